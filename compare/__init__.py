@@ -1,0 +1,1 @@
+"""Comparison layer and figures for the dem engine."""

@@ -1,0 +1,228 @@
+// dem: command-line front end. Exit codes: 0 ok, 2 bad input, 3 unstable run.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "elastic_params.hpp"
+#include "outputs.hpp"
+#include "run.hpp"
+#include "scene.hpp"
+#include "stability.hpp"
+#include "world.hpp"
+
+using namespace dem;
+
+namespace {
+
+const char* kMainHelp =
+    "dem " DEM_VERSION " - 2D discrete-element engine of Kiyama & Fujimura (1983)\n"
+    "\n"
+    "usage:\n"
+    "  dem run SCENE.toml --out DIR [options]   run a scene (dem run --help)\n"
+    "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
+    "\n"
+    "exit codes: 0 ok, 2 bad input, 3 unstable run\n";
+
+const char* kRunHelp =
+    "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
+    "\n"
+    "  --out DIR       output directory (created; see docs/outputs.md)\n"
+    "  --dt S          time step [s], overrides integrator.dt\n"
+    "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
+    "  --end-time S    maximum simulated time [s], overrides end.time\n"
+    "  --force-dt      run even if dt is above the computed stability bound\n"
+    "  --quiet         no header and no progress line\n"
+    "\n"
+    "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
+    "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
+    "end.max_overlap x r_min) stops with 3 and writes the last good state.\n";
+
+const char* kParamsHelp =
+    "usage: dem params [--E kgf/cm2,...] [--nu V] [--r CM] [--rho G/CM3] [--q GF/CM] [--s V] [--g CM/S2]\n"
+    "\n"
+    "Prints the paper's Table 1: K_n/(rho g) [cm], eta_n/(rho g) [cm s] and the dt bound of eq. (26)\n"
+    "for each Young's modulus E (default 7.5e2,1e3,1e4,1e5,1e6 kgf/cm^2), with nu = 0.3, r = 1 cm,\n"
+    "rho = 2.65 g/cm^3, line load q = 30 gf/cm (not printed in the paper; it reproduces Table 1),\n"
+    "s = K_s/K_n = 0.25, g = 980 cm/s^2.\n";
+
+int bad(const std::string& msg) {
+  std::fprintf(stderr, "dem: %s\n", msg.c_str());
+  return 2;
+}
+
+bool number_arg(const char* s, double& v) {
+  char* end = nullptr;
+  v = std::strtod(s, &end);
+  return end != s && *end == '\0' && std::isfinite(v);
+}
+
+void print_header(const SceneSpec& s, const World& w, const StabilityReport& st) {
+  std::printf("dem %s | scene %s (%s)\n", DEM_VERSION, s.name.c_str(), s.file.c_str());
+  std::printf("  fill: %s\n", s.fill_summary.c_str());
+  std::printf("  N = %zu discs, %zu walls, %zu points; gravity (%g, %g) cm/s^2\n", w.discs.size(),
+              w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy);
+  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s\n", to_string(w.scheme), w.dt,
+              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "");
+  std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s\n", to_string(w.options.normal_spring),
+              to_string(w.options.no_tension), to_string(w.options.friction_cap));
+  std::printf("  %-14s %9s %9s %7s %9s %6s %7s | dt bounds [s]: %-9s %-9s %-9s %-9s %-9s\n", "pair", "m*", "omega0",
+              "zeta_n", "t_c", "e", "zeta_t", "normal", "tangent", "eq.26", "eq.21", "rot z=4");
+  for (const auto& p : st.pairs) {
+    char tc[32];
+    if (std::isfinite(p.t_contact)) std::snprintf(tc, sizeof tc, "%9.3e", p.t_contact);
+    else std::snprintf(tc, sizeof tc, "%9s", "overdamp");
+    std::printf("  %-14s %9.4g %9.4g %7.4f %s %6.3f %7.4f |  %-9.3e %-9.3e %-9.3e %-9.3e %-9.3e\n", p.name.c_str(),
+                p.m_eff, p.omega0, p.zeta_n, tc, p.restitution, p.zeta_t, p.dt_normal, p.dt_tangential, p.dt_eq26,
+                p.dt_eq21, p.dt_rot_z4);
+  }
+  std::printf("  stability bound (single contact, %s): %.4g s, set by %s; dt/bound = %.3f\n", to_string(w.scheme),
+              st.dt_bound, st.limited_by.c_str(), w.dt / st.dt_bound);
+  if (w.dt > st.dt_rot_z4)
+    std::printf("  warning: dt is above the estimate %.4g s for a disc whose rotation is held by 4 sticking contacts\n",
+                st.dt_rot_z4);
+  std::fflush(stdout);
+}
+
+int cmd_run(int argc, char** argv) {
+  std::string scene, out;
+  SceneOverrides ov;
+  bool quiet = false;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    auto value = [&](const char* what) -> const char* {
+      if (a + 1 >= argc) return nullptr;
+      (void)what;
+      return argv[++a];
+    };
+    if (k == "--help" || k == "-h") {
+      std::fputs(kRunHelp, stdout);
+      return 0;
+    } else if (k == "--out") {
+      const char* v = value("--out");
+      if (!v) return bad("--out needs a directory");
+      out = v;
+    } else if (k == "--dt") {
+      const char* v = value("--dt");
+      if (!v || !number_arg(v, ov.dt) || !(ov.dt > 0)) return bad("--dt needs a number > 0");
+    } else if (k == "--end-time") {
+      const char* v = value("--end-time");
+      if (!v || !number_arg(v, ov.end_time) || !(ov.end_time > 0)) return bad("--end-time needs a number > 0");
+    } else if (k == "--scheme") {
+      const char* v = value("--scheme");
+      if (!v) return bad("--scheme needs paper_eq18, paper_eq19 or velocity_verlet");
+      ov.scheme = v;
+    } else if (k == "--force-dt") {
+      ov.force_dt = true;
+    } else if (k == "--quiet") {
+      quiet = true;
+    } else if (!k.empty() && k[0] == '-') {
+      return bad("unknown option " + k + " (see dem run --help)");
+    } else if (scene.empty()) {
+      scene = k;
+    } else {
+      return bad("more than one scene given: " + scene + ", " + k);
+    }
+  }
+  if (scene.empty()) return bad("no scene file given (see dem run --help)");
+  if (out.empty()) return bad("--out DIR is required (see dem run --help)");
+
+  SceneSpec spec;
+  World world;
+  StabilityReport stab;
+  try {
+    spec = load_scene(scene, ov);
+    build_world(spec, world);
+    stab = stability_report(world, spec.material_names);
+  } catch (const SceneError& e) {
+    return bad(e.what());
+  }
+  // Only a valid scene creates its output directory.
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) return bad("--out " + out + ": cannot create the directory: " + ec.message());
+  if (!quiet) print_header(spec, world, stab);
+  RunResult res = run_scene(spec, world, spec.progress && !quiet);
+  write_outputs(out, spec, world, res, stab);
+  if (res.status == RunStatus::unstable) {
+    std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),
+                 res.last_good_time, out.c_str());
+    return 3;
+  }
+  if (!quiet) {
+    std::printf("  %s at t = %.4f s after %ld steps; rest %s", to_string(res.status), world.time, world.steps,
+                res.rest_reached ? "reached" : "not reached");
+    if (res.rest_reached) std::printf(" at t = %.4f s", res.rest_time);
+    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s\n", res.wall_seconds,
+                res.wall_seconds > 0 ? world.discs.size() * double(world.steps) / res.wall_seconds : 0.0, out.c_str());
+  }
+  return 0;
+}
+
+int cmd_params(int argc, char** argv) {
+  ElasticInputs in{};
+  std::vector<double> E = {7.5e2, 1e3, 1e4, 1e5, 1e6};
+  double q_gf = 30.0;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (k == "--help" || k == "-h") {
+      std::fputs(kParamsHelp, stdout);
+      return 0;
+    }
+    if (a + 1 >= argc) return bad("option " + k + " needs a value (see dem params --help)");
+    const char* v = argv[++a];
+    double x;
+    if (k == "--E") {
+      E.clear();
+      std::string s = v;
+      std::size_t pos = 0;
+      while (pos <= s.size()) {
+        const std::size_t c = s.find(',', pos);
+        const std::string item = s.substr(pos, c == std::string::npos ? std::string::npos : c - pos);
+        if (!number_arg(item.c_str(), x) || !(x > 0)) return bad("--E: \"" + item + "\" is not a number > 0");
+        E.push_back(x);
+        if (c == std::string::npos) break;
+        pos = c + 1;
+      }
+      continue;
+    }
+    if (!number_arg(v, x)) return bad(k + ": \"" + std::string(v) + "\" is not a number");
+    if (k == "--nu") { if (!(x >= 0 && x < 0.5)) return bad("--nu must be in [0, 0.5)"); in.nu = x; }
+    else if (k == "--r") { if (!(x > 0)) return bad("--r must be > 0"); in.r = x; }
+    else if (k == "--rho") { if (!(x > 0)) return bad("--rho must be > 0"); in.rho = x; }
+    else if (k == "--q") { if (!(x > 0)) return bad("--q must be > 0"); q_gf = x; }
+    else if (k == "--s") { if (!(x > 0)) return bad("--s must be > 0"); in.s = x; }
+    else if (k == "--g") { if (!(x > 0)) return bad("--g must be > 0"); in.g = x; }
+    else return bad("unknown option " + k + " (see dem params --help)");
+  }
+  in.q = q_gf * 980.665;
+  const double rg = in.rho * in.g;
+  std::printf("Table 1: nu = %g, r = %g cm, rho = %g g/cm^3, q = %g gf/cm, s = %g, g = %g cm/s^2\n", in.nu, in.r,
+              in.rho, q_gf, in.s, in.g);
+  std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "E [kgf/cm^2]", "K_n/(rho g)", "eta_n/(rho g)", "dt eq.26 [s]",
+              "K_s/(rho g)", "b [cm]");
+  std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "", "[cm]", "[cm s]", "", "[cm]", "");
+  for (double e : E) {
+    in.E = e * kKgfPerCm2;
+    const ElasticParams p = elastic_params(in);
+    std::printf("%-14.4g %-14.4g %-16.4g %-14.4g %-14.4g %-12.4g\n", e, p.kn / rg, p.eta_n / rg, p.dt_eq26, p.ks / rg,
+                p.b);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string cmd = argv[1];
+  if (cmd == "run") return cmd_run(argc - 2, argv + 2);
+  if (cmd == "params") return cmd_params(argc - 2, argv + 2);
+  return bad("unknown command " + cmd + " (dem --help)");
+}

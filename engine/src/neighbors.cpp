@@ -1,0 +1,118 @@
+#include "neighbors.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace dem {
+
+bool Neighbors::needs_rebuild(const Discs& d) const {
+  if (x0_.size() != d.size()) return true;
+  const double lim2 = 0.25 * skin * skin;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const double dx = d.x[i] - x0_[i], dy = d.y[i] - y0_[i];
+    if (dx * dx + dy * dy > lim2) return true;
+  }
+  return false;
+}
+
+namespace {
+// Keep the history of entries present in both sorted lists (same key).
+template <class T, class Key>
+void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key key) {
+  std::size_t a = 0;
+  for (auto& e : new_list) {
+    while (a < old_list.size() && key(old_list[a]) < key(e)) ++a;
+    if (a < old_list.size() && key(old_list[a]) == key(e)) e = old_list[a];
+  }
+}
+
+// Distance from c to obstacle k, ignoring which part owns the contact (a candidate test).
+double reach_distance(const Geometry& g, int k, double cx, double cy) {
+  const int nw = static_cast<int>(g.walls.size());
+  if (k >= nw) return std::hypot(g.points[k - nw].x - cx, g.points[k - nw].y - cy);
+  const Wall& w = g.walls[k];
+  const double ex = w.bx - w.ax, ey = w.by - w.ay;
+  double u = ((cx - w.ax) * ex + (cy - w.ay) * ey) / (ex * ex + ey * ey);
+  u = std::clamp(u, 0.0, 1.0);
+  return std::hypot(w.ax + u * ex - cx, w.ay + u * ey - cy);
+}
+}  // namespace
+
+void Neighbors::rebuild(const Discs& d, const Geometry& g) {
+  const int n = static_cast<int>(d.size());
+  ++rebuilds;
+  x0_ = d.x;
+  y0_ = d.y;
+
+  // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block.
+  double rmax = 0, xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+  if (n > 0) {
+    xmin = xmax = d.x[0];
+    ymin = ymax = d.y[0];
+  }
+  for (int i = 0; i < n; ++i) {
+    rmax = std::max(rmax, d.r[i]);
+    xmin = std::min(xmin, d.x[i]); xmax = std::max(xmax, d.x[i]);
+    ymin = std::min(ymin, d.y[i]); ymax = std::max(ymax, d.y[i]);
+  }
+  cell_ = std::max(min_cell, 2 * rmax + skin);
+  long nx = static_cast<long>((xmax - xmin) / cell_) + 1;
+  long ny = static_cast<long>((ymax - ymin) / cell_) + 1;
+  // Sparse scenes (discs flung far apart) would need huge grids: coarsen instead.
+  while (nx * ny > 4L * n + 64) {
+    cell_ *= 2;
+    nx = static_cast<long>((xmax - xmin) / cell_) + 1;
+    ny = static_cast<long>((ymax - ymin) / cell_) + 1;
+  }
+  const long ncell = nx * ny;
+  cell_of_.resize(n);
+  cell_start_.assign(ncell + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    const long cx = static_cast<long>((d.x[i] - xmin) / cell_);
+    const long cy = static_cast<long>((d.y[i] - ymin) / cell_);
+    cell_of_[i] = static_cast<int>(cy * nx + cx);
+    ++cell_start_[cell_of_[i] + 1];
+  }
+  for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  order_.resize(n);
+  {
+    std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (int i = 0; i < n; ++i) order_[fill[cell_of_[i]]++] = i;
+  }
+
+  new_pairs_.clear();
+  std::vector<int> found;
+  for (int i = 0; i < n; ++i) {
+    const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
+    found.clear();
+    for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b)
+      for (long a = std::max(0L, ci - 1); a <= std::min(nx - 1, ci + 1); ++a) {
+        const long c = b * nx + a;
+        for (int s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
+          const int j = order_[s];
+          if (j <= i) continue;
+          const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
+          const double reach = d.r[i] + d.r[j] + skin;
+          if (dx * dx + dy * dy < reach * reach) found.push_back(j);
+        }
+      }
+    std::sort(found.begin(), found.end());
+    for (int j : found) new_pairs_.push_back(PairContact{i, j});
+  }
+  merge_history(pairs, new_pairs_, [](const PairContact& p) {
+    return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j);
+  });
+  pairs.swap(new_pairs_);
+
+  new_walls_.clear();
+  const int nk = g.obstacle_count();
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < nk; ++k)
+      if (reach_distance(g, k, d.x[i], d.y[i]) < d.r[i] + skin) new_walls_.push_back(WallContact{i, k});
+  merge_history(walls, new_walls_, [](const WallContact& w) {
+    return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k);
+  });
+  walls.swap(new_walls_);
+}
+
+}  // namespace dem

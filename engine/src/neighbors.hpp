@@ -1,0 +1,53 @@
+// Contact detection: a sorted cell grid (counting sort, the paper's eq. (27) cells in row-major
+// order) builds Verlet lists with a skin, so lists are rebuilt only when some disc has moved
+// more than skin/2. Contact history (the incremental springs) is carried across rebuilds by
+// merging the old and new sorted lists. Nothing here is O(N^2).
+#pragma once
+
+#include <vector>
+
+#include "discs.hpp"
+#include "geometry.hpp"
+
+namespace dem {
+
+// One candidate disc-disc pair (i < j) and its history.
+struct PairContact {
+  int i, j;
+  double en = 0, es = 0;  // elastic normal and shear forces, eqs. (7a), (11a)
+  double fn = 0, fs = 0;  // last total forces (with dashpots), eqs. (9), (14)
+};
+
+// One candidate disc-obstacle contact (obstacle k: walls first, then points).
+struct WallContact {
+  int i, k;
+  double en = 0, es = 0;
+  double fn = 0, fs = 0;
+  double px = 0, py = 0;  // last contact point on the obstacle
+  double nx = 0, ny = 0;  // last unit normal from the disc to the obstacle
+  bool touching = false;
+};
+
+class Neighbors {
+ public:
+  double skin = 0.2;      // [cm] extra reach of the lists
+  double min_cell = 0.0;  // [cm] requested cell size (0: 2 r_max + skin)
+
+  std::vector<PairContact> pairs;  // sorted by (i, j)
+  std::vector<WallContact> walls;  // sorted by (i, k)
+  long rebuilds = 0;
+
+  bool needs_rebuild(const Discs& d) const;
+  void rebuild(const Discs& d, const Geometry& g);
+  double cell_size() const { return cell_; }
+
+ private:
+  std::vector<double> x0_, y0_;  // positions at the last rebuild
+  double cell_ = 0;
+  // Scratch kept between rebuilds to avoid reallocation.
+  std::vector<int> cell_start_, order_, cell_of_;
+  std::vector<PairContact> new_pairs_;
+  std::vector<WallContact> new_walls_;
+};
+
+}  // namespace dem

@@ -1,0 +1,283 @@
+#include "outputs.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+namespace dem {
+
+using json = nlohmann::ordered_json;
+
+void write_file_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points) {
+  const Geometry& g = w.geometry;
+  const int nw = static_cast<int>(g.walls.size());
+  walls.clear();
+  points.clear();
+  for (const Wall& wl : g.walls) {
+    WallLoad L;
+    L.name = wl.name;
+    L.group = wl.group;
+    L.bin = bin;
+    L.length = std::hypot(wl.bx - wl.ax, wl.by - wl.ay);
+    const std::size_t nb = static_cast<std::size_t>(std::ceil(L.length / bin - 1e-9));
+    L.bin_normal.assign(nb, 0);
+    L.bin_shear.assign(nb, 0);
+    L.bin_contacts.assign(nb, 0);
+    walls.push_back(L);
+  }
+  for (const Point& p : g.points) points.push_back({p.name, p.group, p.x, p.y});
+  for (const WallContact& c : w.neighbors.walls) {
+    if (!c.touching) continue;
+    // Force on the obstacle: f_n n + f_s t, t = (-n_y, n_x) (the opposite of eq. 15 on the disc).
+    const double fx = c.fn * c.nx - c.fs * c.ny, fy = c.fn * c.ny + c.fs * c.nx;
+    if (c.k < nw) {
+      const Wall& wl = g.walls[c.k];
+      WallLoad& L = walls[c.k];
+      const double ex = (wl.bx - wl.ax) / L.length, ey = (wl.by - wl.ay) / L.length;
+      const double shear = fx * ex + fy * ey;
+      L.fx += fx; L.fy += fy;
+      L.normal += c.fn;
+      L.shear += shear;
+      ++L.contacts;
+      const double s = (c.px - wl.ax) * ex + (c.py - wl.ay) * ey;
+      std::size_t b = static_cast<std::size_t>(std::max(0.0, std::floor(s / bin)));
+      b = std::min(b, L.bin_normal.size() - 1);
+      L.bin_normal[b] += c.fn;
+      L.bin_shear[b] += shear;
+      ++L.bin_contacts[b];
+    } else {
+      PointLoad& P = points[c.k - nw];
+      P.fx += fx; P.fy += fy;
+      ++P.contacts;
+    }
+  }
+}
+
+namespace {
+
+std::string fmt(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+std::string vtu(const std::vector<double>& px, const std::vector<double>& py, int points_per_cell, int vtk_type,
+                const std::vector<std::pair<std::string, std::vector<double>>>& scalars,
+                const std::vector<std::pair<std::string, std::vector<double>>>& vectors3,
+                const std::vector<std::pair<std::string, std::vector<int>>>& ints, bool cell_data) {
+  const std::size_t np = px.size(), nc = np / points_per_cell;
+  std::ostringstream o;
+  o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+    << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nc << "\">\n";
+  o << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < np; ++i) o << fmt(px[i]) << ' ' << fmt(py[i]) << " 0\n";
+  o << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < np; ++i) o << i << '\n';
+  o << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < nc; ++c) o << (c + 1) * points_per_cell << '\n';
+  o << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < nc; ++c) o << vtk_type << '\n';
+  o << "</DataArray>\n</Cells>\n";
+  o << (cell_data ? "<CellData>\n" : "<PointData>\n");
+  for (const auto& [name, v] : scalars) {
+    o << "<DataArray type=\"Float64\" Name=\"" << name << "\" format=\"ascii\">\n";
+    for (double x : v) o << fmt(x) << '\n';
+    o << "</DataArray>\n";
+  }
+  for (const auto& [name, v] : vectors3) {
+    o << "<DataArray type=\"Float64\" Name=\"" << name << "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i + 2 < v.size(); i += 3) o << fmt(v[i]) << ' ' << fmt(v[i + 1]) << ' ' << fmt(v[i + 2]) << '\n';
+    o << "</DataArray>\n";
+  }
+  for (const auto& [name, v] : ints) {
+    o << "<DataArray type=\"Int32\" Name=\"" << name << "\" format=\"ascii\">\n";
+    for (int x : v) o << x << '\n';
+    o << "</DataArray>\n";
+  }
+  o << (cell_data ? "</CellData>\n" : "</PointData>\n") << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+  return o.str();
+}
+
+json pair_json(const PairReport& r) {
+  return json{{"name", r.name},
+              {"kind", r.disc_disc ? "disc-disc" : "disc-obstacle"},
+              {"kn", r.p.kn}, {"ks", r.p.ks}, {"eta_n", r.p.eta_n}, {"eta_s", r.p.eta_s}, {"mu", r.p.mu},
+              {"m_eff", r.m_eff}, {"m_t", r.m_t},
+              {"omega0", r.omega0}, {"zeta_n", r.zeta_n},
+              {"t_contact", finite_or_null(r.t_contact)}, {"restitution", r.restitution},
+              {"omega_t", r.omega_t}, {"zeta_t", r.zeta_t},
+              {"dt_bound_normal", finite_or_null(r.dt_normal)}, {"dt_bound_tangential", finite_or_null(r.dt_tangential)},
+              {"dt_bound_eq26", r.dt_eq26}, {"dt_bound_eq21", r.dt_eq21},
+              {"dt_bound_rotation_z4", finite_or_null(r.dt_rot_z4)}, {"dt_bound_rotation_z6", finite_or_null(r.dt_rot_z6)}};
+}
+
+}  // namespace
+
+void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
+                   const StabilityReport& stab) {
+  const bool unstable = res.status == RunStatus::unstable;
+  const Discs& d = unstable ? res.last_good : w.discs;
+  std::vector<WallLoad> walls;
+  std::vector<PointLoad> points;
+  measure_loads(w, spec.profile_bin, walls, points);
+  const double g = std::hypot(w.gx, w.gy);
+  const double ghx = w.gx / g, ghy = w.gy / g;
+  double weight = 0;
+  for (double m : d.mass) weight += m * g;
+  const double top = w.geometry.max_y();
+
+  json js;
+  js["engine"] = std::string("dem ") + DEM_VERSION;
+  js["scene"] = {{"name", spec.name}, {"file", spec.file}, {"description", spec.description}, {"fill", spec.fill_summary}};
+  js["status"] = to_string(res.status);
+  if (unstable) js["reason"] = res.reason;
+  js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt},
+                   {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},
+                   {"friction_cap", to_string(w.options.friction_cap)}, {"gravity", {w.gx, w.gy}},
+                   {"skin", w.neighbors.skin}, {"cell", w.neighbors.cell_size()}, {"profile_bin", spec.profile_bin}};
+  js["n_discs"] = d.size();
+  js["steps"] = w.steps;
+  js["time"] = w.time;
+  js["wall_time_s"] = res.wall_seconds;
+  js["particle_steps_per_s"] = res.wall_seconds > 0 ? d.size() * static_cast<double>(w.steps) / res.wall_seconds : 0.0;
+  js["neighbor_rebuilds"] = w.neighbors.rebuilds;
+  js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(res.rest_time) : json(nullptr)},
+                {"criterion", "mean over discs of |du| and of |dv| per step < rest_factor * g * dt^2 (paper note 3)"},
+                {"rest_factor", spec.rest_factor}, {"threshold", res.rest_threshold},
+                {"mean_abs_du", res.mean_abs_du}, {"mean_abs_dv", res.mean_abs_dv}};
+  js["weight"] = weight;
+  js["disc_weight"] = d.mass.empty() ? 0.0 : d.mass[0] * g;
+  js["width"] = w.geometry.max_x() - w.geometry.min_x();
+  js["height"] = top - w.geometry.min_y();
+  json jw = json::array();
+  double vertical = 0;
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    const WallLoad& L = walls[k];
+    const Wall& wl = w.geometry.walls[k];
+    vertical += L.fx * ghx + L.fy * ghy;
+    json prof;
+    std::vector<double> slo, shi, dm, xm, ym;
+    for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
+      const double lo = b * L.bin, hi = std::min(L.length, (b + 1) * L.bin), mid = 0.5 * (lo + hi);
+      const double x = wl.ax + (wl.bx - wl.ax) * mid / L.length, y = wl.ay + (wl.by - wl.ay) * mid / L.length;
+      slo.push_back(lo); shi.push_back(hi); xm.push_back(x); ym.push_back(y); dm.push_back(top - y);
+    }
+    prof = {{"s_lo", slo}, {"s_hi", shi}, {"depth_mid", dm}, {"x_mid", xm}, {"y_mid", ym},
+            {"normal", L.bin_normal}, {"shear", L.bin_shear}, {"contacts", L.bin_contacts}};
+    jw.push_back({{"name", L.name}, {"group", L.group}, {"from", {wl.ax, wl.ay}}, {"to", {wl.bx, wl.by}},
+                  {"normal_total", L.normal}, {"shear_total", L.shear}, {"force", {L.fx, L.fy}},
+                  {"contacts", L.contacts}, {"profile", prof}});
+  }
+  js["walls"] = jw;
+  json jp = json::array();
+  for (const PointLoad& P : points) {
+    vertical += P.fx * ghx + P.fy * ghy;
+    jp.push_back({{"name", P.name}, {"group", P.group}, {"at", {P.x, P.y}}, {"force", {P.fx, P.fy}}, {"contacts", P.contacts}});
+  }
+  js["points"] = jp;
+  std::map<std::string, std::array<double, 4>> groups;
+  for (const WallLoad& L : walls) {
+    auto& G = groups[L.group];
+    G[0] += L.normal; G[1] += L.shear; G[2] += L.fx; G[3] += L.fy;
+  }
+  for (const PointLoad& P : points) {
+    auto& G = groups[P.group];
+    G[2] += P.fx; G[3] += P.fy;
+  }
+  json jg = json::object();
+  for (const auto& [name, G] : groups)
+    jg[name] = {{"normal_total", G[0]}, {"shear_total", G[1]}, {"force", {G[2], G[3]}}};
+  js["groups"] = jg;
+  js["balance"] = {{"weight", weight}, {"walls_vertical", vertical},
+                   {"residual_relative", weight > 0 ? std::abs(weight - vertical) / weight : 0.0},
+                   {"note", "weight of all discs against the vertical load on walls and points; equal at rest"}};
+  json jd = json::array();
+  for (const auto& p : stab.pairs) jd.push_back(pair_json(p));
+  js["derived"] = jd;
+  js["stability"] = {{"dt_bound", stab.dt_bound}, {"limited_by", stab.limited_by},
+                     {"dt_rotation_z4", finite_or_null(stab.dt_rot_z4)},
+                     {"note", "dt_bound: single contact, this scheme (spectral radius of its step); "
+                              "dt_rotation_z4: a disc's rotation held by 4 sticking contacts (estimate)"}};
+
+  // wall_profiles.csv
+  {
+    std::ostringstream o;
+    o << "wall,group,bin,s_lo,s_hi,x_mid,y_mid,depth_mid,normal,shear,contacts\n";
+    for (const auto& pw : jw) {
+      const auto& p = pw["profile"];
+      for (std::size_t b = 0; b < p["normal"].size(); ++b)
+        o << pw["name"].get<std::string>() << ',' << pw["group"].get<std::string>() << ',' << b << ','
+          << fmt(p["s_lo"][b]) << ',' << fmt(p["s_hi"][b]) << ',' << fmt(p["x_mid"][b]) << ',' << fmt(p["y_mid"][b])
+          << ',' << fmt(p["depth_mid"][b]) << ',' << fmt(p["normal"][b]) << ',' << fmt(p["shear"][b]) << ','
+          << p["contacts"][b].get<int>() << '\n';
+    }
+    write_file_atomic(dir + "/wall_profiles.csv", o.str());
+  }
+  // contacts.csv and contacts.vtu
+  if (!unstable) {
+    std::ostringstream o;
+    o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
+    std::vector<double> lx, ly, fn, fs, en, es;
+    std::vector<int> kind;
+    for (const PairContact& c : w.neighbors.pairs) {
+      const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+      const double R = std::hypot(dx, dy);
+      if (R > d.r[c.i] + d.r[c.j] || R == 0) continue;
+      const double nx = dx / R, ny = dy / R, ov = d.r[c.i] + d.r[c.j] - R;
+      const double cx = d.x[c.i] + nx * (d.r[c.i] - 0.5 * ov), cy = d.y[c.i] + ny * (d.r[c.i] - 0.5 * ov);
+      o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
+        << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ',' << fmt(c.fs) << '\n';
+      lx.insert(lx.end(), {d.x[c.i], d.x[c.j]}); ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
+      fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(0);
+    }
+    const int nw = static_cast<int>(w.geometry.walls.size());
+    for (const WallContact& c : w.neighbors.walls) {
+      if (!c.touching) continue;
+      const bool is_wall = c.k < nw;
+      const std::string name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
+      o << (is_wall ? "dw," : "dp,") << d.id[c.i] << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
+        << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+        << fmt(c.fs) << '\n';
+      lx.insert(lx.end(), {d.x[c.i], c.px}); ly.insert(ly.end(), {d.y[c.i], c.py});
+      fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(is_wall ? 1 : 2);
+    }
+    write_file_atomic(dir + "/contacts.csv", o.str());
+    write_file_atomic(dir + "/contacts.vtu",
+                      vtu(lx, ly, 2, 3, {{"f_n", fn}, {"f_s", fs}, {"e_n", en}, {"e_s", es}}, {}, {{"kind", kind}}, true));
+  }
+  // discs.csv and discs.vtu
+  {
+    std::ostringstream o;
+    o << "id,x,y,r,vx,vy,omega,material\n";
+    std::vector<double> vel;
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r[i]) << ',' << fmt(d.vx[i]) << ','
+        << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material[i]] << '\n';
+      vel.insert(vel.end(), {d.vx[i], d.vy[i], 0.0});
+    }
+    write_file_atomic(dir + "/discs.csv", o.str());
+    write_file_atomic(dir + "/discs.vtu",
+                      vtu(d.x, d.y, 1, 1, {{"radius", d.r}, {"omega", d.omega}}, {{"velocity", vel}}, {{"id", d.id}}, false));
+  }
+  write_file_atomic(dir + "/summary.json", js.dump(2) + "\n");
+}
+
+}  // namespace dem

@@ -1,0 +1,40 @@
+// Run outputs (docs/outputs.md): summary.json, CSV profiles and contacts, VTU snapshots.
+// Every file is written to NAME.tmp and renamed when complete.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "run.hpp"
+#include "scene.hpp"
+#include "stability.hpp"
+#include "world.hpp"
+
+namespace dem {
+
+// Forces exerted by the discs on one wall, totals and per bin along the wall.
+struct WallLoad {
+  std::string name, group;
+  double fx = 0, fy = 0;           // resultant on the wall
+  double normal = 0, shear = 0;    // along the inward normal reversed / along from -> to
+  int contacts = 0;
+  std::vector<double> bin_normal, bin_shear;
+  std::vector<int> bin_contacts;
+  double bin = 0, length = 0;
+};
+struct PointLoad {
+  std::string name, group;
+  double x = 0, y = 0, fx = 0, fy = 0;
+  int contacts = 0;
+};
+
+void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points);
+
+// Writes all files of one run into dir (which must exist).
+void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
+                   const StabilityReport& stab);
+
+// Atomic text file write: path.tmp then rename.
+void write_file_atomic(const std::string& path, const std::string& text);
+
+}  // namespace dem

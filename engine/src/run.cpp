@@ -1,0 +1,93 @@
+#include "run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace dem {
+
+const char* to_string(RunStatus s) {
+  return s == RunStatus::rest ? "rest" : s == RunStatus::end_time ? "end_time" : "unstable";
+}
+
+namespace {
+// Finds what went wrong, for the message of an unstable run.
+std::string diagnose(const World& w, double overlap_limit) {
+  const Discs& d = w.discs;
+  std::ostringstream os;
+  os.precision(6);
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i]) || !std::isfinite(d.vx[i]) || !std::isfinite(d.vy[i]) ||
+        !std::isfinite(d.omega[i])) {
+      os << "non-finite state of disc " << d.id[i] << " at t = " << w.time << " s (step " << w.steps << ")";
+      return os.str();
+    }
+  os << "overlap " << w.max_overlap << " cm exceeds the limit " << overlap_limit << " cm (end.max_overlap x r_min) at t = "
+     << w.time << " s (step " << w.steps << "); kinetic energy " << w.kinetic_energy();
+  return os.str();
+}
+}  // namespace
+
+RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
+  RunResult res;
+  const double g = std::hypot(w.gx, w.gy);
+  res.rest_threshold = spec.rest_factor * g * w.dt * w.dt;  // note 3: ~1e-9 cm at dt = 1e-4
+  double rmin = 1e300;
+  for (double r : w.discs.r) rmin = std::min(rmin, r);
+  const double overlap_limit = spec.max_overlap_fraction * rmin;
+  const long max_steps = static_cast<long>(std::ceil(spec.end_time / w.dt - 1e-9));
+  const long check_every = 10;
+  const long keep_every = 1000;
+  res.last_good = w.discs;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_print = t0;
+  while (w.steps < max_steps) {
+    w.step();
+    // A run that cannot be trusted stops here: overlap blow-up or non-finite values.
+    if (!(w.max_overlap <= overlap_limit)) {
+      res.status = RunStatus::unstable;
+      res.reason = diagnose(w, overlap_limit);
+      break;
+    }
+    if (w.steps % check_every == 0) {
+      w.mean_abs_increment(res.mean_abs_du, res.mean_abs_dv);
+      if (!std::isfinite(res.mean_abs_du) || !std::isfinite(res.mean_abs_dv)) {
+        res.status = RunStatus::unstable;
+        res.reason = diagnose(w, overlap_limit);
+        break;
+      }
+      if (res.mean_abs_du < res.rest_threshold && res.mean_abs_dv < res.rest_threshold && !res.rest_reached) {
+        res.rest_reached = true;
+        res.rest_time = w.time;
+        if (spec.stop_at_rest) {
+          res.status = RunStatus::rest;
+          break;
+        }
+      }
+      if (w.steps % keep_every == 0) {
+        res.last_good = w.discs;
+        res.last_good_time = w.time;
+      }
+    }
+    if (progress && (w.steps & 1023) == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
+        last_print = now;
+        const double el = std::chrono::duration<double>(now - t0).count();
+        std::fprintf(stderr, "\r  t = %.4f / %.4f s  step %ld  mean|du| %.2e (rest < %.2e)  %.1fs elapsed   ",
+                     w.time, spec.end_time, w.steps, std::max(res.mean_abs_du, res.mean_abs_dv),
+                     res.rest_threshold, el);
+        std::fflush(stderr);
+      }
+    }
+  }
+  if (progress && std::chrono::duration<double>(last_print - t0).count() > 0) std::fprintf(stderr, "\n");
+  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (res.status != RunStatus::unstable && res.status != RunStatus::rest) res.status = RunStatus::end_time;
+  return res;
+}
+
+}  // namespace dem

@@ -1,0 +1,31 @@
+// Running a scene to its end condition: rest (the paper's note 3), end time, or instability.
+#pragma once
+
+#include <string>
+
+#include "discs.hpp"
+#include "scene.hpp"
+#include "world.hpp"
+
+namespace dem {
+
+enum class RunStatus { rest, end_time, unstable };
+
+struct RunResult {
+  RunStatus status = RunStatus::end_time;
+  std::string reason;          // why an unstable run stopped
+  bool rest_reached = false;
+  double rest_time = 0;        // [s] simulated time when rest was first detected
+  double rest_threshold = 0;   // rest_factor * g dt^2 [cm]
+  double mean_abs_du = 0, mean_abs_dv = 0;  // last measured (x and y increments per step)
+  double wall_seconds = 0;
+  Discs last_good;             // state at the last check that passed (written when unstable)
+  double last_good_time = 0;
+};
+
+const char* to_string(RunStatus s);
+
+// Steps the world until its end condition. Progress goes to stderr when `progress`.
+RunResult run_scene(const SceneSpec& spec, World& w, bool progress);
+
+}  // namespace dem

@@ -1,0 +1,48 @@
+// Derived quantities of the contact law and time-step bounds, printed in every run's header.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model.hpp"
+
+namespace dem {
+
+class World;
+
+// Spectral radius of one step of `scheme` on the one-degree-of-freedom contact
+// m x'' = -k x - c x' written the paper's way (spring on the summed increments, dashpot on the
+// last increment over dt). The step is linear, so its matrix is found by stepping unit states.
+double spectral_radius(Scheme scheme, double m, double k, double c, double dt);
+
+// Largest dt for which that step is stable (spectral radius <= 1).
+double scheme_dt_bound(Scheme scheme, double m, double k, double c);
+
+struct PairReport {
+  std::string name;          // e.g. "sand-sand", "sand-wall"
+  bool disc_disc = true;
+  double m_eff = 0;          // m_i m_j / (m_i + m_j), or m_i against an obstacle
+  double m_t = 0;            // tangential effective mass (rotation included): m/6 or m/3
+  PairProps p;
+  double omega0 = 0, zeta_n = 0;  // sqrt(k_n/m*), eta_n / (2 sqrt(m* k_n))
+  double t_contact = 0;      // pi / omega_d; infinite when overdamped (zeta_n >= 1)
+  double restitution = 0;    // exp(-pi zeta / sqrt(1 - zeta^2)); 0 when overdamped
+  double omega_t = 0, zeta_t = 0;
+  double dt_normal = 0;      // scheme bound, normal contact
+  double dt_tangential = 0;  // scheme bound, sticking shear contact
+  double dt_eq26 = 0;        // paper (26): eta_n / K_n
+  double dt_eq21 = 0;        // Cundall (21): 2 sqrt(m* / K_n)
+  double dt_rot_z4 = 0;      // disc rotation held by 4 sticking contacts of this pair
+  double dt_rot_z6 = 0;      // ... by 6 (hexagonal packing)
+};
+
+struct StabilityReport {
+  std::vector<PairReport> pairs;
+  double dt_bound = 0;       // min over pairs of the single-contact scheme bounds
+  std::string limited_by;
+  double dt_rot_z4 = 0;      // min over disc-disc pairs: a multi-contact estimate (not enforced)
+};
+
+StabilityReport stability_report(const World& w, const std::vector<std::string>& material_names);
+
+}  // namespace dem

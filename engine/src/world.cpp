@@ -1,0 +1,223 @@
+#include "world.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "contact_law.hpp"
+
+namespace dem {
+
+void World::step() {
+  if (scheme == Scheme::velocity_verlet) {
+    kick(0.5 * dt);  // v(t + dt/2)
+    drift_eq18();    // du = v(t + dt/2) dt; x += du
+  }
+  if (neighbors.needs_rebuild(discs)) neighbors.rebuild(discs, geometry);
+  (this->*force_kernel_)();  // eqs. (3)-(15) from the increments of the last move
+  switch (scheme) {
+    case Scheme::paper_eq18: kick(dt); drift_eq18(); break;   // (17), (18)
+    case Scheme::paper_eq19: kick(dt); drift_eq19(); break;   // (17), (19)
+    case Scheme::velocity_verlet: kick(0.5 * dt); break;      // v(t + dt)
+  }
+  time += dt;
+  ++steps;
+}
+
+bool World::adjacent(int k1, int k2) const {
+  const int nw = static_cast<int>(geometry.walls.size());
+  if ((k1 < nw) == (k2 < nw)) return false;
+  const int wall = std::min(k1, k2), point = std::max(k1, k2) - nw;
+  for (int a : geometry.points[point].adjacent)
+    if (a == wall) return true;
+  return false;
+}
+
+void World::init() {
+  select_kernel();
+  geometry.link_points();
+  touch_scratch_.assign(geometry.obstacle_count() + 1, 0);
+  neighbors.rebuild(discs, geometry);
+  (this->*force_kernel_)();  // forces at the start (Verlet's first half kick uses them)
+}
+
+void World::kick(double h) {
+  Discs& d = discs;
+  const std::size_t n = d.size();
+  for (std::size_t i = 0; i < n; ++i) {  // (16), (17)
+    d.vx[i] += d.fx[i] * d.inv_mass[i] * h;
+    d.vy[i] += d.fy[i] * d.inv_mass[i] * h;
+    d.omega[i] += d.torque[i] * d.inv_inertia[i] * h;
+  }
+}
+
+void World::drift_eq18() {
+  Discs& d = discs;
+  const std::size_t n = d.size();
+  for (std::size_t i = 0; i < n; ++i) {  // (18)
+    d.dux[i] = d.vx[i] * dt;
+    d.duy[i] = d.vy[i] * dt;
+    d.dphi[i] = d.omega[i] * dt;
+    d.x[i] += d.dux[i];
+    d.y[i] += d.duy[i];
+    d.phi[i] += d.dphi[i];
+  }
+}
+
+void World::drift_eq19() {
+  Discs& d = discs;
+  const std::size_t n = d.size();
+  for (std::size_t i = 0; i < n; ++i) {  // (19): the mean of the last increment and v dt
+    d.dux[i] = 0.5 * (d.dux[i] + d.vx[i] * dt);
+    d.duy[i] = 0.5 * (d.duy[i] + d.vy[i] * dt);
+    d.dphi[i] = 0.5 * (d.dphi[i] + d.omega[i] * dt);
+    d.x[i] += d.dux[i];
+    d.y[i] += d.duy[i];
+    d.phi[i] += d.dphi[i];
+  }
+}
+
+template <NormalSpring NS, NoTension NT, FrictionCap FC>
+void World::compute_forces() {
+  Discs& d = discs;
+  const std::size_t n = d.size();
+  const double inv_dt = 1.0 / dt;
+  for (std::size_t i = 0; i < n; ++i) {  // gravity, the m_i g of (15a)
+    d.fx[i] = d.mass[i] * gx;
+    d.fy[i] = d.mass[i] * gy;
+    d.torque[i] = 0;
+  }
+  double worst = 0;
+
+  for (PairContact& c : neighbors.pairs) {
+    const int i = c.i, j = c.j;
+    const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
+    const double R2 = dx * dx + dy * dy, sum = d.r[i] + d.r[j];
+    if (R2 > sum * sum) {  // (3): apart; the contact and its history end
+      c.en = c.es = c.fn = c.fs = 0;
+      continue;
+    }
+    const double R = std::sqrt(R2);
+    const double nx = dx / R, ny = dy / R;  // (4): cos(alpha), sin(alpha), from i to j
+    const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
+    const double du_n = ddx * nx + ddy * ny;                                       // (5a)
+    const double du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i] + d.r[j] * d.dphi[j];  // (5b)
+    const double overlap = sum - R;
+    worst = std::max(worst, overlap);
+    contact_law<NS, NT, FC>(pair(d.material[i], d.material[j]), overlap, du_n, du_s, inv_dt,
+                            c.en, c.es, c.fn, c.fs);
+    const double fx = -c.fn * nx + c.fs * ny;  // (15a) term on i
+    const double fy = -c.fn * ny - c.fs * nx;  // (15b) term on i
+    d.fx[i] += fx; d.fy[i] += fy;
+    d.fx[j] -= fx; d.fy[j] -= fy;
+    d.torque[i] -= d.r[i] * c.fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+    d.torque[j] -= d.r[j] * c.fs;
+  }
+
+  // Walls and points: the same law with a fixed partner of zero radius.
+  auto& wl = neighbors.walls;
+  const std::size_t nw = wl.size();
+  const int n_walls = static_cast<int>(geometry.walls.size());
+  const int n_mat = n_materials;
+  for (std::size_t b = 0; b < nw;) {
+    std::size_t e = b;
+    while (e < nw && wl[e].i == wl[b].i) ++e;  // the entries of one disc: [b, e)
+    const int i = wl[b].i;
+    // Geometry first, so that a contact passing from a wall to its end point keeps its history
+    // (the normal is continuous there; the paper is silent, a reset would kick the disc).
+    char* now = touch_scratch_.data();
+    for (std::size_t a = b; a < e; ++a) {
+      WallContact& c = wl[a];
+      ObstacleHit h{};
+      now[a - b] = closest_point(geometry, c.k, d.x[i], d.y[i], h) && h.dist <= d.r[i] && h.dist > 0;
+      if (now[a - b]) {
+        c.px = h.px; c.py = h.py;
+        c.nx = (h.px - d.x[i]) / h.dist;
+        c.ny = (h.py - d.y[i]) / h.dist;
+      }
+    }
+    for (std::size_t a = b; a < e; ++a) {
+      if (!now[a - b] || wl[a].touching) continue;
+      for (std::size_t o = b; o < e; ++o)  // a new contact inherits from a lost neighbour
+        if (!now[o - b] && wl[o].touching && adjacent(wl[o].k, wl[a].k)) {
+          wl[a].en = wl[o].en; wl[a].es = wl[o].es;
+          wl[o].en = wl[o].es = 0;
+        }
+    }
+    for (std::size_t a = b; a < e; ++a) {
+      WallContact& c = wl[a];
+      c.touching = now[a - b];
+      if (!c.touching) { c.en = c.es = c.fn = c.fs = 0; continue; }
+      const double dist = std::hypot(c.px - d.x[i], c.py - d.y[i]);
+      const double nx = c.nx, ny = c.ny;
+      const double du_n = d.dux[i] * nx + d.duy[i] * ny;                         // (5a)
+      const double du_s = -d.dux[i] * ny + d.duy[i] * nx + d.r[i] * d.dphi[i];   // (5b)
+      const double overlap = d.r[i] - dist;
+      worst = std::max(worst, overlap);
+      const int km = c.k < n_walls ? geometry.walls[c.k].material
+                                   : geometry.points[c.k - n_walls].material;
+      contact_law<NS, NT, FC>(props[d.material[i] * n_mat + km], overlap, du_n, du_s, inv_dt,
+                              c.en, c.es, c.fn, c.fs);
+      d.fx[i] += -c.fn * nx + c.fs * ny;  // (15a)
+      d.fy[i] += -c.fn * ny - c.fs * nx;  // (15b)
+      d.torque[i] -= d.r[i] * c.fs;       // (15c)
+    }
+    b = e;
+  }
+  max_overlap = worst;
+}
+
+void World::select_kernel() {
+  // Every option combination is its own compiled kernel (no branch per contact).
+#define DEM_K(NS, NT, FC)                                                              \
+  if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT && \
+      options.friction_cap == FrictionCap::FC) {                                        \
+    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC>; \
+    return;                                                                             \
+  }
+#define DEM_K2(NS, NT) DEM_K(NS, NT, elastic) DEM_K(NS, NT, total)
+#define DEM_K3(NS) DEM_K2(NS, elastic) DEM_K2(NS, total) DEM_K2(NS, overlap)
+  DEM_K3(incremental)
+  DEM_K3(overlap)
+#undef DEM_K3
+#undef DEM_K2
+#undef DEM_K
+}
+
+void World::mean_abs_increment(double& mx, double& my) const {
+  mx = my = 0;
+  const std::size_t n = discs.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    mx += std::abs(discs.dux[i]);
+    my += std::abs(discs.duy[i]);
+  }
+  if (n) { mx /= n; my /= n; }
+}
+
+double World::kinetic_energy() const {
+  const Discs& d = discs;
+  double e = 0;
+  for (std::size_t i = 0; i < d.size(); ++i)
+    e += 0.5 * d.mass[i] * (d.vx[i] * d.vx[i] + d.vy[i] * d.vy[i]) +
+         0.5 / d.inv_inertia[i] * d.omega[i] * d.omega[i];
+  return e;
+}
+
+bool World::all_finite() const {
+  const Discs& d = discs;
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i]) || !std::isfinite(d.vx[i]) ||
+        !std::isfinite(d.vy[i]) || !std::isfinite(d.omega[i]))
+      return false;
+  return true;
+}
+
+const char* to_string(NormalSpring v) { return v == NormalSpring::incremental ? "incremental" : "overlap"; }
+const char* to_string(NoTension v) {
+  return v == NoTension::elastic ? "elastic" : v == NoTension::total ? "total" : "overlap";
+}
+const char* to_string(FrictionCap v) { return v == FrictionCap::elastic ? "elastic" : "total"; }
+const char* to_string(Scheme v) {
+  return v == Scheme::paper_eq18 ? "paper_eq18" : v == Scheme::paper_eq19 ? "paper_eq19" : "velocity_verlet";
+}
+
+}  // namespace dem
