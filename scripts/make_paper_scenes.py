@@ -86,7 +86,7 @@ def main():
     OUT.mkdir(parents=True, exist_ok=True)
     for s in range(12, 20):
         text = TEMPLATE.format(arr=f"{s-1}/{s}", a=s - 1, s=s, gap=gap(s),
-                               scheme="velocity_verlet", dt="5e-5", force="false")
+                               scheme="paper_eq19", dt="1e-4", force="false")
         (OUT / f"silo_{s-1}_{s}.toml").write_text(text)
     return 0
 

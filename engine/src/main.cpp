@@ -79,11 +79,12 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
                 p.m_eff, p.omega0, p.zeta_n, tc, p.restitution, p.zeta_t, p.dt_normal, p.dt_tangential, p.dt_eq26,
                 p.dt_eq21, p.dt_rot_z4);
   }
-  std::printf("  stability bound (single contact, %s): %.4g s, set by %s; dt/bound = %.3f\n", to_string(w.scheme),
-              st.dt_bound, st.limited_by.c_str(), w.dt / st.dt_bound);
-  if (w.dt > st.dt_rot_z4)
-    std::printf("  warning: dt is above the estimate %.4g s for a disc whose rotation is held by 4 sticking contacts\n",
-                st.dt_rot_z4);
+  std::printf("  stability bound of %s: %.4g s (single contact %.4g s, rotation on 4 contacts %.4g s), set by %s;"
+              " dt/bound = %.3f\n", to_string(w.scheme), st.dt_bound, st.dt_single, st.dt_rot_z4, st.limited_by.c_str(),
+              w.dt / st.dt_bound);
+  if (w.dt > st.dt_rot_z6)
+    std::printf("  warning: dt is above %.4g s, the bound for a disc whose rotation is held by 6 sticking contacts"
+                " (dense packings)\n", st.dt_rot_z6);
   std::fflush(stdout);
 }
 

@@ -213,9 +213,12 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   for (const auto& p : stab.pairs) jd.push_back(pair_json(p));
   js["derived"] = jd;
   js["stability"] = {{"dt_bound", stab.dt_bound}, {"limited_by", stab.limited_by},
+                     {"dt_single_contact", stab.dt_single},
                      {"dt_rotation_z4", finite_or_null(stab.dt_rot_z4)},
-                     {"note", "dt_bound: single contact, this scheme (spectral radius of its step); "
-                              "dt_rotation_z4: a disc's rotation held by 4 sticking contacts (estimate)"}};
+                     {"dt_rotation_z6", finite_or_null(stab.dt_rot_z6)},
+                     {"note", "bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
+                              "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
+                              "sticking contacts; dt_bound = min(single contact, rotation on 4) is enforced"}};
 
   // wall_profiles.csv
   {

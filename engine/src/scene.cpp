@@ -614,7 +614,7 @@ void build_world(const SceneSpec& s, World& w) {
     std::ostringstream os;
     os.precision(4);
     os << s.file << ": integrator.dt = " << s.dt << ": above the stability bound " << rep.dt_bound << " s of "
-       << to_string(s.scheme) << " for one contact (" << rep.limited_by
+       << to_string(s.scheme) << " (set by " << rep.limited_by
        << "); set integrator.force_dt = true (or --force-dt) to run it anyway";
     throw SceneError(os.str());
   }

@@ -5,3 +5,25 @@ from pathlib import Path
 REPO_ROOT = Path(__file__).resolve().parents[2]
 if str(REPO_ROOT) not in sys.path:
     sys.path.insert(0, str(REPO_ROOT))
+
+import os
+import subprocess
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def dem_binary():
+    """The engine built by CMake (ctest passes DEM_BINARY; otherwise build/dem)."""
+    path = Path(os.environ.get("DEM_BINARY", REPO_ROOT / "build" / "dem"))
+    if not path.exists():
+        pytest.fail(f"dem binary not found at {path}: build first (cmake --build build)")
+    return path
+
+
+@pytest.fixture
+def run_dem(dem_binary):
+    """Runs `dem ARGS...` and returns the CompletedProcess (text output)."""
+    def run(*args, timeout=300):
+        return subprocess.run([str(dem_binary), *map(str, args)], capture_output=True, text=True, timeout=timeout)
+    return run

@@ -1,0 +1,88 @@
+"""A real run of the paper's 17/18 fill: output files parse (json, csv, meshio) and agree."""
+import csv
+import json
+import math
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SCENE = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory, dem_binary):
+    import subprocess
+    out = tmp_path_factory.mktemp("silo") / "run"
+    proc = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "zeta_n" in proc.stdout and "stability bound" in proc.stdout  # the run header
+    return out
+
+
+def test_summary(run_dir):
+    s = json.loads((run_dir / "summary.json").read_text())
+    assert s["status"] == "rest" and s["rest"]["reached"]
+    assert s["n_discs"] == 350
+    # Paper's note 3: the threshold is 1e-4 g dt^2.
+    assert s["rest"]["threshold"] == pytest.approx(1e-4 * 980 * 1e-4 ** 2)
+    assert s["particle_steps_per_s"] > 0 and s["steps"] > 0
+    m = 2.65 * math.pi
+    assert s["disc_weight"] == pytest.approx(m * 980)
+    assert s["weight"] == pytest.approx(350 * m * 980)
+    assert s["balance"]["residual_relative"] < 1e-3
+    names = {w["name"] for w in s["walls"]}
+    assert names == {"left", "right", "bottom_left", "gate", "bottom_right"}
+    dd = next(p for p in s["derived"] if p["kind"] == "disc-disc")
+    # Table 2: eta_n = 15.3 rho g against m* = m/2 gives zeta = 1.0015 (reference-codes.md).
+    assert dd["zeta_n"] == pytest.approx(15.3 * 2.65 * 980 / (2 * math.sqrt(m / 2 * 3.64e4 * 2.65 * 980)))
+    assert dd["dt_bound_eq26"] == pytest.approx(15.3 / 3.64e4)
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_csv_files_agree_with_summary(run_dir):
+    s = json.loads((run_dir / "summary.json").read_text())
+    discs = read_csv(run_dir / "discs.csv")
+    assert len(discs) == s["n_discs"]
+    contacts = read_csv(run_dir / "contacts.csv")
+    for wall in s["walls"]:
+        fn = sum(float(c["f_n"]) for c in contacts if c["kind"] == "dw" and c["j"] == wall["name"])
+        assert fn == pytest.approx(wall["normal_total"], rel=1e-12, abs=1e-9)
+    prof = read_csv(run_dir / "wall_profiles.csv")
+    for wall in s["walls"]:
+        rows = [r for r in prof if r["wall"] == wall["name"]]
+        assert sum(float(r["normal"]) for r in rows) == pytest.approx(wall["normal_total"], rel=1e-12, abs=1e-9)
+        assert sum(int(r["contacts"]) for r in rows) == wall["contacts"]
+
+
+def test_vtu_files_read_with_meshio(run_dir):
+    s = json.loads((run_dir / "summary.json").read_text())
+    discs = meshio.read(run_dir / "discs.vtu")
+    assert discs.points.shape == (s["n_discs"], 3)
+    assert np.allclose(discs.point_data["radius"], 1.0)
+    assert discs.point_data["velocity"].shape == (s["n_discs"], 3)
+    contacts = meshio.read(run_dir / "contacts.vtu")
+    lines = contacts.cells_dict["line"]
+    n_csv = len(read_csv(run_dir / "contacts.csv"))
+    assert lines.shape == (n_csv, 2)
+    assert contacts.cell_data["f_n"][0].shape == (n_csv,)
+
+
+def test_no_temporary_files_left(run_dir):
+    assert not list(run_dir.glob("*.tmp"))
+
+
+def test_figures_from_a_real_run(run_dir, tmp_path):
+    from compare import figures
+    net = tmp_path / "network.png"
+    prof = tmp_path / "profiles.png"
+    figures.plot_network(run_dir, net)
+    figures.plot_side_profiles([run_dir], prof)
+    for png in (net, prof):
+        assert png.stat().st_size > 10000
