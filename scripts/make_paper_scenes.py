@@ -82,14 +82,25 @@ def gap(s):
     return 0.03 * (0.004 / 0.03) ** ((s - 12) / 6.0)
 
 
-def main():
+def scenes():
+    """{file name: text} of the eight arrangements, with the paper's own scheme and dt."""
+    return {f"silo_{s-1}_{s}.toml": TEMPLATE.format(arr=f"{s-1}/{s}", a=s - 1, s=s, gap=gap(s),
+                                                    scheme="paper_eq19", dt="1e-4", force="false")
+            for s in range(12, 20)}
+
+
+def main(argv):
+    if "--check" in argv:  # CI: the committed scenes must be what the generator writes
+        stale = [n for n, t in scenes().items() if not (OUT / n).exists() or (OUT / n).read_text() != t]
+        if stale:
+            print("stale scenes (run scripts/make_paper_scenes.py):", ", ".join(stale), file=sys.stderr)
+            return 1
+        return 0
     OUT.mkdir(parents=True, exist_ok=True)
-    for s in range(12, 20):
-        text = TEMPLATE.format(arr=f"{s-1}/{s}", a=s - 1, s=s, gap=gap(s),
-                               scheme="paper_eq19", dt="1e-4", force="false")
-        (OUT / f"silo_{s-1}_{s}.toml").write_text(text)
+    for name, text in scenes().items():
+        (OUT / name).write_text(text)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))
