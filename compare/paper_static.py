@@ -35,7 +35,7 @@ def run_one(dem, s, scheme, dt, out_root):
     scene = SCENES / f"silo_{s - 1}_{s}.toml"
     out = out_root / "runs" / f"{scheme}_dt{dt:g}" / f"silo_{s - 1}_{s}"
     cmd = [str(dem), "run", str(scene), "--out", str(out), "--scheme", scheme, "--dt", repr(dt),
-           "--force-dt", "--quiet"]
+           "--force-dt", "--quiet", "--no-plots"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     rec = {"s": s, "arrangement": label(s), "scheme": scheme, "dt": dt, "exit": proc.returncode,
            "dir": str(out.relative_to(out_root))}
@@ -86,7 +86,12 @@ def write_report(out_root, records, dem):
             for s in ARRANGEMENTS:
                 r = by.get((scheme, dt, s))
                 v = verdict(r) if r else "-"
-                cells.append(f"{r['side_mean']:.1f}" + ("" if v == "rest" else f" ({v})") if r and v != "error" else v)
+                if r and v == "rest":
+                    cells.append(f"{r['side_mean']:.1f}")
+                elif r and v == "no rest by end time":
+                    cells.append(f"{r['side_mean']:.1f} (no rest)")
+                else:
+                    cells.append(v)
             lines.append(f"| {scheme} | {dt:g} | " + " | ".join(cells) + " |")
     lines += ["", "## Time to rest [s] (simulated) and run cost", "",
               "| scheme | dt [s] | " + " | ".join(label(s) for s in ARRANGEMENTS) + " | particle-steps/s (median) |",

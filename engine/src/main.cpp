@@ -29,6 +29,7 @@ const char* kMainHelp =
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
+    "               [--no-plots]\n"
     "\n"
     "  --out DIR       output directory (created; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
@@ -36,6 +37,7 @@ const char* kRunHelp =
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
     "  --force-dt      run even if dt is above the computed stability bound\n"
     "  --quiet         no header and no progress line\n"
+    "  --no-plots      skip the PNGs (network.png, side_walls.png, made with " DEM_PYTHON_EXE " -m compare.figures)\n"
     "\n"
     "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
     "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
@@ -88,10 +90,28 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
   std::fflush(stdout);
 }
 
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// The paper's pictures of one run, drawn by the Python layer (compare/figures.py). A missing
+// Python stack costs the PNGs only, never the run.
+void make_plots(const std::string& out, bool quiet) {
+  const std::string base = std::string("PYTHONPATH=") + shell_quote(DEM_SOURCE_DIR) + " " + DEM_PYTHON_EXE +
+                           " -m compare.figures ";
+  const std::string dir = shell_quote(out);
+  const std::string redirect = quiet ? " >/dev/null 2>&1" : " >/dev/null";
+  const int a = std::system((base + "network " + dir + " --out " + shell_quote(out + "/network.png") + redirect).c_str());
+  const int b = std::system((base + "profiles " + dir + " --out " + shell_quote(out + "/side_walls.png") + redirect).c_str());
+  if (a != 0 || b != 0) std::fprintf(stderr, "dem: warning: the PNGs could not be drawn (%s -m compare.figures)\n", DEM_PYTHON_EXE);
+}
+
 int cmd_run(int argc, char** argv) {
   std::string scene, out;
   SceneOverrides ov;
-  bool quiet = false;
+  bool quiet = false, plots = true;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     auto value = [&](const char* what) -> const char* {
@@ -120,6 +140,8 @@ int cmd_run(int argc, char** argv) {
       ov.force_dt = true;
     } else if (k == "--quiet") {
       quiet = true;
+    } else if (k == "--no-plots") {
+      plots = false;
     } else if (!k.empty() && k[0] == '-') {
       return bad("unknown option " + k + " (see dem run --help)");
     } else if (scene.empty()) {
@@ -148,6 +170,7 @@ int cmd_run(int argc, char** argv) {
   if (!quiet) print_header(spec, world, stab);
   RunResult res = run_scene(spec, world, spec.progress && !quiet);
   write_outputs(out, spec, world, res, stab);
+  if (plots && res.status != RunStatus::unstable) make_plots(out, quiet);
   if (res.status == RunStatus::unstable) {
     std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),
                  res.last_good_time, out.c_str());

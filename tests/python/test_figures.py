@@ -251,12 +251,201 @@ def test_bottom_png(tmp_path):
 
 def test_cli_subcommands(tmp_path):
     run = str(make_run(tmp_path / "run"))
-    for args in (["network", run], ["profiles", run, run, "--labels", "x", "y"], ["bottom", run]):
-        out = tmp_path / f"{args[0]}.png"
+    for n, args in enumerate((["network", run], ["profiles", run, run, "--labels", "x", "y"],
+                              ["profiles", run, "--per", "bin"], ["bottom", run],
+                              ["grid", run, run, run, "--labels", "a", "b", "c", "--ncols", "2"])):
+        out = tmp_path / f"{n}_{args[0]}.png"
         done = subprocess.run([sys.executable, "-m", "compare.figures", *args, "--out", str(out)],
                               cwd=REPO_ROOT, capture_output=True, text=True)
         assert done.returncode == 0, done.stderr
         assert_png(out)
+
+
+def capture_figures(monkeypatch):
+    """Make figures._save keep the figure (still writing the PNG); returns the list of figures."""
+    kept = []
+
+    def save(fig, out_png):
+        kept.append(fig)
+        fig.savefig(out_png, dpi=50)
+        return out_png
+    monkeypatch.setattr(figures, "_save", save)
+    return kept
+
+
+def set_rest(run_dir, reached, status):
+    """Add summary.json's rest block and status to a synthetic run."""
+    path = run_dir / "summary.json"
+    summary = json.loads(path.read_text())
+    summary["rest"] = {"reached": reached}
+    summary["status"] = status
+    path.write_text(json.dumps(summary))
+
+
+def test_network_is_drawn_by_draw_network_with_the_paper_scale(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    run_dir = make_run(tmp_path / "run")
+    figures.plot_network(str(run_dir), str(tmp_path / "n.png"))
+    run = figures.load_run(str(run_dir), parts=("contacts", "discs"))
+    expected = figures.network_segments(run["contacts"], 1.0, DISC_WEIGHT)
+    lines = [c for c in kept[0].axes[0].collections if isinstance(c, figures.LineCollection)]
+    assert len(lines) == 1
+    np.testing.assert_allclose(np.array(lines[0].get_segments()), expected)
+
+
+def test_network_grid_panels_titles_and_scale(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    runs = [make_run(tmp_path / f"run{s}", s=s, name=f"{s - 1}/{s}") for s in (5, 6, 7)]
+    set_rest(runs[0], True, "rest")
+    set_rest(runs[1], False, "end_time")            # runs[2] has no rest block at all
+    out = tmp_path / "grid.png"
+    assert figures.plot_network_grid([str(r) for r in runs], str(out), ncols=2) == str(out)
+    assert_png(out)
+    fig = kept[0]
+    assert len(fig.axes) == 4                        # 2 x 2, the last one switched off
+    titles = [ax.get_title() for ax in fig.axes[:3]]
+    assert titles == ["4/5: at rest", "5/6: NOT at rest (end_time)", "6/7: rest unknown"]
+    assert not fig.axes[3].axison
+    assert "50/\u03c0" in fig._suptitle.get_text() and "disc weights" in fig._suptitle.get_text()
+    # Each panel's segments follow the same rule as plot_network (r_ref = 1 cm here) ...
+    for ax, run_dir in zip(fig.axes, runs):
+        run = figures.load_run(str(run_dir), parts=("contacts", "discs"))
+        lines = [c for c in ax.collections if isinstance(c, figures.LineCollection)]
+        np.testing.assert_allclose(np.array(lines[0].get_segments()),
+                                   figures.network_segments(run["contacts"], 1.0, DISC_WEIGHT))
+    # ... and all panels show the same length of silo per panel (one length scale).
+    spans = {(round(np.diff(ax.get_xlim())[0], 9), round(np.diff(ax.get_ylim())[0], 9))
+             for ax in fig.axes[:3]}
+    assert len(spans) == 1
+    figures.plot_network_grid([str(r) for r in runs], str(out), labels=["a", "b", "c"])
+    assert [ax.get_title().split(":")[0] for ax in kept[1].axes] == ["a", "b", "c"]
+    with pytest.raises(SystemExit, match="2 labels for 3 runs"):
+        figures.plot_network_grid([str(r) for r in runs], str(out), labels=["a", "b"])
+
+
+# --------------------------------------------------------------------------- per-contact profile
+
+SIDE_WALLS = [{"name": "left", "group": "side_left", "from": [0, 10], "to": [0, 0]},
+              {"name": "right", "group": "side_right", "from": [8, 10], "to": [8, 0]},
+              {"name": "floor", "group": "bottom", "from": [0, 0], "to": [8, 0]}]
+
+
+def contact_arrays(rows):
+    """contacts.csv arrays from rows (kind, i, j, x, y, nx, ny, f_n, f_s); e = f here."""
+    cols = {k: [] for k in figures.CONTACT_COLUMNS}
+    for kind, i, j, x, y, nx, ny, fn, fs in rows:
+        for k, v in zip(figures.CONTACT_COLUMNS, (kind, i, j, x, y, nx, ny, fn, fs, fn, fs)):
+            cols[k].append(v)
+    return {k: np.array(v, dtype=str if k in ("kind", "j") else float) for k, v in cols.items()}
+
+
+def test_side_wall_contacts_by_hand():
+    rows = [
+        # Left wall, y = 7: n = (-1, 0), t = (-ny, nx) = (0, -1). Force on the wall
+        # 5 n + 2 t = (-5, -2); along from -> to = (0, -1): friction +2 (downward). Depth 10 - 7 = 3.
+        ("dw", 0, "left", 0, 7, -1, 0, 5, 2),
+        # Right wall, y = 7 + 4e-7 (same row): n = (1, 0), t = (0, 1). Force 7 n - 1 t = (7, -1),
+        # friction +1. Depth 3 - 4e-7, within 1e-6 of the left one: mean normal 6, friction 1.5.
+        ("dw", 1, "right", 8, 7 + 4e-7, 1, 0, 7, -1),
+        # Left, y = 4 (depth 6), n = (-0.8, 0.6), t = (-0.6, -0.8): force 10 n + 5 t
+        # = (-8 - 3, 6 - 4) = (-11, 2), friction -2 (upward).
+        ("dw", 2, "left", 0, 4, -0.8, 0.6, 10, 5),
+        # Right, y = 4: n = (1, 0), t = (0, 1): force 10 n - 3 t = (10, -3), friction +3.
+        # Mean at depth 6: normal 10, friction 0.5.
+        ("dw", 3, "right", 8, 4, 1, 0, 10, -3),
+        # Ignored: a disc-disc contact and a bottom contact.
+        ("dd", 0, "2", 0.5, 5.5, 0, -1, 99, 9),
+        ("dw", 4, "floor", 4, 0, 0, -1, 50, 1),
+    ]
+    prof = figures.side_wall_contacts({"walls": SIDE_WALLS}, contact_arrays(rows))
+    assert prof["paired"]
+    np.testing.assert_allclose(prof["depth"], [3 - 2e-7, 6], atol=1e-12)
+    np.testing.assert_allclose(prof["normal"], [6, 10])
+    np.testing.assert_allclose(prof["friction"], [1.5, 0.5], atol=1e-12)
+    np.testing.assert_allclose(prof["groups"]["side_left"]["normal"], [5, 10])
+    np.testing.assert_allclose(prof["groups"]["side_left"]["friction"], [2, -2], atol=1e-12)
+    np.testing.assert_allclose(prof["groups"]["side_right"]["friction"], [1, 3], atol=1e-12)
+    assert set(prof["groups"]) == {"side_left", "side_right"}
+    np.testing.assert_allclose(prof["contacts"]["side_right"]["depth"], [3 - 4e-7, 6], atol=1e-12)
+
+
+def test_side_wall_contacts_unpaired_and_wall_direction():
+    # The right wall now runs bottom to top, so its friction flips sign: contact at y = 7 with
+    # force (7, -1) on the wall, along (0, 1): -1. The left contact at y = 4 has no partner
+    # (right contact at y = 4.5, depth 5.5): the rows are not paired.
+    walls = [dict(SIDE_WALLS[0]), {"name": "right", "group": "side_right", "from": [8, 0], "to": [8, 10]}]
+    rows = [("dw", 0, "left", 0, 7, -1, 0, 5, 2),
+            ("dw", 1, "right", 8, 7, 1, 0, 7, -1),
+            ("dw", 2, "left", 0, 4, -1, 0, 4, 0),
+            ("dw", 3, "right", 8, 4.5, 1, 0, 8, 0)]
+    prof = figures.side_wall_contacts({"walls": walls}, contact_arrays(rows))
+    assert not prof["paired"]
+    np.testing.assert_allclose(prof["depth"], [3, 5.5, 6])
+    np.testing.assert_allclose(prof["normal"], [6, 8, 4])          # one side only at 5.5 and 6
+    np.testing.assert_allclose(prof["friction"], [0.5, 0, 0], atol=1e-12)   # (2 + -1) / 2
+    assert np.isnan(prof["groups"]["side_left"]["normal"][1])
+    assert figures.side_wall_contacts({"walls": walls}, contact_arrays(rows[:0])) is None
+
+
+def test_side_wall_contacts_of_a_synthetic_run_match_the_wall_totals(tmp_path):
+    run = figures.load_run(str(make_run(tmp_path / "run", nrows=9)), parts=("contacts",))
+    prof = figures.side_wall_contacts(run["summary"], run["contacts"])
+    assert prof["paired"]
+    for w in run["summary"]["walls"]:
+        if w["group"].startswith("side"):
+            raw = prof["contacts"][w["group"]]
+            assert len(raw["depth"]) == w["contacts"]
+            np.testing.assert_allclose(raw["normal"].sum(), w["normal_total"])
+            # left wall: n = (-1, 0), force on it (-e_n, -0.1 e_n), friction +0.1 e_n = 0.04 depth W
+            if w["name"] == "left":
+                np.testing.assert_allclose(raw["friction"], 0.04 * raw["depth"] * DISC_WEIGHT)
+
+
+def test_profiles_plot_one_point_per_contact_row(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    runs = [make_run(tmp_path / "same", nrows=9, name="same"),
+            make_run(tmp_path / "differ", nrows=9, name="differ", right_factor=1.3)]
+    out = tmp_path / "side.png"
+    figures.plot_side_profiles([str(r) for r in runs], str(out))
+    assert_png(out)
+    axn, axs = kept[0].axes
+    assert "per contact" in axn.get_xlabel() and "per contact" in axs.get_xlabel()
+    assert "P_y per contact" in kept[0]._suptitle.get_text()
+    run = figures.load_run(str(runs[0]), parts=("contacts",))
+    prof = figures.side_wall_contacts(run["summary"], run["contacts"])
+    # First run: sides equal, one line per panel holding the per-row means in disc weights.
+    first = axn.get_lines()[0]
+    np.testing.assert_allclose(first.get_xdata(), prof["normal"] / DISC_WEIGHT)
+    np.testing.assert_allclose(first.get_ydata(), prof["depth"])
+    # Second run: the right wall pushes 1.3 times the left, so each side is drawn too; in the
+    # normal panel: first run 1 line, second run mean + 2 sides. In the friction panel the
+    # synthetic data's friction is +0.1 e_n on the left and -0.1 e_n on the right: sides drawn.
+    assert len(axn.get_lines()) == 1 + 3
+    assert [h for h in axn.get_legend().get_texts()][-1].get_text() == "side_right alone"
+    # per="bin" keeps the former figure.
+    figures.plot_side_profiles([str(r) for r in runs], str(out), per="bin")
+    assert "per 2 cm bin" in kept[1].axes[0].get_xlabel()
+    with pytest.raises(SystemExit, match="per must be"):
+        figures.plot_side_profiles([str(r) for r in runs], str(out), per="row")
+
+
+def test_profiles_of_a_run_with_unlevel_rows_draw_the_sides_apart(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    run_dir = make_run(tmp_path / "run", nrows=5, name="tilted")
+    path = run_dir / "contacts.csv"
+    lines = path.read_text().splitlines()
+    shifted = []
+    for line in lines:                                # move every right-wall contact up 0.01
+        cells = line.split(",")
+        if cells[0] == "dw" and cells[2] == "right":
+            cells[4] = repr(float(cells[4]) + 0.01)
+        shifted.append(",".join(cells))
+    path.write_text("\n".join(shifted) + "\n")
+    figures.plot_side_profiles([str(run_dir)], str(tmp_path / "side.png"))
+    axn = kept[0].axes[0]
+    assert len(axn.get_lines()) == 2                  # left and right, no mean line
+    assert {l.get_marker() for l in axn.get_lines()} == {"<", ">"}
+    assert "not level in tilted" in kept[0]._suptitle.get_text()
 
 
 # --------------------------------------------------------------------------- errors
@@ -279,8 +468,20 @@ def test_missing_or_malformed_csv_names_the_file(tmp_path):
     run = make_run(tmp_path / "run")
     (run / "wall_profiles.csv").unlink()
     with pytest.raises(SystemExit, match="wall_profiles.csv.*missing"):
-        figures.plot_side_profiles([str(run)], str(tmp_path / "x.png"))
+        figures.plot_side_profiles([str(run)], str(tmp_path / "x.png"), per="bin")
+    figures.plot_side_profiles([str(run)], str(tmp_path / "x.png"))   # per contact: not needed
     with open(run / "contacts.csv", "a") as f:
         f.write("dd,0,1,oops,0,1,0,1,0,1,0\n")
     with pytest.raises(SystemExit, match="contacts.csv.*'x'"):
         figures.plot_network(str(run), str(tmp_path / "x.png"))
+    with pytest.raises(SystemExit, match="contacts.csv.*'x'"):
+        figures.plot_side_profiles([str(run)], str(tmp_path / "x.png"))
+
+
+def test_profiles_without_side_wall_contacts_name_the_file(tmp_path):
+    run = make_run(tmp_path / "run")
+    rows = [line for line in (run / "contacts.csv").read_text().splitlines()
+            if ",left," not in line and ",right," not in line]
+    (run / "contacts.csv").write_text("\n".join(rows) + "\n")
+    with pytest.raises(SystemExit, match="contacts.csv.*side"):
+        figures.plot_side_profiles([str(run)], str(tmp_path / "x.png"))

@@ -74,6 +74,11 @@ def test_vtu_files_read_with_meshio(run_dir):
     assert contacts.cell_data["f_n"][0].shape == (n_csv,)
 
 
+def test_run_draws_its_pictures(run_dir):
+    for name in ("network.png", "side_walls.png"):
+        assert (run_dir / name).stat().st_size > 10000
+
+
 def test_no_temporary_files_left(run_dir):
     assert not list(run_dir.glob("*.tmp"))
 
