@@ -82,11 +82,33 @@ def gap(s):
     return 0.03 * (0.004 / 0.03) ** ((s - 12) / 6.0)
 
 
+DISCHARGE = """
+[discharge]                      # section 5(2): the slit opens under the rested fill
+time = 1.0                       # s after opening
+gate = "gate"
+outlet_depth = 4.0               # cm below the floor: removed (the paper's k = -102 region)
+jam_time = 0.3                   # s without a removal while discs remain: a jam
+on_jam = "stop"                  # or "remove_keystone" (the paper's note 4)
+series_interval = 0.005          # s, wall-force sampling
+peak_window = 0.05               # s, window of the windowed peak ratio
+snapshots = [0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0]   # s, the paper's frames
+"""
+
+
 def scenes():
-    """{file name: text} of the eight arrangements, with the paper's own scheme and dt."""
-    return {f"silo_{s-1}_{s}.toml": TEMPLATE.format(arr=f"{s-1}/{s}", a=s - 1, s=s, gap=gap(s),
-                                                    scheme="paper_eq19", dt="1e-4", force="false")
-            for s in range(12, 20)}
+    """{file name: text}: the eight static fills and the two discharges the paper shows, with
+    the paper's own scheme (eq. 19) and dt = 1e-4 s."""
+    out = {}
+    for s in range(12, 20):
+        text = TEMPLATE.format(arr=f"{s-1}/{s}", a=s - 1, s=s, gap=gap(s), scheme="paper_eq19", dt="1e-4",
+                               force="false")
+        out[f"silo_{s-1}_{s}.toml"] = text
+        if s in (12, 18):
+            d = text.replace(f'name = "silo_{s-1}_{s}"', f'name = "discharge_{s-1}_{s}"')
+            d = d.replace("closed slit, filling to rest", "fill to rest, then discharge through the 8 cm slit")
+            d = d.replace("static filling (section 5(1))", "filling, then discharge (section 5(2), Figs. 8-10)")
+            out[f"discharge_{s-1}_{s}.toml"] = d + DISCHARGE
+    return out
 
 
 def main(argv):

@@ -11,6 +11,7 @@ void Geometry::link_points(double tol) {
     p.adjacent.clear();
     for (int w = 0; w < static_cast<int>(walls.size()); ++w) {
       const Wall& s = walls[w];
+      if (!s.active) continue;
       if (std::hypot(s.ax - p.x, s.ay - p.y) <= tol || std::hypot(s.bx - p.x, s.by - p.y) <= tol)
         p.adjacent.push_back(w);
     }
@@ -46,6 +47,7 @@ bool closest_point(const Geometry& g, int k, double cx, double cy, ObstacleHit& 
   const int nw = static_cast<int>(g.walls.size());
   if (k < nw) {
     const Wall& w = g.walls[k];
+    if (!w.active) return false;
     const double u = projection(w, cx, cy);
     if (u < 0.0 || u > 1.0) return false;  // plane contact only
     hit.px = w.ax + u * (w.bx - w.ax);

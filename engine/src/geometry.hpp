@@ -12,6 +12,7 @@ struct Wall {
   std::string group;  // force reporting group, e.g. "side_left", "bottom"
   double ax, ay, bx, by;  // from (a) -> to (b); shear on the wall is reported along a -> b
   int material;
+  bool active = true;     // false once removed (the slit's gate after opening)
 };
 
 struct Point {

@@ -7,7 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "discharge.hpp"
 #include "elastic_params.hpp"
+#include "state.hpp"
 #include "outputs.hpp"
 #include "run.hpp"
 #include "scene.hpp"
@@ -29,13 +31,15 @@ const char* kMainHelp =
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
-    "               [--no-plots]\n"
+    "               [--no-plots] [--from STATE] [--save-state FILE]\n"
     "\n"
     "  --out DIR       output directory (created; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
     "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
     "  --force-dt      run even if dt is above the computed stability bound\n"
+    "  --from STATE    start from a saved state (overrides start.from; skips the fill)\n"
+    "  --save-state F  save the final state (positions, velocities, forces, contact history)\n"
     "  --quiet         no header and no progress line\n"
     "  --no-plots      skip the PNGs (network.png, side_walls.png, made with " DEM_PYTHON_EXE " -m compare.figures)\n"
     "\n"
@@ -112,6 +116,7 @@ int cmd_run(int argc, char** argv) {
   std::string scene, out;
   SceneOverrides ov;
   bool quiet = false, plots = true;
+  std::string save_to;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     auto value = [&](const char* what) -> const char* {
@@ -142,6 +147,14 @@ int cmd_run(int argc, char** argv) {
       quiet = true;
     } else if (k == "--no-plots") {
       plots = false;
+    } else if (k == "--from") {
+      const char* v = value("--from");
+      if (!v) return bad("--from needs a state file");
+      ov.from = v;
+    } else if (k == "--save-state") {
+      const char* v = value("--save-state");
+      if (!v) return bad("--save-state needs a file name");
+      save_to = v;
     } else if (!k.empty() && k[0] == '-') {
       return bad("unknown option " + k + " (see dem run --help)");
     } else if (scene.empty()) {
@@ -160,16 +173,46 @@ int cmd_run(int argc, char** argv) {
     spec = load_scene(scene, ov);
     build_world(spec, world);
     stab = stability_report(world, spec.material_names);
+    if (!spec.start_from.empty()) load_state(world, spec.start_from);
   } catch (const SceneError& e) {
     return bad(e.what());
+  } catch (const std::runtime_error& e) {
+    return bad(std::string("start.from: ") + e.what());
   }
   // Only a valid scene creates its output directory.
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) return bad("--out " + out + ": cannot create the directory: " + ec.message());
   if (!quiet) print_header(spec, world, stab);
-  RunResult res = run_scene(spec, world, spec.progress && !quiet);
-  write_outputs(out, spec, world, res, stab);
+  RunResult res;
+  if (spec.start_from.empty()) {
+    res = run_scene(spec, world, spec.progress && !quiet);  // the fill, to rest
+  } else {
+    res.status = RunStatus::end_time;
+    res.last_good = world.discs;
+    if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
+  }
+  nlohmann::ordered_json extra;
+  if (spec.discharge.enabled && res.status != RunStatus::unstable) {
+    if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
+    const DischargeResult dr = run_discharge(spec, world, out, spec.progress && !quiet);
+    extra["status"] = dr.status;
+    if (dr.status == "unstable") {
+      res.status = RunStatus::unstable;
+      res.reason = dr.reason;
+      res.last_good = world.discs;
+      extra["reason"] = dr.reason;
+    }
+    extra["discharge"] = dr.metrics;
+    if (!quiet)
+      std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
+                  dr.status.c_str(), dr.duration, dr.removals.size(), dr.metrics["discs_out_at_1s"].get<int>(),
+                  dr.metrics["flow_rate_discs"].is_null() ? NAN : dr.metrics["flow_rate_discs"].get<double>(),
+                  dr.metrics["pattern"].get<std::string>().c_str(), dr.metrics["peak_ratio_bottom"].get<double>(),
+                  dr.metrics["peak_ratio_side"].get<double>());
+  }
+  write_outputs(out, spec, world, res, stab, &extra);
+  if (!save_to.empty() && res.status != RunStatus::unstable) save_state(world, save_to);
   if (plots && res.status != RunStatus::unstable) make_plots(out, quiet);
   if (res.status == RunStatus::unstable) {
     std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace dem {
 
@@ -31,6 +32,7 @@ double reach_distance(const Geometry& g, int k, double cx, double cy) {
   const int nw = static_cast<int>(g.walls.size());
   if (k >= nw) return std::hypot(g.points[k - nw].x - cx, g.points[k - nw].y - cy);
   const Wall& w = g.walls[k];
+  if (!w.active) return std::numeric_limits<double>::infinity();
   const double ex = w.bx - w.ax, ey = w.by - w.ay;
   double u = ((cx - w.ax) * ex + (cy - w.ay) * ey) / (ex * ex + ey * ey);
   u = std::clamp(u, 0.0, 1.0);
@@ -113,6 +115,41 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g) {
     return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k);
   });
   walls.swap(new_walls_);
+}
+
+}  // namespace dem
+
+namespace dem {
+
+void Neighbors::compact(const std::vector<int>& new_index) {
+  std::size_t o = 0;
+  for (const PairContact& p : pairs) {
+    const int i = new_index[p.i], j = new_index[p.j];
+    if (i < 0 || j < 0) continue;
+    PairContact q = p;
+    q.i = i;
+    q.j = j;
+    pairs[o++] = q;
+  }
+  pairs.resize(o);
+  o = 0;
+  for (const WallContact& w : walls) {
+    const int i = new_index[w.i];
+    if (i < 0) continue;
+    WallContact q = w;
+    q.i = i;
+    walls[o++] = q;
+  }
+  walls.resize(o);
+  o = 0;
+  for (std::size_t k = 0; k < new_index.size() && k < x0_.size(); ++k)
+    if (new_index[k] >= 0) {
+      x0_[o] = x0_[k];
+      y0_[o] = y0_[k];
+      ++o;
+    }
+  x0_.resize(o);
+  y0_.resize(o);
 }
 
 }  // namespace dem

@@ -40,6 +40,11 @@ class Neighbors {
   bool needs_rebuild(const Discs& d) const;
   void rebuild(const Discs& d, const Geometry& g);
   double cell_size() const { return cell_; }
+  // Discs were removed: new_index[old] is the new index or -1. Order is kept, so the lists stay
+  // sorted and the history stays attached.
+  void compact(const std::vector<int>& new_index);
+  // Forget the reference positions: the next step rebuilds (after geometry changes).
+  void invalidate() { x0_.clear(); y0_.clear(); }
 
  private:
   std::vector<double> x0_, y0_;  // positions at the last rebuild

@@ -131,8 +131,66 @@ json pair_json(const PairReport& r) {
 
 }  // namespace
 
+
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
+  const Discs& d = w.discs;
+  std::ostringstream o;
+  o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
+  std::vector<double> lx, ly, fn, fs, en, es;
+  std::vector<int> kind;
+  for (const PairContact& c : w.neighbors.pairs) {
+    const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+    const double R = std::hypot(dx, dy);
+    if (R > d.r[c.i] + d.r[c.j] || R == 0) continue;
+    const double nx = dx / R, ny = dy / R, ov = d.r[c.i] + d.r[c.j] - R;
+    const double cx = d.x[c.i] + nx * (d.r[c.i] - 0.5 * ov), cy = d.y[c.i] + ny * (d.r[c.i] - 0.5 * ov);
+    o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
+      << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ',' << fmt(c.fs) << '\n';
+    lx.insert(lx.end(), {d.x[c.i], d.x[c.j]});
+    ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
+    fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(0);
+  }
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  for (const WallContact& c : w.neighbors.walls) {
+    if (!c.touching) continue;
+    const bool is_wall = c.k < nw;
+    const std::string name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
+    o << (is_wall ? "dw," : "dp,") << d.id[c.i] << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
+      << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+      << fmt(c.fs) << '\n';
+    lx.insert(lx.end(), {d.x[c.i], c.px});
+    ly.insert(ly.end(), {d.y[c.i], c.py});
+    fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(is_wall ? 1 : 2);
+  }
+  write_file_atomic(dir + "/" + stem + ".csv", o.str());
+  write_file_atomic(dir + "/" + stem + ".vtu",
+                    vtu(lx, ly, 2, 3, {{"f_n", fn}, {"f_s", fs}, {"e_n", en}, {"e_s", es}}, {}, {{"kind", kind}}, true));
+}
+
+void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
+                      const std::vector<double>* disp_x, const std::vector<double>* disp_y) {
+  std::ostringstream o;
+  o << "id,x,y,r,vx,vy,omega,material" << (disp_x ? ",dx,dy" : "") << "\n";
+  std::vector<double> vel, disp;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r[i]) << ',' << fmt(d.vx[i]) << ','
+      << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material[i]];
+    if (disp_x) {
+      o << ',' << fmt((*disp_x)[i]) << ',' << fmt((*disp_y)[i]);
+      disp.insert(disp.end(), {(*disp_x)[i], (*disp_y)[i], 0.0});
+    }
+    o << '\n';
+    vel.insert(vel.end(), {d.vx[i], d.vy[i], 0.0});
+  }
+  write_file_atomic(dir + "/" + stem + ".csv", o.str());
+  std::vector<std::pair<std::string, std::vector<double>>> vec3 = {{"velocity", vel}};
+  if (disp_x) vec3.push_back({"displacement", disp});
+  write_file_atomic(dir + "/" + stem + ".vtu",
+                    vtu(d.x, d.y, 1, 1, {{"radius", d.r}, {"omega", d.omega}}, vec3, {{"id", d.id}}, false));
+}
+
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
-                   const StabilityReport& stab) {
+                   const StabilityReport& stab, const json* extra) {
   const bool unstable = res.status == RunStatus::unstable;
   const Discs& d = unstable ? res.last_good : w.discs;
   std::vector<WallLoad> walls;
@@ -234,52 +292,10 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
     }
     write_file_atomic(dir + "/wall_profiles.csv", o.str());
   }
-  // contacts.csv and contacts.vtu
-  if (!unstable) {
-    std::ostringstream o;
-    o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
-    std::vector<double> lx, ly, fn, fs, en, es;
-    std::vector<int> kind;
-    for (const PairContact& c : w.neighbors.pairs) {
-      const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
-      const double R = std::hypot(dx, dy);
-      if (R > d.r[c.i] + d.r[c.j] || R == 0) continue;
-      const double nx = dx / R, ny = dy / R, ov = d.r[c.i] + d.r[c.j] - R;
-      const double cx = d.x[c.i] + nx * (d.r[c.i] - 0.5 * ov), cy = d.y[c.i] + ny * (d.r[c.i] - 0.5 * ov);
-      o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
-        << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ',' << fmt(c.fs) << '\n';
-      lx.insert(lx.end(), {d.x[c.i], d.x[c.j]}); ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
-      fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(0);
-    }
-    const int nw = static_cast<int>(w.geometry.walls.size());
-    for (const WallContact& c : w.neighbors.walls) {
-      if (!c.touching) continue;
-      const bool is_wall = c.k < nw;
-      const std::string name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
-      o << (is_wall ? "dw," : "dp,") << d.id[c.i] << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
-        << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
-        << fmt(c.fs) << '\n';
-      lx.insert(lx.end(), {d.x[c.i], c.px}); ly.insert(ly.end(), {d.y[c.i], c.py});
-      fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(is_wall ? 1 : 2);
-    }
-    write_file_atomic(dir + "/contacts.csv", o.str());
-    write_file_atomic(dir + "/contacts.vtu",
-                      vtu(lx, ly, 2, 3, {{"f_n", fn}, {"f_s", fs}, {"e_n", en}, {"e_s", es}}, {}, {{"kind", kind}}, true));
-  }
-  // discs.csv and discs.vtu
-  {
-    std::ostringstream o;
-    o << "id,x,y,r,vx,vy,omega,material\n";
-    std::vector<double> vel;
-    for (std::size_t i = 0; i < d.size(); ++i) {
-      o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r[i]) << ',' << fmt(d.vx[i]) << ','
-        << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material[i]] << '\n';
-      vel.insert(vel.end(), {d.vx[i], d.vy[i], 0.0});
-    }
-    write_file_atomic(dir + "/discs.csv", o.str());
-    write_file_atomic(dir + "/discs.vtu",
-                      vtu(d.x, d.y, 1, 1, {{"radius", d.r}, {"omega", d.omega}}, {{"velocity", vel}}, {{"id", d.id}}, false));
-  }
+  if (extra)
+    for (const auto& [k, v] : extra->items()) js[k] = v;
+  if (!unstable) write_contact_files(dir, "contacts", w);
+  write_disc_files(dir, "discs", spec, d, nullptr, nullptr);
   write_file_atomic(dir + "/summary.json", js.dump(2) + "\n");
 }
 

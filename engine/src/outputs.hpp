@@ -2,6 +2,7 @@
 // Every file is written to NAME.tmp and renamed when complete.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -30,9 +31,15 @@ struct PointLoad {
 
 void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points);
 
-// Writes all files of one run into dir (which must exist).
+// Writes all files of one run into dir (which must exist). `extra` is merged into summary.json.
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
-                   const StabilityReport& stab);
+                   const StabilityReport& stab, const nlohmann::ordered_json* extra = nullptr);
+
+// STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w);
+// STEM.csv and STEM.vtu of the discs, with displacement columns when given.
+void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
+                      const std::vector<double>* disp_x, const std::vector<double>* disp_y);
 
 // Atomic text file write: path.tmp then rename.
 void write_file_atomic(const std::string& path, const std::string& text);

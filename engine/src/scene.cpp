@@ -563,6 +563,46 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     s.cell = t.non_negative("cell", 0.0);
     t.finish();
   }
+  if (const toml::table* st = root.table("start", false)) {
+    Tab t(*st, "start", s.file);
+    s.start_from = t.str("from");
+    const auto slash = s.file.find_last_of('/');
+    if (!s.start_from.empty() && s.start_from[0] != '/' && slash != std::string::npos)
+      s.start_from = s.file.substr(0, slash + 1) + s.start_from;
+    t.finish();
+  }
+  if (const toml::table* dt = root.table("discharge", false)) {
+    Tab t(*dt, "discharge", s.file);
+    DischargeSpec& d = s.discharge;
+    d.enabled = true;
+    d.time = t.positive("time", d.time);
+    d.gate = t.str("gate", d.gate);
+    d.outlet_depth = t.positive("outlet_depth", d.outlet_depth);
+    d.jam_time = t.positive("jam_time", d.jam_time);
+    d.remove_keystone = t.choice("on_jam", {"stop", "remove_keystone"}, "stop") == "remove_keystone";
+    d.series_interval = t.positive("series_interval", d.series_interval);
+    d.peak_window = t.positive("peak_window", d.peak_window);
+    d.surface_column = t.positive("surface_column", d.surface_column);
+    if (const toml::node* n = t.node("snapshots")) {
+      auto a = n->as_array();
+      if (!a) t.fail("snapshots", show(*n), "expected an array of times [s]");
+      d.snapshots.clear();
+      for (std::size_t k = 0; k < a->size(); ++k) {
+        const toml::node& e = *a->get(k);
+        double v;
+        if (auto i = e.as_integer()) v = static_cast<double>(i->get());
+        else if (auto f = e.as_floating_point()) v = f->get();
+        else t.fail("snapshots", show(*n), "expected numbers");
+        if (!(v >= 0) || !std::isfinite(v)) t.fail("snapshots", show(*n), "times must be finite and >= 0");
+        d.snapshots.push_back(v);
+      }
+      std::sort(d.snapshots.begin(), d.snapshots.end());
+    }
+    t.finish();
+    bool found = false;
+    for (const auto& w : s.geometry.walls) found |= w.name == d.gate;
+    if (!found) throw SceneError(s.file + ": discharge.gate = \"" + d.gate + "\": no wall of that name (a [silo] with slit = \"closed\" has \"gate\")");
+  }
   s.profile_bin = 2 * rmean;
   if (const toml::table* ot = root.table("output", false)) {
     Tab t(*ot, "output", s.file);
@@ -591,6 +631,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   }
   if (ov.end_time > 0) s.end_time = ov.end_time;
   if (ov.force_dt) s.force_dt = true;
+  if (!ov.from.empty()) s.start_from = ov.from;
   check_initial_discs(s);
   return s;
 }

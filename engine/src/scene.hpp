@@ -22,6 +22,20 @@ struct DiscInit {
   int material;
 };
 
+// Section 5(2): opening the slit from the rested fill, the outlet below it, and what is recorded.
+struct DischargeSpec {
+  bool enabled = false;
+  double time = 1.0;            // [s] simulated after opening
+  std::string gate = "gate";    // wall removed at opening
+  double outlet_depth = 4.0;    // [cm] discs this far below the floor leave the computation
+  double jam_time = 0.3;        // [s] no removal for this long while discs remain: a jam
+  bool remove_keystone = false; // note 4: remove the arch's crown disc and go on (else stop)
+  double series_interval = 0.005;  // [s] wall-force sampling
+  double peak_window = 0.05;       // [s] moving-average window of the windowed peak ratio
+  std::vector<double> snapshots = {0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0};  // [s] after opening
+  double surface_column = 4.0;     // [cm] width of the surface columns at the walls and centre
+};
+
 struct SceneSpec {
   std::string file, name, description;
   double gx = 0, gy = -980.0;      // [physics] gravity [cm/s^2]
@@ -44,6 +58,8 @@ struct SceneSpec {
   bool stop_at_rest = true;
   double rest_factor = 1e-4;
   double max_overlap_fraction = 0.5;
+  std::string start_from;          // [start] from: a saved state (skips the fill)
+  DischargeSpec discharge;         // [discharge]
   double profile_bin = 0;          // [output]
   bool progress = true;
 };
@@ -54,6 +70,7 @@ struct SceneOverrides {
   std::string scheme;         // "": none
   double end_time = 0;        // 0: none
   bool force_dt = false;
+  std::string from;           // "": none; a state file to start from
 };
 SceneSpec load_scene(const std::string& path, const SceneOverrides& ov = {});
 

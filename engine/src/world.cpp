@@ -32,11 +32,15 @@ bool World::adjacent(int k1, int k2) const {
   return false;
 }
 
-void World::init() {
+void World::prepare() {
   select_kernel();
   geometry.link_points();
   touch_scratch_.assign(geometry.obstacle_count() + 1, 0);
-  neighbors.rebuild(discs, geometry);
+  neighbors.rebuild(discs, geometry);  // keeps the history already in the lists
+}
+
+void World::init() {
+  prepare();
   (this->*force_kernel_)();  // forces at the start (Verlet's first half kick uses them)
 }
 
@@ -181,6 +185,37 @@ void World::select_kernel() {
 #undef DEM_K3
 #undef DEM_K2
 #undef DEM_K
+}
+
+void World::remove_discs(const std::vector<char>& dead) {
+  Discs& d = discs;
+  const std::size_t n = d.size();
+  std::vector<int> new_index(n, -1);
+  int o = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!dead[i]) new_index[i] = o++;
+  if (static_cast<std::size_t>(o) == n) return;
+  auto keep = [&](auto& v) {
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!dead[i]) v[k++] = v[i];
+    v.resize(k);
+  };
+  keep(d.r); keep(d.mass); keep(d.inv_mass); keep(d.inv_inertia); keep(d.material); keep(d.id);
+  keep(d.x); keep(d.y); keep(d.phi); keep(d.vx); keep(d.vy); keep(d.omega);
+  keep(d.dux); keep(d.duy); keep(d.dphi); keep(d.fx); keep(d.fy); keep(d.torque);
+  neighbors.compact(new_index);
+}
+
+bool World::deactivate_wall(const std::string& name) {
+  for (Wall& w : geometry.walls)
+    if (w.name == name && w.active) {
+      w.active = false;
+      geometry.link_points();  // the slit ends now act as points
+      neighbors.invalidate();
+      return true;
+    }
+  return false;
 }
 
 void World::mean_abs_increment(double& mx, double& my) const {

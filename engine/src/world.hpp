@@ -1,6 +1,7 @@
 // The simulated world and its time step.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "discs.hpp"
@@ -29,8 +30,15 @@ class World {
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
   // Selects the specialised force kernel and computes the first forces (call before step()).
   void init();
+  // The same without computing forces: for a state restored with its forces and history.
+  void prepare();
   // One time step; the whole algorithm is here.
   void step();
+
+  // Removes the discs with dead[i] != 0 from every array (order kept; lists remapped).
+  void remove_discs(const std::vector<char>& dead);
+  // Removes a wall (the slit's gate) from the computation; false if there is no such wall.
+  bool deactivate_wall(const std::string& name);
 
   // Paper's rest measure (note 3): mean over discs of |du| and |dv| of the last step.
   void mean_abs_increment(double& mx, double& my) const;

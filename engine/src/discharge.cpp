@@ -1,0 +1,436 @@
+#include "discharge.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include "outputs.hpp"
+
+namespace dem {
+
+using json = nlohmann::ordered_json;
+
+namespace {
+
+std::string fmt(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+json num_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+// Where the slit is: the gate's ends (or the points L and R).
+struct Slit {
+  double left = 0, right = 0, floor = 0;
+};
+
+Slit find_slit(const World& w, const std::string& gate) {
+  Slit s;
+  s.floor = w.geometry.min_y();
+  for (const Wall& wl : w.geometry.walls)
+    if (wl.name == gate) {
+      s.left = std::min(wl.ax, wl.bx);
+      s.right = std::max(wl.ax, wl.bx);
+      s.floor = std::min(wl.ay, wl.by);
+    }
+  return s;
+}
+
+// Top of the fill in a column [x0, x1]: the highest disc top among discs inside the silo.
+double surface(const Discs& d, double x0, double x1, double floor) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (d.x[i] >= x0 && d.x[i] < x1 && d.y[i] > floor) top = std::max(top, d.y[i] + d.r[i]);
+  return top;
+}
+
+}  // namespace
+
+std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y) {
+  const Discs& d = w.discs;
+  const int n = static_cast<int>(d.size());
+  if (n == 0) return {};
+  double rmax = 0;
+  for (double r : d.r) rmax = std::max(rmax, r);
+  // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it.
+  std::vector<char> at_left(n, 0), at_right(n, 0);
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  for (const WallContact& c : w.neighbors.walls) {
+    if (!c.touching) continue;
+    const bool near_floor = std::abs(c.py - floor_y) < 1e-9 * (1 + std::abs(floor_y));
+    if (c.k >= nw || near_floor) {
+      if (std::abs(c.px - slit_left) <= 2 * rmax) at_left[c.i] = 1;
+      if (std::abs(c.px - slit_right) <= 2 * rmax) at_right[c.i] = 1;
+    }
+  }
+  // Breadth-first search over touching pairs from the left feet to the right feet.
+  std::vector<std::vector<int>> adj(n);
+  for (const PairContact& p : w.neighbors.pairs)
+    if (p.fn > 0) {
+      adj[p.i].push_back(p.j);
+      adj[p.j].push_back(p.i);
+    }
+  std::vector<int> prev(n, -2);
+  std::deque<int> q;
+  for (int i = 0; i < n; ++i)
+    if (at_left[i]) {
+      prev[i] = -1;
+      q.push_back(i);
+    }
+  while (!q.empty()) {
+    const int i = q.front();
+    q.pop_front();
+    if (at_right[i]) {
+      std::vector<int> path;
+      for (int k = i; k >= 0; k = prev[k]) path.push_back(k);
+      if (path.size() < 2) return {};  // one disc on both ends is not an arch
+      return path;
+    }
+    for (int j : adj[i])
+      if (prev[j] == -2 && d.y[j] > floor_y) {
+        prev[j] = i;
+        q.push_back(j);
+      }
+  }
+  return {};
+}
+
+double flow_rate(const std::vector<Removal>& removals, double t_end) {
+  std::vector<double> t, m;
+  double cum = 0;
+  for (const Removal& r : removals) {
+    if (r.keystone) continue;
+    cum += r.mass;
+    t.push_back(r.t);
+    m.push_back(cum);
+  }
+  (void)t_end;
+  if (t.size() < 10) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t a = 4;
+  double st = 0, sm = 0, stt = 0, stm = 0, k = 0;
+  for (std::size_t i = a; i < t.size(); ++i) {
+    st += t[i]; sm += m[i]; stt += t[i] * t[i]; stm += t[i] * m[i]; k += 1;
+  }
+  const double den = k * stt - st * st;
+  return den > 0 ? (k * stm - st * sm) / den : std::numeric_limits<double>::quiet_NaN();
+}
+
+DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress) {
+  const DischargeSpec& ds = spec.discharge;
+  DischargeResult res;
+  const Slit slit = find_slit(w, ds.gate);
+  const double width = w.geometry.max_x() - w.geometry.min_x();
+  const double x_left = w.geometry.min_x(), x_right = w.geometry.max_x();
+  const double xc = 0.5 * (slit.left + slit.right);
+  double rmin = std::numeric_limits<double>::infinity(), rmean = 0;
+  for (double r : w.discs.r) { rmin = std::min(rmin, r); rmean += r; }
+  rmean /= std::max<std::size_t>(1, w.discs.size());
+  const double overlap_limit = spec.max_overlap_fraction * rmin;
+  const double g = std::hypot(w.gx, w.gy);
+
+  // The static state: loads and positions at opening.
+  std::vector<WallLoad> static_walls;
+  std::vector<PointLoad> static_points;
+  measure_loads(w, spec.profile_bin, static_walls, static_points);
+  res.t_open = w.time;
+  res.n_initial = static_cast<int>(w.discs.size());
+  int max_id = 0;
+  for (int id : w.discs.id) max_id = std::max(max_id, id);
+  std::vector<double> x0(max_id + 1, NAN), y0(max_id + 1, NAN);
+  double fill_top = -1e300;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) {
+    x0[w.discs.id[i]] = w.discs.x[i];
+    y0[w.discs.id[i]] = w.discs.y[i];
+    fill_top = std::max(fill_top, w.discs.y[i]);
+  }
+  const double col = ds.surface_column;
+  auto surfaces = [&](double s[3]) {
+    s[0] = surface(w.discs, x_left, x_left + col, slit.floor);
+    s[1] = surface(w.discs, xc - 0.5 * col, xc + 0.5 * col, slit.floor);
+    s[2] = surface(w.discs, x_right - col, x_right + 1e-12, slit.floor);
+  };
+  double surf0[3];
+  surfaces(surf0);
+  double sink_time[3] = {NAN, NAN, NAN};
+
+  if (!w.deactivate_wall(ds.gate)) {
+    res.status = "unstable";
+    res.reason = "no gate wall \"" + ds.gate + "\" to open";
+    return res;
+  }
+
+  namespace fs = std::filesystem;
+  const std::string snapdir = out + "/snapshots";
+  fs::create_directories(snapdir);
+  std::ostringstream series, totals, flow, pvd_d, pvd_c;
+  series << "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
+  totals << "t,name,normal,shear,fx,fy\n";
+  flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,surface_right,"
+          "arch_discs,arch_crown_y\n";
+  const double top = w.geometry.max_y();
+
+  // Per wall and bin: series of normal force (for the ratios).
+  std::vector<std::vector<std::vector<double>>> bin_series(static_walls.size());
+  for (std::size_t k = 0; k < static_walls.size(); ++k) bin_series[k].resize(static_walls[k].bin_normal.size());
+  std::vector<std::vector<double>> total_series(static_walls.size());
+  std::vector<double> sample_t;
+
+  std::size_t next_snap = 0;
+  const double y_out = slit.floor - ds.outlet_depth;
+  double last_removal = 0;
+  double removed_mass = 0;
+  std::vector<char> dead;
+  const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
+  const long sample_every = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
+  double moved_fraction = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_print = t0;
+  res.status = "discharged";
+
+  for (long s = 0; s <= steps_total; ++s) {
+    const double t = w.time - res.t_open;
+    if (s > 0) {
+      w.step();
+      if (!(w.max_overlap <= overlap_limit) || !w.all_finite()) {
+        res.status = "unstable";
+        std::ostringstream os;
+        os << "overlap " << w.max_overlap << " cm (limit " << overlap_limit << ") or non-finite state at t = "
+           << t << " s after opening";
+        res.reason = os.str();
+        break;
+      }
+      // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
+      dead.assign(w.discs.size(), 0);
+      bool any = false;
+      for (std::size_t i = 0; i < w.discs.size(); ++i)
+        if (w.discs.y[i] < y_out) {
+          dead[i] = 1;
+          any = true;
+          res.removals.push_back({t, w.discs.id[i], w.discs.mass[i], w.discs.vx[i], w.discs.vy[i], false});
+          removed_mass += w.discs.mass[i];
+        }
+      if (any) {
+        w.remove_discs(dead);
+        last_removal = t;
+      }
+      if (w.discs.size() == 0) {
+        res.status = "emptied";
+      }
+      // Jam: nothing left through the outlet for jam_time while discs remain in the silo.
+      if (res.status != "emptied" && t - last_removal > ds.jam_time) {
+        bool inside = false;
+        for (double y : w.discs.y) inside |= y > slit.floor;
+        if (inside) {
+          ++res.jams;
+          if (res.jam_at < 0) res.jam_at = t;
+          const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
+          if (!ds.remove_keystone) {
+            res.status = "jammed";
+          } else {
+            // Note 4: remove the arch's top (crown) disc; without a found arch, the lowest disc over the slit.
+            int pick = -1;
+            for (int i : arch)
+              if (pick < 0 || w.discs.y[i] > w.discs.y[pick]) pick = i;
+            if (pick < 0)
+              for (std::size_t i = 0; i < w.discs.size(); ++i)
+                if (std::abs(w.discs.x[i] - xc) <= 0.5 * (slit.right - slit.left) + w.discs.r[i] &&
+                    w.discs.y[i] > slit.floor - w.discs.r[i] &&
+                    (pick < 0 || w.discs.y[i] < w.discs.y[pick]))
+                  pick = static_cast<int>(i);
+            if (pick < 0) {
+              res.status = "jammed";
+            } else {
+              res.removals.push_back({t, w.discs.id[pick], w.discs.mass[pick], w.discs.vx[pick], w.discs.vy[pick], true});
+              dead.assign(w.discs.size(), 0);
+              dead[pick] = 1;
+              w.remove_discs(dead);
+              last_removal = t;
+            }
+          }
+        }
+      }
+    }
+    const bool last = s == steps_total || res.status == "jammed" || res.status == "emptied";
+    // Samples: wall forces, flow, surface, arch.
+    if (s % sample_every == 0 || last) {
+      std::vector<WallLoad> walls;
+      std::vector<PointLoad> points;
+      measure_loads(w, spec.profile_bin, walls, points);
+      sample_t.push_back(t);
+      for (std::size_t k = 0; k < walls.size(); ++k) {
+        const WallLoad& L = walls[k];
+        const Wall& wl = w.geometry.walls[k];
+        totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
+               << fmt(L.fy) << '\n';
+        total_series[k].push_back(L.normal);
+        for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
+          const double mid = std::min(L.length, (b + 0.5) * L.bin);
+          const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
+          bin_series[k][b].push_back(L.bin_normal[b]);
+          series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym) << ','
+                 << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
+        }
+      }
+      for (const PointLoad& P : points)
+        totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
+               << fmt(P.fy) << '\n';
+      int inside = 0, below = 0, moved = 0;
+      for (std::size_t i = 0; i < w.discs.size(); ++i) {
+        (w.discs.y[i] > slit.floor ? inside : below)++;
+        const int id = w.discs.id[i];
+        if (std::hypot(w.discs.x[i] - x0[id], w.discs.y[i] - y0[id]) >= w.discs.r[i]) ++moved;
+      }
+      const int removed = static_cast<int>(res.removals.size());
+      moved_fraction = res.n_initial ? double(moved + removed) / res.n_initial : 0.0;
+      double sf[3];
+      surfaces(sf);
+      for (int c = 0; c < 3; ++c)
+        if (std::isnan(sink_time[c]) && !(sf[c] > surf0[c] - rmean)) sink_time[c] = t;
+      const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
+      double crown = NAN;
+      for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
+      flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(removed_mass) << ','
+           << fmt(moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
+           << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
+    }
+    // Snapshots at the requested times (and at the end).
+    while (next_snap < ds.snapshots.size() && ds.snapshots[next_snap] <= t + 0.5 * w.dt) {
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "%04zu", next_snap);
+      std::vector<double> dx(w.discs.size()), dy(w.discs.size());
+      for (std::size_t i = 0; i < w.discs.size(); ++i) {
+        dx[i] = w.discs.x[i] - x0[w.discs.id[i]];
+        dy[i] = w.discs.y[i] - y0[w.discs.id[i]];
+      }
+      write_disc_files(snapdir, std::string("discs_") + stem, spec, w.discs, &dx, &dy);
+      write_contact_files(snapdir, std::string("contacts_") + stem, w);
+      pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
+      pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+      ++next_snap;
+    }
+    if (progress && (s & 1023) == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
+        last_print = now;
+        std::fprintf(stderr, "\r  discharge t = %.3f / %.3f s, %zu removed   ", t, ds.time, res.removals.size());
+        std::fflush(stderr);
+      }
+    }
+    if (res.status != "discharged" || last) break;
+  }
+  if (progress && last_print != t0) std::fprintf(stderr, "\n");
+  res.duration = w.time - res.t_open;
+
+  write_file_atomic(out + "/wall_series.csv", series.str());
+  write_file_atomic(out + "/wall_totals_series.csv", totals.str());
+  write_file_atomic(out + "/flow_series.csv", flow.str());
+  {
+    std::ostringstream o;
+    o << "t,id,mass,vx,vy,how\n";
+    for (const Removal& r : res.removals)
+      o << fmt(r.t) << ',' << r.id << ',' << fmt(r.mass) << ',' << fmt(r.vx) << ',' << fmt(r.vy) << ','
+        << (r.keystone ? "keystone" : "outlet") << '\n';
+    write_file_atomic(out + "/removals.csv", o.str());
+  }
+  for (auto [name, body] : {std::pair{"discharge_discs.pvd", pvd_d.str()}, std::pair{"discharge_contacts.pvd", pvd_c.str()}})
+    write_file_atomic(out + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
+                                            body + "  </Collection>\n</VTKFile>\n");
+
+  // Ratios of peak to static: raw maximum and the maximum of a moving average.
+  const std::size_t win = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every * w.dt))));
+  auto peaks = [&](const std::vector<double>& v, double& raw, double& windowed) {
+    raw = 0;
+    windowed = 0;
+    double acc = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      raw = std::max(raw, v[i]);
+      acc += v[i];
+      if (i >= win) acc -= v[i - win];
+      if (i + 1 >= win) windowed = std::max(windowed, acc / win);
+    }
+  };
+  json walls_json = json::array();
+  double best_bottom[2] = {0, 0}, best_side[2] = {0, 0};
+  for (std::size_t k = 0; k < static_walls.size(); ++k) {
+    const WallLoad& S = static_walls[k];
+    double raw, wnd;
+    peaks(total_series[k], raw, wnd);
+    json bins = json::array();
+    double smax = 0;
+    for (double v : S.bin_normal) smax = std::max(smax, v);
+    for (std::size_t b = 0; b < S.bin_normal.size(); ++b) {
+      double br, bw;
+      peaks(bin_series[k][b], br, bw);
+      // Bins that carried little at rest have no meaningful ratio (one contact of 1 disc weight).
+      const bool ok = S.bin_normal[b] >= 0.25 * smax && smax > 0;
+      const double rr = ok ? br / S.bin_normal[b] : NAN, rw = ok ? bw / S.bin_normal[b] : NAN;
+      bins.push_back({{"bin", b}, {"static", S.bin_normal[b]}, {"peak", br}, {"peak_windowed", bw},
+                      {"ratio", num_or_null(rr)}, {"ratio_windowed", num_or_null(rw)}});
+      if (ok && S.name != ds.gate) {
+        double* best = S.group == "bottom" ? best_bottom : (S.group.rfind("side", 0) == 0 ? best_side : nullptr);
+        if (best) {
+          best[0] = std::max(best[0], rr);
+          best[1] = std::max(best[1], rw);
+        }
+      }
+    }
+    walls_json.push_back({{"name", S.name}, {"group", S.group}, {"static_normal", S.normal}, {"peak_normal", raw},
+                          {"peak_normal_windowed", wnd},
+                          {"ratio", S.normal > 0 ? json(raw / S.normal) : json(nullptr)},
+                          {"ratio_windowed", S.normal > 0 ? json(wnd / S.normal) : json(nullptr)}, {"bins", bins}});
+  }
+
+  // Flow pattern (documented in docs/outputs.md).
+  const double t_walls = std::isnan(sink_time[0]) ? sink_time[2]
+                         : std::isnan(sink_time[2]) ? sink_time[0] : std::min(sink_time[0], sink_time[2]);
+  std::string pattern = "undetermined";
+  if (!std::isnan(t_walls) && (std::isnan(sink_time[1]) || t_walls < sink_time[1])) pattern = "funnel";
+  else if (!std::isnan(sink_time[1]) && (std::isnan(t_walls) || sink_time[1] <= t_walls)) pattern = "piping";
+  int out_1s = 0;
+  for (const Removal& r : res.removals)
+    if (!r.keystone && r.t <= 1.0 + 1e-12) ++out_1s;
+  const double q = flow_rate(res.removals, res.duration);
+  const double m_disc = w.discs.size() ? w.discs.mass[0] : (res.removals.empty() ? 1.0 : res.removals[0].mass);
+  res.metrics = {
+      {"status", res.status},
+      {"t_open", res.t_open},
+      {"duration", res.duration},
+      {"n_initial", res.n_initial},
+      {"removed", res.removals.size()},
+      {"removed_by_hand", std::count_if(res.removals.begin(), res.removals.end(), [](const Removal& r) { return r.keystone; })},
+      {"discs_out_at_1s", out_1s},
+      {"flow_rate_mass", num_or_null(q)},
+      {"flow_rate_discs", num_or_null(q / m_disc)},
+      {"flow_rate_note", "slope of cumulative removed mass [g/s per cm] from the 5th removal on (least squares)"},
+      {"jammed", res.status == "jammed"},
+      {"jam_at", res.jam_at >= 0 ? json(res.jam_at) : json(nullptr)},
+      {"jams", res.jams},
+      {"peak_ratio_bottom", best_bottom[0]},
+      {"peak_ratio_bottom_windowed", best_bottom[1]},
+      {"peak_ratio_side", best_side[0]},
+      {"peak_ratio_side_windowed", best_side[1]},
+      {"ratio_note", "max over the bins (static >= 1/4 of the wall's largest) of peak / static normal force; "
+                     "windowed: moving average over peak_window"},
+      {"pattern", pattern},
+      {"surface_sink_time", {{"left_wall", num_or_null(sink_time[0])}, {"centre", num_or_null(sink_time[1])},
+                             {"right_wall", num_or_null(sink_time[2])}}},
+      {"pattern_note", "funnel: the top surface first sinks (by one mean radius) at a wall column; piping: first at "
+                       "the centre column"},
+      {"moved_fraction_end", moved_fraction},
+      {"dead_fraction_end", 1.0 - moved_fraction},
+      {"slit", {slit.left, slit.right}},
+      {"outlet_y", y_out},
+      {"walls", walls_json},
+      {"fill_top", fill_top},
+      {"width", width},
+      {"gravity", g}};
+  return res;
+}
+
+}  // namespace dem
