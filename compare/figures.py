@@ -40,7 +40,15 @@ CONTACT_COLUMNS = ("kind", "i", "j", "x", "y", "nx", "ny", "e_n", "e_s", "f_n", 
 DISC_COLUMNS = ("id", "x", "y", "r", "vx", "vy", "omega", "material")
 PROFILE_COLUMNS = ("wall", "group", "bin", "s_lo", "s_hi", "x_mid", "y_mid", "depth_mid",
                    "normal", "shear", "contacts")
-TEXT_COLUMNS = {"kind", "j", "wall", "group", "material"}   # kept as str
+# Discharge outputs (docs/outputs.md, "Discharge outputs").
+SNAPSHOT_DISC_COLUMNS = DISC_COLUMNS + ("dx", "dy")
+REMOVAL_COLUMNS = ("t", "id", "mass", "vx", "vy", "how")
+FLOW_COLUMNS = ("t", "discs_in_silo", "discs_below", "removed", "removed_mass", "moved_fraction",
+                "surface_left", "surface_centre", "surface_right", "arch_discs", "arch_crown_y")
+WALL_SERIES_COLUMNS = ("t", "wall", "bin", "s_mid", "x_mid", "y_mid", "depth_mid", "normal",
+                       "shear")
+WALL_TOTALS_COLUMNS = ("t", "name", "normal", "shear", "fx", "fy")
+TEXT_COLUMNS = {"kind", "j", "wall", "group", "material", "how", "name"}   # kept as str
 INT_COLUMNS = {"i", "id", "bin", "contacts"}                 # converted to int
 
 # Line styles of the separate side walls in the profile figure.
@@ -60,12 +68,14 @@ def _fail(path, message):
 # --------------------------------------------------------------------------- reading
 
 
-def read_csv(path, columns):
+def read_csv(path, columns, empty=None):
     """Read a CSV file with the given columns into a dict of numpy arrays.
 
     A header row naming exactly ``columns`` is skipped if present. Columns in TEXT_COLUMNS
     stay strings, INT_COLUMNS become int, the others float. An empty file (or a header
-    alone) gives arrays of length 0.
+    alone) gives arrays of length 0. With ``empty`` given (e.g. nan), an empty cell of a float
+    column reads as that value (flow_series.csv leaves the arch columns empty when there is
+    no arch); otherwise it is an error.
     """
     if not os.path.isfile(path):
         _fail(path, "file is missing")
@@ -81,7 +91,10 @@ def read_csv(path, columns):
                 _fail(path, f"line {line}: expected {len(columns)} fields "
                             f"({','.join(columns)}), found {len(row)}")
             cell = row[k]
-            if name not in TEXT_COLUMNS:
+            if name not in TEXT_COLUMNS and empty is not None and cell == "" \
+                    and name not in INT_COLUMNS:
+                cell = empty
+            elif name not in TEXT_COLUMNS:
                 try:
                     cell = int(cell) if name in INT_COLUMNS else float(cell)
                 except ValueError:
@@ -335,6 +348,30 @@ def network_bounds(run, pad_fraction=0.04):
     return x0 - pad, x1 + pad, y0 - pad, y1 + pad
 
 
+def _draw_discs(ax, discs, facecolors, edgecolors, linewidth, zorder=1):
+    """Discs of their true radius (an EllipseCollection in data units)."""
+    ax.add_collection(EllipseCollection(
+        2 * discs["r"], 2 * discs["r"], np.zeros(len(discs["r"])), units="xy",
+        offsets=np.column_stack([discs["x"], discs["y"]]), offset_transform=ax.transData,
+        facecolors=facecolors, edgecolors=edgecolors, linewidths=linewidth, zorder=zorder))
+
+
+def _draw_walls(ax, walls, linewidth, skip=()):
+    """Walls as thick black lines, leaving out those whose name is in ``skip``."""
+    for w in walls:
+        if w.get("name") in skip:
+            continue
+        ax.plot([w["from"][0], w["to"][0]], [w["from"][1], w["to"][1]],
+                color="black", linewidth=3 * linewidth, solid_capstyle="round")
+
+
+def _draw_points(ax, points, linewidth):
+    """Point contacts ({name: (x, y)}) as black dots."""
+    if points:
+        px, py = zip(*points.values())
+        ax.plot(px, py, "o", color="black", markersize=3 * linewidth)
+
+
 def draw_network(ax, run, linewidth=1.0):
     """Draw one run's contact-force network (the paper's Fig. 6) on a matplotlib Axes.
 
@@ -352,17 +389,10 @@ def draw_network(ax, run, linewidth=1.0):
     points = point_positions(summary, contacts)
     x0, x1, y0, y1 = network_bounds(run)
 
-    ax.add_collection(EllipseCollection(
-        2 * discs["r"], 2 * discs["r"], np.zeros(len(discs["r"])), units="xy",
-        offsets=np.column_stack([discs["x"], discs["y"]]), offset_transform=ax.transData,
-        facecolors="none", edgecolors="0.6", linewidths=0.5 * linewidth))
+    _draw_discs(ax, discs, "none", "0.6", 0.5 * linewidth)
     ax.add_collection(LineCollection(segments, colors="darkred", linewidths=1.2 * linewidth))
-    for w in summary["walls"]:
-        ax.plot([w["from"][0], w["to"][0]], [w["from"][1], w["to"][1]],
-                color="black", linewidth=3 * linewidth, solid_capstyle="round")
-    if points:
-        px, py = zip(*points.values())
-        ax.plot(px, py, "o", color="black", markersize=3 * linewidth)
+    _draw_walls(ax, summary["walls"], linewidth)
+    _draw_points(ax, points, linewidth)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")

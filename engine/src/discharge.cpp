@@ -194,9 +194,9 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
   res.status = "discharged";
 
   for (long s = 0; s <= steps_total; ++s) {
+    if (s > 0) w.step();
     const double t = w.time - res.t_open;
     if (s > 0) {
-      w.step();
       if (!(w.max_overlap <= overlap_limit) || !w.all_finite()) {
         res.status = "unstable";
         std::ostringstream os;
@@ -326,6 +326,7 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
   }
   if (progress && last_print != t0) std::fprintf(stderr, "\n");
   res.duration = w.time - res.t_open;
+  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   write_file_atomic(out + "/wall_series.csv", series.str());
   write_file_atomic(out + "/wall_totals_series.csv", totals.str());

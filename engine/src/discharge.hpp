@@ -24,6 +24,7 @@ struct DischargeResult {
   std::string reason;      // unstable: what grew where
   double t_open = 0;       // [s] world time at opening
   double duration = 0;     // [s] simulated since opening
+  double wall_seconds = 0; // [s] of computing
   int n_initial = 0;
   std::vector<Removal> removals;
   double jam_at = -1;      // [s] since opening when a jam was declared (first one), -1 none

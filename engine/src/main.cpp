@@ -196,6 +196,7 @@ int cmd_run(int argc, char** argv) {
   if (spec.discharge.enabled && res.status != RunStatus::unstable) {
     if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
     const DischargeResult dr = run_discharge(spec, world, out, spec.progress && !quiet);
+    res.wall_seconds += dr.wall_seconds;
     extra["status"] = dr.status;
     if (dr.status == "unstable") {
       res.status = RunStatus::unstable;
@@ -220,12 +221,16 @@ int cmd_run(int argc, char** argv) {
     return 3;
   }
   if (!quiet) {
-    std::printf("  %s at t = %.4f s after %ld steps; rest %s", to_string(res.status), world.time, world.steps,
-                res.rest_reached ? "reached" : "not reached");
+    if (spec.discharge.enabled)
+      std::printf("  %s at t = %.4f s after %ld steps", extra["status"].get<std::string>().c_str(), world.time, world.steps);
+    else
+      std::printf("  %s at t = %.4f s after %ld steps", to_string(res.status), world.time, world.steps);
+    std::printf("; fill rest %s", res.rest_reached ? "reached" : "not reached");
     if (res.rest_reached) std::printf(" at t = %.4f s", res.rest_time);
     std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s\n", res.wall_seconds,
-                res.wall_seconds > 0 ? world.discs.size() * double(world.steps) / res.wall_seconds : 0.0, out.c_str());
+                res.wall_seconds > 0 ? world.particle_steps / res.wall_seconds : 0.0, out.c_str());
   }
+
   return 0;
 }
 

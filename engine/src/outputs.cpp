@@ -215,7 +215,8 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   js["steps"] = w.steps;
   js["time"] = w.time;
   js["wall_time_s"] = res.wall_seconds;
-  js["particle_steps_per_s"] = res.wall_seconds > 0 ? d.size() * static_cast<double>(w.steps) / res.wall_seconds : 0.0;
+  js["particle_steps"] = w.particle_steps;
+  js["particle_steps_per_s"] = res.wall_seconds > 0 ? w.particle_steps / res.wall_seconds : 0.0;
   js["neighbor_rebuilds"] = w.neighbors.rebuilds;
   js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(res.rest_time) : json(nullptr)},
                 {"criterion", "mean over discs of |du| and of |dv| per step < rest_factor * g * dt^2 (paper note 3)"},

@@ -21,6 +21,7 @@ void World::step() {
   }
   time += dt;
   ++steps;
+  particle_steps += static_cast<double>(discs.size());
 }
 
 bool World::adjacent(int k1, int k2) const {

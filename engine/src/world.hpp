@@ -25,6 +25,7 @@ class World {
 
   double time = 0;
   long steps = 0;
+  double particle_steps = 0;  // sum over steps of the number of discs (throughput)
   double max_overlap = 0;  // largest overlap seen by the last force computation [cm]
 
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
