@@ -9,7 +9,14 @@ The file formats read here are those of docs/outputs.md:
 - ``profiles``: side-wall normal force and wall friction against depth for several runs
   (Fig. 7): by default one point per side-wall contact (from contacts.csv, as the paper
   plots P_y per contact), or with ``--per bin`` per depth bin of wall_profiles.csv;
-- ``bottom``:   bottom-wall normal force per bin against X for one run.
+- ``bottom``:   bottom-wall normal force per bin against X for one run;
+- ``frames``:   discs (coloured by displacement since opening) and contact forces at the
+  discharge snapshots, one panel each (the paper's Figs. 8 and 9);
+- ``ratios``:   wall normal force per bin relative to static against time during discharge,
+  as heat maps, and the wall totals (the paper's Fig. 10);
+- ``flow``:     removed discs, discs in the silo, moved fraction, surface heights and the arch
+  against time during discharge;
+- ``discharge``: the three discharge figures of one run into one folder.
 
 Usage, from the repository root::
 
@@ -17,6 +24,10 @@ Usage, from the repository root::
     /usr/bin/python3 -m compare.figures grid RUN_DIR [RUN_DIR ...] --out grid.png [--labels ...]
     /usr/bin/python3 -m compare.figures profiles RUN_DIR [RUN_DIR ...] --out side.png [--per bin]
     /usr/bin/python3 -m compare.figures bottom RUN_DIR --out bottom.png
+    /usr/bin/python3 -m compare.figures frames RUN_DIR --out frames.png [--times 0 0.1 ...]
+    /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
+    /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
+    /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
 """
 
 import argparse
@@ -24,6 +35,7 @@ import csv
 import json
 import math
 import os
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import matplotlib
@@ -631,11 +643,511 @@ def plot_bottom_profile(run_dir, out_png):
     return _save(fig, out_png)
 
 
+# --------------------------------------------------------------------------- discharge
+
+# The gate wall is removed at opening; summary.json does not name it (docs/outputs.md), so the
+# wall of this name is the gate unless summary["discharge"]["gate"] says otherwise.
+GATE_NAME = "gate"
+# Discs that moved less than this many radii since opening are "dead" (docs/outputs.md).
+DEAD_RADII = 1.0
+# Bins whose static (t = 0) normal force is below this fraction of the wall's largest static bin
+# are masked in the ratio heat maps (docs/outputs.md: peak_ratio_*).
+STATIC_FRACTION = 0.25
+# Colour range of the force / static ratio (log scale, ratio 1 = white).
+RATIO_LIMITS = (0.1, 30.0)
+# Colours of the three surface columns and of the wall groups.
+SURFACE_COLOURS = {"left": "tab:blue", "centre": "tab:red", "right": "tab:green"}
+
+
+def discharge_info(summary, path):
+    """summary["discharge"], or stop: the run has no [discharge] table."""
+    info = summary.get("discharge")
+    if not isinstance(info, dict):
+        _fail(path, "no 'discharge' object: not a discharge run (scene without [discharge])")
+    return info
+
+
+def gate_name(summary):
+    """Name of the gate wall: summary["discharge"]["gate"] if given, else 'gate'."""
+    gate = (summary.get("discharge") or {}).get("gate")
+    return gate if isinstance(gate, str) and gate else GATE_NAME
+
+
+def read_pvd(path):
+    """The DataSets of a ParaView collection (.pvd) as (timestep, file) pairs sorted by time
+    (stable: equal times keep their order in the file). ``file`` is as written (relative to
+    the .pvd's folder)."""
+    if not os.path.isfile(path):
+        _fail(path, "file is missing")
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as err:
+        _fail(path, f"not valid XML: {err}")
+    found = []
+    for ds in root.iter("DataSet"):
+        try:
+            t = float(ds.get("timestep"))
+        except (TypeError, ValueError):
+            _fail(path, f"DataSet without a numeric timestep: {ds.attrib}")
+        if not ds.get("file"):
+            _fail(path, f"DataSet without a file: {ds.attrib}")
+        found.append((t, ds.get("file")))
+    return sorted(found, key=lambda pair: pair[0])
+
+
+def _same_time(a, b):
+    return abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))
+
+
+def snapshot_index(run_dir):
+    """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t.
+
+    Times (since opening) come from discharge_discs.pvd's timestep attributes; each VTU file
+    named there has a CSV twin of the same stem (snapshots/discs_NNNN.csv). The contacts CSV is
+    the twin of discharge_contacts.pvd's file at the same time, or, without that .pvd or time,
+    the discs file's name with 'discs_' replaced by 'contacts_'.
+    """
+    discs = read_pvd(os.path.join(run_dir, "discharge_discs.pvd"))
+    contacts_pvd = os.path.join(run_dir, "discharge_contacts.pvd")
+    contacts = read_pvd(contacts_pvd) if os.path.isfile(contacts_pvd) else []
+    snaps = []
+    for t, name in discs:
+        match = [c for tc, c in contacts if _same_time(t, tc)]
+        if match:
+            cname = match[0]
+        else:
+            folder, base = os.path.split(name)
+            cname = os.path.join(folder, base.replace("discs_", "contacts_", 1))
+        snaps.append({"t": t,
+                      "discs": os.path.join(run_dir, os.path.splitext(name)[0] + ".csv"),
+                      "contacts": os.path.join(run_dir, os.path.splitext(cname)[0] + ".csv")})
+    return snaps
+
+
+def select_snapshots(snaps, times=None):
+    """All snapshots (times None), or for each requested time the snapshot nearest to it
+    (each snapshot once, in time order)."""
+    if not snaps:
+        raise SystemExit("compare.figures: the run has no discharge snapshots")
+    if times is None:
+        return list(snaps)
+    at = np.array([s["t"] for s in snaps])
+    picked = sorted({int(np.argmin(np.abs(at - float(t)))) for t in times})
+    return [snaps[k] for k in picked]
+
+
+def displacement_radii(discs):
+    """Displacement since opening, |(dx, dy)| / r, of each disc of a snapshot."""
+    return np.hypot(discs["dx"], discs["dy"]) / discs["r"]
+
+
+def wall_series_matrix(series, wall):
+    """One wall's bins over time from wall_series.csv arrays, or None if the wall is absent.
+
+    Returns a dict: ``t`` (sorted sample times), ``bin`` (sorted bin numbers), ``s_mid``,
+    ``x_mid``, ``y_mid``, ``depth_mid`` (per bin, from its first row), and ``normal``,
+    ``shear`` as (len(t), len(bin)) arrays (nan where a sample lacks a bin).
+    """
+    sel = series["wall"] == wall
+    if not np.any(sel):
+        return None
+    times, it = np.unique(series["t"][sel], return_inverse=True)
+    bins, first, ib = np.unique(series["bin"][sel], return_index=True, return_inverse=True)
+    out = {"t": times, "bin": bins}
+    for q in ("s_mid", "x_mid", "y_mid", "depth_mid"):
+        out[q] = np.asarray(series[q], float)[sel][first]
+    for q in ("normal", "shear"):
+        m = np.full((len(times), len(bins)), np.nan)
+        m[it, ib] = np.asarray(series[q], float)[sel]
+        out[q] = m
+    return out
+
+
+def static_ratio(normal, fraction=STATIC_FRACTION):
+    """Force over static force per bin: returns (ratio, static, keep).
+
+    ``normal`` is a (time, bin) array whose first row is the static state (t = 0, at opening).
+    A bin is kept if its static value is positive and at least ``fraction`` of the largest
+    static bin; ratio = normal / static in kept bins, nan in the others.
+    """
+    normal = np.asarray(normal, float)
+    static = normal[0] if len(normal) else np.zeros(normal.shape[1:])
+    positive = np.isfinite(static) & (static > 0)
+    largest = float(static[positive].max()) if positive.any() else 0.0
+    keep = positive & (static >= fraction * largest)
+    ratio = np.full(normal.shape, np.nan)
+    ratio[:, keep] = normal[:, keep] / static[keep]
+    return ratio, static, keep
+
+
+def cell_edges(centres):
+    """Edges of cells around sorted centres (midpoints; the ends mirror the nearest gap)."""
+    c = np.asarray(centres, float)
+    if len(c) == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = (c[1:] + c[:-1]) / 2
+    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+
+
+def flow_fit_line(t, cumulative, slope, first=5):
+    """The fitted flow line through cumulative removals: returns (t0, t1, intercept) or None.
+
+    summary.json gives only the least-squares slope, from the ``first``-th removal on; the
+    least-squares intercept for that slope over the same points is mean(M) - slope mean(t).
+    The line is drawn from the first to the last of those points.
+    """
+    if slope is None or len(t) < first:
+        return None
+    t, m = np.asarray(t, float)[first - 1:], np.asarray(cumulative, float)[first - 1:]
+    return float(t[0]), float(t[-1]), float(np.mean(m) - slope * np.mean(t))
+
+
+def _fmt(value, spec=".3g"):
+    """A number formatted, or 'n/a' for None / non-numbers."""
+    return format(value, spec) if isinstance(value, (int, float)) else "n/a"
+
+
+def _discharge_head(summary):
+    """'scene: pattern flow, status S' for discharge figure titles."""
+    info = summary.get("discharge") or {}
+    return (f"{scene_name(summary)}: {info.get('pattern', '?')} flow, "
+            f"status {summary.get('status', '?')}")
+
+
+def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
+    """Disc positions and contact forces at the discharge snapshots (the paper's Figs. 8, 9).
+
+    One panel per snapshot (all, or the nearest to each of ``times``, seconds since opening):
+    walls without the gate (open), slit ends, discs coloured by their displacement since
+    opening (light grey: less than one radius, 'dead'; log colour scale above), and the
+    contact-force segments e_n n + e_s t with plot_network's scale (one diameter of disc 0 =
+    50/pi disc weights). All panels share the same limits, which reach down to the outlet
+    (summary["discharge"]["outlet_y"], where discs are removed).
+    """
+    spath = os.path.join(run_dir, "summary.json")
+    summary = read_summary(spath)
+    info = discharge_info(summary, spath)
+    if ncols < 1:
+        raise SystemExit(f"compare.figures: ncols must be >= 1, found {ncols}")
+    snaps = select_snapshots(snapshot_index(run_dir), times)
+    frames = [(s["t"], read_csv(s["discs"], SNAPSHOT_DISC_COLUMNS),
+               read_csv(s["contacts"], CONTACT_COLUMNS)) for s in snaps]
+    r_ref = next((reference_radius(d) for _, d, _ in frames if len(d["r"])), None)
+    if r_ref is None:
+        _fail(snaps[0]["discs"], "no discs in any snapshot: the plot scale needs disc 0")
+    weight = summary["disc_weight"]
+    gate = gate_name(summary)
+    walls = [w for w in summary["walls"] if w.get("name") != gate]
+    points = point_positions(summary, None)
+    for _, _, c in frames:
+        points.update({k: v for k, v in point_positions({}, c).items() if k not in points})
+    n_initial = info.get("n_initial") or len(frames[0][1]["r"])
+    outlet_y = info.get("outlet_y")
+
+    xs = [c[0] for w in walls for c in (w["from"], w["to"])] + [p[0] for p in points.values()]
+    ys = [c[1] for w in walls for c in (w["from"], w["to"])] + [p[1] for p in points.values()]
+    if isinstance(outlet_y, (int, float)):
+        ys.append(outlet_y)
+    for _, d, _ in frames:
+        if len(d["r"]):
+            xs += [np.min(d["x"] - d["r"]), np.max(d["x"] + d["r"])]
+            ys += [np.min(d["y"] - d["r"]), np.max(d["y"] + d["r"])]
+    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
+    pad = 0.03 * max(x1 - x0, y1 - y0, 1e-9)
+    x0, x1, y0, y1 = x0 - pad, x1 + pad, y0 - pad, y1 + pad
+
+    top = max([float(np.max(displacement_radii(d))) for _, d, _ in frames if len(d["r"])] + [0])
+    norm = matplotlib.colors.LogNorm(DEAD_RADII, max(2.0 * DEAD_RADII, top))
+    cmap = matplotlib.colors.LinearSegmentedColormap.from_list(
+        "moved", plt.get_cmap("YlOrRd")(np.linspace(0.15, 0.85, 256)))
+    dead_colour = matplotlib.colors.to_rgba("0.88")
+
+    ncols = min(ncols, len(frames))
+    nrows = -(-len(frames) // ncols)
+    panel = 3.2
+    aspect = (y1 - y0) / (x1 - x0)
+    fig, axes = plt.subplots(nrows, ncols, squeeze=False, layout="constrained",
+                             figsize=(panel * ncols + 0.9, panel * aspect * nrows + 1.0))
+    lw = 0.55
+    for k, ax in enumerate(axes.flat):
+        if k >= len(frames):
+            ax.axis("off")
+            continue
+        t, discs, contacts = frames[k]
+        moved = displacement_radii(discs)
+        dead = moved < DEAD_RADII
+        face = np.empty((len(moved), 4))
+        face[dead] = dead_colour
+        face[~dead] = cmap(norm(moved[~dead]))
+        _draw_discs(ax, discs, face, "0.5", 0.4 * lw)
+        ax.add_collection(LineCollection(network_segments(contacts, r_ref, weight),
+                                         colors="black", linewidths=1.6 * lw, zorder=3))
+        _draw_walls(ax, walls, lw)
+        _draw_points(ax, points, lw * 1.5)
+        slit = info.get("slit")
+        if isinstance(outlet_y, (int, float)) and isinstance(slit, list) and len(slit) == 2:
+            ax.plot(slit, [outlet_y, outlet_y], ":", color="0.3", linewidth=1.0)
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=6)
+        ax.set_title(f"t = {t:.2f} s", fontsize=10)
+        ax.text(x0 + pad, y0 + pad, f"{len(moved)} discs\ndead {np.sum(dead) / n_initial:.0%}",
+                fontsize=6.5, va="bottom", ha="left")
+    bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=axes,
+                       shrink=0.8, pad=0.01, aspect=30)
+    bar.set_label("displacement since opening [radii]; grey: < 1 (dead)", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+    fig.suptitle(f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
+                 f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)\n"
+                 f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
+                 f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
+                 f"(discs removed); dead = share of the {n_initial} discs at opening",
+                 fontsize=10)
+    return _save(fig, out_png)
+
+
+def _ratio_image(ax, m, ratio, position, log_norm, cmap):
+    """Draw one wall's ratio matrix as cells (time x position); returns the QuadMesh."""
+    order = np.argsort(position, kind="stable")
+    lo, hi = RATIO_LIMITS
+    value = np.log10(np.clip(ratio[:, order], lo, hi))
+    return ax.pcolormesh(cell_edges(m["t"]), cell_edges(position[order]), value.T,
+                         norm=log_norm, cmap=cmap, shading="flat")
+
+
+def _mark_peak(ax, t, position, ratio):
+    """Circle the largest ratio of a matrix; returns a text 'max R at t, position' or ''."""
+    if not np.isfinite(ratio).any():
+        return "no bin with a static load"
+    it, ib = np.unravel_index(np.nanargmax(ratio), ratio.shape)
+    ax.plot(t[it], position[ib], "o", markersize=9, markerfacecolor="none",
+            markeredgecolor="black", markeredgewidth=1.2)
+    return f"max {ratio[it, ib]:.3g}\u00d7 static at t = {t[it]:.3f} s"
+
+
+def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
+    """Wall normal force relative to static during discharge (the paper's Fig. 10 analogue).
+
+    Heat maps (time since opening on x) of normal force per bin / its static value (first
+    sample, t = 0) from wall_series.csv: one strip per side wall (depth on y, top up) and one
+    for the bottom walls without the gate (X on y); log colour scale RATIO_LIMITS, ratio 1
+    white; bins whose static value is below ``fraction`` of that wall's largest static bin
+    are masked (grey). The largest shown ratio of each strip is circled. Last panel: each
+    wall's total normal force (wall_totals_series.csv) / its static total.
+    The title quotes summary.json's peak ratios (raw and windowed).
+    """
+    spath = os.path.join(run_dir, "summary.json")
+    summary = read_summary(spath)
+    info = discharge_info(summary, spath)
+    series = read_csv(os.path.join(run_dir, "wall_series.csv"), WALL_SERIES_COLUMNS)
+    totals = read_csv(os.path.join(run_dir, "wall_totals_series.csv"), WALL_TOTALS_COLUMNS)
+    gate = gate_name(summary)
+    sides = [w for w in summary["walls"] if str(w.get("group", "")).startswith("side")]
+    bottoms = [w for w in summary["walls"]
+               if str(w.get("group", "")).startswith("bottom") and w.get("name") != gate]
+    strips = [(f"side wall '{w['name']}'", [w], "depth_mid") for w in sides]
+    if bottoms:
+        strips.append(("bottom walls " + ", ".join(f"'{w['name']}'" for w in bottoms)
+                       + " (gate left out)", bottoms, "x_mid"))
+    if not strips:
+        _fail(spath, "no side or bottom wall in 'walls'")
+
+    lo, hi = RATIO_LIMITS
+    log_norm = matplotlib.colors.TwoSlopeNorm(vmin=math.log10(lo), vcenter=0.0,
+                                              vmax=math.log10(hi))
+    cmap = plt.get_cmap("RdBu_r").copy()
+    cmap.set_bad("0.72")
+    fig, axes = plt.subplots(len(strips) + 1, 1, sharex=True, layout="constrained",
+                             figsize=(11, 2.7 * len(strips) + 2.9),
+                             gridspec_kw={"height_ratios": [3] * len(strips) + [2.3]})
+    t_end = 0.0
+    for ax, (title, group, coord) in zip(axes, strips):
+        notes = []
+        for w in group:
+            m = wall_series_matrix(series, w["name"])
+            if m is None:
+                notes.append(f"'{w['name']}' not in wall_series.csv")
+                continue
+            ratio, _, _ = static_ratio(m["normal"], fraction)
+            _ratio_image(ax, m, ratio, m[coord], log_norm, cmap)
+            note = _mark_peak(ax, m["t"], m[coord], ratio)
+            notes.append(note if len(group) == 1 else f"{w['name']}: {note}")
+            t_end = max(t_end, float(m["t"][-1]))
+        if coord == "depth_mid":
+            ax.invert_yaxis()
+            ax.set_ylabel("depth [cm]")
+        else:
+            ax.set_ylabel("X [cm]")
+            slit = info.get("slit")
+            if isinstance(slit, list) and len(slit) == 2:
+                ax.axhspan(slit[0], slit[1], color="white", zorder=0)
+                ax.text(0.005, (slit[0] + slit[1]) / 2, " slit", va="center", fontsize=8,
+                        transform=ax.get_yaxis_transform())
+        ax.set_title(f"{title}: normal force / static per bin; " + "; ".join(notes),
+                     fontsize=9, loc="left")
+    bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=log_norm, cmap=cmap), ax=axes[:-1],
+                       shrink=0.9, pad=0.01, aspect=35)
+    ticks = [r for r in (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 30) if lo <= r <= hi]
+    bar.set_ticks([math.log10(r) for r in ticks])
+    bar.set_ticklabels([f"{r:g}" for r in ticks])
+    bar.set_label(f"normal / static (clipped to {lo:g}..{hi:g}); grey: static < "
+                  f"{fraction:.0%} of the wall's largest bin", fontsize=8)
+
+    ax = axes[-1]
+    styles = {"side": "-", "bottom": "--"}
+    colours = plt.cm.tab10(np.arange(10))
+    for k, w in enumerate(sides + bottoms):
+        sel = totals["name"] == w["name"]
+        if not sel.any():
+            continue
+        t, normal = totals["t"][sel], totals["normal"][sel]
+        order = np.argsort(t, kind="stable")
+        t, normal = t[order], normal[order]
+        if not normal[0] > 0:
+            continue
+        kind = "side" if w in sides else "bottom"
+        ax.plot(t, normal / normal[0], styles[kind], color=colours[k % 10], linewidth=1.0,
+                label=f"{w['name']} (max {np.max(normal) / normal[0]:.3g})")
+        t_end = max(t_end, float(t[-1]))
+    ax.axhline(1.0, color="black", linewidth=0.8)
+    ax.set_ylabel("wall total / static")
+    ax.set_xlabel("time since opening [s]")
+    ax.grid(True, alpha=0.4)
+    ax.legend(fontsize=8, ncol=4, loc="upper right")
+    ax.set_title("total normal force on each wall / its static value", fontsize=9, loc="left")
+    ax.set_xlim(0.0, t_end if t_end > 0 else 1.0)
+    fig.suptitle(
+        f"{_discharge_head(summary)}: wall forces relative to static "
+        f"(cf. Kiyama & Fujimura 1982, Fig. 10)\nsummary peak ratios: bottom "
+        f"{_fmt(info.get('peak_ratio_bottom'))} (windowed "
+        f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side "
+        f"{_fmt(info.get('peak_ratio_side'))} (windowed "
+        f"{_fmt(info.get('peak_ratio_side_windowed'))})", fontsize=10)
+    return _save(fig, out_png)
+
+
+def plot_flow(run_dir, out_png):
+    """Flow during discharge in four panels against time since opening.
+
+    (a) cumulative removed mass (removals.csv; keystones removed by hand marked) with the
+    fitted flow line (slope summary flow_rate_mass, intercept fitted as in flow_fit_line) and,
+    when all removed discs weigh the same, a removed-disc count axis; (b) discs in the silo and
+    below the floor, and the moved fraction; (c) the three surface heights with the sink times
+    (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
+    """
+    spath = os.path.join(run_dir, "summary.json")
+    summary = read_summary(spath)
+    info = discharge_info(summary, spath)
+    removals = read_csv(os.path.join(run_dir, "removals.csv"), REMOVAL_COLUMNS)
+    flow = read_csv(os.path.join(run_dir, "flow_series.csv"), FLOW_COLUMNS, empty=float("nan"))
+    order = np.argsort(flow["t"], kind="stable")
+    flow = {k: v[order] for k, v in flow.items()}
+    order = np.argsort(removals["t"], kind="stable")
+    removals = {k: v[order] for k, v in removals.items()}
+    duration = info.get("duration")
+    t_end = max([float(duration) if isinstance(duration, (int, float)) else 0.0]
+                + list(flow["t"][-1:]) + list(removals["t"][-1:])) or 1.0
+
+    fig, axes = plt.subplots(2, 2, sharex=True, layout="constrained", figsize=(12, 8))
+    (ax_out, ax_n), (ax_s, ax_a) = axes
+
+    cumulative = np.cumsum(removals["mass"])
+    ax_out.step(np.concatenate([[0.0], removals["t"], [t_end]]),
+                np.concatenate([[0.0], cumulative, cumulative[-1:] if len(cumulative) else [0]]),
+                where="post", color="tab:blue", linewidth=1.4,
+                label=f"removed ({len(cumulative)} discs)")
+    hand = removals["how"] == "keystone"
+    if hand.any():
+        ax_out.plot(removals["t"][hand], cumulative[hand], "v", color="firebrick",
+                    markersize=8, label=f"keystone removed by hand ({int(hand.sum())})")
+    rate = info.get("flow_rate_mass")
+    fit = flow_fit_line(removals["t"], cumulative, rate)
+    if fit is not None:
+        t0, t1, b = fit
+        ax_out.plot([t0, t1], [b + rate * t0, b + rate * t1], "--", color="black",
+                    linewidth=1.0, label=f"fit: {rate:.4g} g/s per cm "
+                                         f"({_fmt(info.get('flow_rate_discs'))} discs/s)")
+    jam = info.get("jam_at")
+    if isinstance(jam, (int, float)):
+        ax_out.axvline(jam, color="firebrick", linestyle=":", label=f"first jam {jam:.3g} s")
+    mass = removals["mass"]
+    if len(mass) and np.ptp(mass) <= 1e-9 * abs(mass[0]) and mass[0] > 0:
+        unit = float(mass[0])
+        sec = ax_out.secondary_yaxis("right", functions=(lambda m: m / unit, lambda n: n * unit))
+        sec.set_ylabel("removed discs")
+    ax_out.set_ylabel("removed mass [g per cm]")
+    ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left")
+    ax_out.legend(fontsize=8, loc="upper left")
+
+    ax_n.plot(flow["t"], flow["discs_in_silo"], color="tab:blue", label="discs in silo")
+    ax_n.plot(flow["t"], flow["discs_below"], color="tab:orange", label="discs below the floor")
+    ax_n.set_ylabel("discs")
+    twin = ax_n.twinx()
+    twin.plot(flow["t"], flow["moved_fraction"], color="tab:purple", linestyle="--",
+              label="moved fraction (right)")
+    twin.set_ylim(0, 1.02)
+    twin.set_ylabel("moved fraction (moved > 1 radius or removed)")
+    h1, l1 = ax_n.get_legend_handles_labels()
+    h2, l2 = twin.get_legend_handles_labels()
+    ax_n.legend(h1 + h2, l1 + l2, fontsize=8, loc="center right")
+    ax_n.set_title(f"(b) discs; dead fraction at the end "
+                   f"{_fmt(info.get('dead_fraction_end'), '.2f')}", fontsize=10, loc="left")
+
+    sink = info.get("surface_sink_time") or {}
+    for column, key in (("left", "left_wall"), ("centre", "centre"), ("right", "right_wall")):
+        when = sink.get(key)
+        colour = SURFACE_COLOURS[column]
+        label = f"{column}: " + (f"sinks at {when:.3g} s" if isinstance(when, (int, float))
+                                 else "does not sink")
+        ax_s.plot(flow["t"], flow[f"surface_{column}"], color=colour, linewidth=1.3,
+                  label=label, linestyle={"left": "-", "centre": "-", "right": "--"}[column])
+        if isinstance(when, (int, float)):
+            ax_s.axvline(when, color=colour, linestyle=":", linewidth=1.2)
+    ax_s.set_ylabel("top surface height Y [cm]")
+    ax_s.set_xlabel("time since opening [s]")
+    ax_s.legend(fontsize=8, loc="lower left")
+    ax_s.set_title(f"(c) top surface in the wall and centre columns: "
+                   f"{info.get('pattern', '?')}", fontsize=10, loc="left")
+
+    ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
+              label="crown height (left)")
+    ax_a.set_ylabel("arch crown Y [cm]")
+    ax_a.set_ylim(bottom=0)
+    twin = ax_a.twinx()
+    twin.plot(flow["t"], flow["arch_discs"], color="0.5", linewidth=0.8,
+              drawstyle="steps-post", label="discs in the arch (right)")
+    twin.set_ylabel("discs in the arch")
+    twin.set_ylim(bottom=0)
+    h1, l1 = ax_a.get_legend_handles_labels()
+    h2, l2 = twin.get_legend_handles_labels()
+    ax_a.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
+    ax_a.set_xlabel("time since opening [s]")
+    no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
+    ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
+                   fontsize=10, loc="left")
+    for ax in axes.flat:
+        ax.grid(True, alpha=0.4)
+        ax.set_xlim(0.0, t_end)
+    fig.suptitle(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
+                 f"{_fmt(info.get('n_initial'), 'd')} discs out "
+                 f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
+                 f"{_fmt(info.get('jams'), 'd')} jams", fontsize=11)
+    return _save(fig, out_png)
+
+
+def plot_discharge(run_dir, outdir):
+    """All discharge figures of one run: frames.png, wall_ratios.png and flow.png in outdir."""
+    return [plot_discharge_frames(run_dir, os.path.join(outdir, "frames.png")),
+            plot_wall_ratios(run_dir, os.path.join(outdir, "wall_ratios.png")),
+            plot_flow(run_dir, os.path.join(outdir, "flow.png"))]
+
+
 # --------------------------------------------------------------------------- command line
 
 
 def main(argv=None):
-    """Command line: network, grid, profiles and bottom subcommands (see the module docstring)."""
+    """Command line: the subcommands of the module docstring."""
     parser = argparse.ArgumentParser(prog="python3 -m compare.figures", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -657,6 +1169,22 @@ def main(argv=None):
     p = sub.add_parser("bottom", help="bottom-wall normal force against X of one run")
     p.add_argument("run_dir")
     p.add_argument("--out", required=True, help="PNG file to write")
+    p = sub.add_parser("frames", help="discs and contact forces at the discharge snapshots "
+                                      "(Figs. 8, 9)")
+    p.add_argument("run_dir")
+    p.add_argument("--out", required=True, help="PNG file to write")
+    p.add_argument("--times", type=float, nargs="+",
+                   help="seconds since opening: the nearest snapshots (default: all)")
+    p.add_argument("--ncols", type=int, default=5, help="panels per row (default 5)")
+    p = sub.add_parser("ratios", help="wall normal force / static during discharge (Fig. 10)")
+    p.add_argument("run_dir")
+    p.add_argument("--out", required=True, help="PNG file to write")
+    p = sub.add_parser("flow", help="removals, discs, surfaces and arch during discharge")
+    p.add_argument("run_dir")
+    p.add_argument("--out", required=True, help="PNG file to write")
+    p = sub.add_parser("discharge", help="frames.png, wall_ratios.png and flow.png of one run")
+    p.add_argument("run_dir")
+    p.add_argument("--outdir", required=True, help="folder to write the three PNGs to")
     args = parser.parse_args(argv)
 
     if args.command == "network":
@@ -665,8 +1193,16 @@ def main(argv=None):
         out = plot_network_grid(args.run_dirs, args.out, labels=args.labels, ncols=args.ncols)
     elif args.command == "profiles":
         out = plot_side_profiles(args.run_dirs, args.out, labels=args.labels, per=args.per)
-    else:
+    elif args.command == "bottom":
         out = plot_bottom_profile(args.run_dir, args.out)
+    elif args.command == "frames":
+        out = plot_discharge_frames(args.run_dir, args.out, times=args.times, ncols=args.ncols)
+    elif args.command == "ratios":
+        out = plot_wall_ratios(args.run_dir, args.out)
+    elif args.command == "flow":
+        out = plot_flow(args.run_dir, args.out)
+    else:
+        out = "\n".join(plot_discharge(args.run_dir, args.outdir))
     print(out)
     return 0
 

@@ -384,6 +384,8 @@ void read_fill(SceneSpec& s, Tab& root) {
       throw SceneError(s.file + ": fill: disc " + std::to_string(k) + " radius = " + show(s.discs[k].r) + ": must be > 0");
 }
 
+}  // namespace
+
 // Overlapping discs and discs outside the walls are refused (cell grid, no O(N^2)).
 void check_initial_discs(const SceneSpec& s) {
   Discs d;
@@ -432,7 +434,6 @@ void check_initial_discs(const SceneSpec& s) {
   }
 }
 
-}  // namespace
 
 Scheme parse_scheme(const std::string& v, bool& ok) {
   ok = true;

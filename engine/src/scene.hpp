@@ -74,6 +74,9 @@ struct SceneOverrides {
 };
 SceneSpec load_scene(const std::string& path, const SceneOverrides& ov = {});
 
+// Refuses overlapping discs and discs outside the walls (throws SceneError).
+void check_initial_discs(const SceneSpec& s);
+
 // Builds the world; throws SceneError for a dt above the scheme's bound (unless forced).
 void build_world(const SceneSpec& s, World& w);
 
