@@ -35,6 +35,7 @@ import csv
 import json
 import math
 import os
+import textwrap
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -892,18 +893,23 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
         ax.set_title(f"t = {t:.2f} s", fontsize=10)
-        ax.text(x0 + pad, y0 + pad, f"{len(moved)} discs\ndead {np.sum(dead) / n_initial:.0%}",
+        ax.text(x0 + pad, y0 + pad, f"{len(moved)} discs, dead {np.sum(dead) / n_initial:.0%}",
                 fontsize=6.5, va="bottom", ha="left")
     bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=axes,
                        shrink=0.8, pad=0.01, aspect=30)
+    ticks = [v for v in (1, 2, 3, 5, 10, 20, 30, 50, 100) if norm.vmin <= v <= norm.vmax]
+    bar.set_ticks(ticks)
+    bar.set_ticklabels([f"{v:g}" for v in ticks])
+    bar.ax.minorticks_off()
     bar.set_label("displacement since opening [radii]; grey: < 1 (dead)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    fig.suptitle(f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
-                 f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)\n"
-                 f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
-                 f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
-                 f"(discs removed); dead = share of the {n_initial} discs at opening",
-                 fontsize=10)
+    width = int(fig.get_figwidth() * 12)          # characters per title line at 10 pt
+    head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
+            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
+    note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
+            f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
+            f"(discs removed); dead = share of the {n_initial} discs at opening")
+    fig.suptitle(textwrap.fill(head, width) + "\n" + textwrap.fill(note, width), fontsize=10)
     return _save(fig, out_png)
 
 
@@ -923,7 +929,7 @@ def _mark_peak(ax, t, position, ratio):
     it, ib = np.unravel_index(np.nanargmax(ratio), ratio.shape)
     ax.plot(t[it], position[ib], "o", markersize=9, markerfacecolor="none",
             markeredgecolor="black", markeredgewidth=1.2)
-    return f"max {ratio[it, ib]:.3g}\u00d7 static at t = {t[it]:.3f} s"
+    return f"max {ratio[it, ib]:.3g}\u00d7 at t = {t[it]:.3f} s"
 
 
 def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
@@ -946,10 +952,9 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     sides = [w for w in summary["walls"] if str(w.get("group", "")).startswith("side")]
     bottoms = [w for w in summary["walls"]
                if str(w.get("group", "")).startswith("bottom") and w.get("name") != gate]
-    strips = [(f"side wall '{w['name']}'", [w], "depth_mid") for w in sides]
+    strips = [(f"side wall {w['name']}", [w], "depth_mid") for w in sides]
     if bottoms:
-        strips.append(("bottom walls " + ", ".join(f"'{w['name']}'" for w in bottoms)
-                       + " (gate left out)", bottoms, "x_mid"))
+        strips.append(("bottom walls (gate left out)", bottoms, "x_mid"))
     if not strips:
         _fail(spath, "no side or bottom wall in 'walls'")
 
@@ -984,7 +989,7 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
                 ax.axhspan(slit[0], slit[1], color="white", zorder=0)
                 ax.text(0.005, (slit[0] + slit[1]) / 2, " slit", va="center", fontsize=8,
                         transform=ax.get_yaxis_transform())
-        ax.set_title(f"{title}: normal force / static per bin; " + "; ".join(notes),
+        ax.set_title(f"{title}, normal force / static per bin: " + "; ".join(notes),
                      fontsize=9, loc="left")
     bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=log_norm, cmap=cmap), ax=axes[:-1],
                        shrink=0.9, pad=0.01, aspect=35)
@@ -1014,7 +1019,8 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     ax.set_ylabel("wall total / static")
     ax.set_xlabel("time since opening [s]")
     ax.grid(True, alpha=0.4)
-    ax.legend(fontsize=8, ncol=4, loc="upper right")
+    ax.legend(fontsize=8, ncol=4, loc="lower right", bbox_to_anchor=(1.0, 1.0), frameon=False,
+              borderaxespad=0.1)
     ax.set_title("total normal force on each wall / its static value", fontsize=9, loc="left")
     ax.set_xlim(0.0, t_end if t_end > 0 else 1.0)
     fig.suptitle(
@@ -1080,8 +1086,10 @@ def plot_flow(run_dir, out_png):
     ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left")
     ax_out.legend(fontsize=8, loc="upper left")
 
-    ax_n.plot(flow["t"], flow["discs_in_silo"], color="tab:blue", label="discs in silo")
-    ax_n.plot(flow["t"], flow["discs_below"], color="tab:orange", label="discs below the floor")
+    present = flow["discs_in_silo"] + flow["discs_below"]
+    ax_n.plot(flow["t"], flow["discs_in_silo"], color="tab:blue", label="discs in the silo")
+    ax_n.fill_between(flow["t"], flow["discs_in_silo"], present, color="tab:orange",
+                      alpha=0.6, linewidth=0, label="+ discs below the floor")
     ax_n.set_ylabel("discs")
     twin = ax_n.twinx()
     twin.plot(flow["t"], flow["moved_fraction"], color="tab:purple", linestyle="--",
@@ -1090,7 +1098,7 @@ def plot_flow(run_dir, out_png):
     twin.set_ylabel("moved fraction (moved > 1 radius or removed)")
     h1, l1 = ax_n.get_legend_handles_labels()
     h2, l2 = twin.get_legend_handles_labels()
-    ax_n.legend(h1 + h2, l1 + l2, fontsize=8, loc="center right")
+    ax_n.legend(h1 + h2, l1 + l2, fontsize=8, loc="center left")
     ax_n.set_title(f"(b) discs; dead fraction at the end "
                    f"{_fmt(info.get('dead_fraction_end'), '.2f')}", fontsize=10, loc="left")
 

@@ -425,6 +425,7 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
                        "the centre column"},
       {"moved_fraction_end", moved_fraction},
       {"dead_fraction_end", 1.0 - moved_fraction},
+      {"gate", ds.gate},
       {"slit", {slit.left, slit.right}},
       {"outlet_y", y_out},
       {"walls", walls_json},

@@ -25,7 +25,7 @@ namespace {
 struct Member {
   int index = 0;
   std::string status;
-  json metrics;
+  json metrics = json::object();
   bool fill_rest = false;
 };
 
@@ -84,6 +84,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
       std::snprintf(name, sizeof name, "member_%02d", k);
       const std::string dir = out_dir + "/" + name;
       std::filesystem::create_directories(dir);
+      try {
       World w;
       build_world(specs[k], w);
       const StabilityReport stab = stability_report(w, specs[k].material_names);
@@ -107,6 +108,11 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
         }
       }
       write_outputs(dir, specs[k], w, res, stab, &extra);
+      } catch (const std::exception& e) {  // one failed member must not take the others down
+        members[k].index = k;
+        members[k].status = std::string("error: ") + e.what();
+      }
+      const Member& m = members[k];
       if (!quiet) {
         std::lock_guard<std::mutex> lock(print);
         std::printf("  %s: %s, %d out by 1 s, flow %.4g discs/s, %s\n", name, m.status.c_str(),

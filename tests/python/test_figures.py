@@ -485,3 +485,323 @@ def test_profiles_without_side_wall_contacts_name_the_file(tmp_path):
     (run / "contacts.csv").write_text("\n".join(rows) + "\n")
     with pytest.raises(SystemExit, match="contacts.csv.*side"):
         figures.plot_side_profiles([str(run)], str(tmp_path / "x.png"))
+
+
+# --------------------------------------------------------------------------- discharge
+
+DISCHARGE_WALLS = [
+    {"name": "left", "group": "side_left", "from": [0, 10], "to": [0, 0]},
+    {"name": "right", "group": "side_right", "from": [8, 10], "to": [8, 0]},
+    {"name": "bottom_left", "group": "bottom", "from": [0, 0], "to": [3, 0]},
+    {"name": "gate", "group": "bottom", "from": [3, 0], "to": [5, 0]},
+    {"name": "bottom_right", "group": "bottom", "from": [5, 0], "to": [8, 0]},
+]
+SNAPSHOT_TIMES = (0.0, 0.05, 0.1)
+# Discs of each snapshot: (id, x, y, dx, dy); r = 1. Disc 1 falls through the slit and is gone
+# at 0.1 s; disc 3 sinks 1.4 then 3.9 radii; disc 2 creeps 0.5 (dead); disc 0 stays (dead).
+SNAPSHOT_DISCS = (
+    [(0, 1, 1, 0, 0), (1, 4, 1, 0, 0), (2, 7, 1, 0, 0), (3, 4, 2.9, 0, 0)],
+    [(0, 1, 1, 0, 0), (1, 4, -1, 0, -2), (2, 7, 1, 0, 0), (3, 4, 1.5, 0, -1.4)],
+    [(0, 1, 1, 0, 0), (2, 7.5, 1, 0.5, 0), (3, 4, -1.0, 0, -3.9)],
+)
+SNAPSHOT_CONTACTS = (
+    [["dw", 0, "left", 0, 1, -1, 0, 2 * DISC_WEIGHT, 0, 2 * DISC_WEIGHT, 0],
+     ["dw", 1, "gate", 4, 0, 0, -1, 5 * DISC_WEIGHT, 0, 5 * DISC_WEIGHT, 0],
+     ["dd", 1, "3", 4, 1.95, 0, 1, 3 * DISC_WEIGHT, 0.5 * DISC_WEIGHT, 3 * DISC_WEIGHT, 0]],
+    [["dw", 0, "bottom_left", 1, 0, 0, -1, 9 * DISC_WEIGHT, 1, 9 * DISC_WEIGHT, 1],
+     ["dp", 3, "L", 3, 0, -0.6, -0.8, 4 * DISC_WEIGHT, 0, 4 * DISC_WEIGHT, 0]],
+    [],
+)
+# Static (t = 0) normal force per bin of each wall in wall_series.csv, then two later samples
+# as multiples of a fixed pattern; the side walls have 5 bins of 2 cm from the top.
+SERIES = {
+    "left": [[0, 8, 2, 1.9, 10], [0, 16, 1, 5, 30], [0, 4, 6, 0, 0]],
+    "right": [[0, 8, 8, 8, 8], [0, 8, 16, 8, 8], [0, 8, 8, 8, 0]],
+    "bottom_left": [[4, 4], [12, 2], [4, 0]],
+    "gate": [[6], [0], [0]],
+    "bottom_right": [[4, 1], [4, 1], [4, 1]],
+}
+SERIES_TIMES = (0.0, 0.05, 0.1)
+# Removals: five outlet discs (mass 2), then a keystone removed by hand at 0.08 s, then two more.
+REMOVALS = [(0.01, 10, 2.0, "outlet"), (0.02, 11, 2.0, "outlet"), (0.03, 12, 2.0, "outlet"),
+            (0.04, 13, 2.0, "outlet"), (0.05, 14, 2.0, "outlet"), (0.08, 15, 2.0, "keystone"),
+            (0.09, 16, 2.0, "outlet"), (0.095, 17, 2.0, "outlet")]
+
+
+def bin_geometry(wall, k):
+    """(s_mid, x_mid, y_mid, depth_mid) of 2 cm bin k of one of DISCHARGE_WALLS (top = 10)."""
+    a, b = np.array(wall["from"], float), np.array(wall["to"], float)
+    length = np.linalg.norm(b - a)
+    s = (k * BIN + min((k + 1) * BIN, length)) / 2
+    x, y = a + (b - a) / length * s
+    return s, float(x), float(y), 10 - float(y)
+
+
+def make_discharge_run(run_dir, contacts_pvd=True, name="tiny discharge"):
+    """Write a synthetic discharge run as docs/outputs.md ("Discharge outputs") describes."""
+    run_dir.mkdir(parents=True, exist_ok=True)
+    (run_dir / "snapshots").mkdir(exist_ok=True)
+    walls = [dict(w, normal_total=0.0, shear_total=0.0, contacts=0) for w in DISCHARGE_WALLS]
+    summary = {
+        "engine": "dem 0.1.0",
+        "scene": {"name": name, "file": "tiny.toml", "description": "test fixture"},
+        "status": "jammed", "n_discs": 3, "time": 0.5, "disc_weight": DISC_WEIGHT,
+        "weight": 4 * DISC_WEIGHT, "height": 10, "width": 8, "walls": walls,
+        "points": [{"name": "L", "group": "slit_ends", "at": [3, 0], "force": [0, 0], "contacts": 0},
+                   {"name": "R", "group": "slit_ends", "at": [5, 0], "force": [0, 0], "contacts": 0}],
+        "rest": {"reached": True, "time": 0.4},
+        "discharge": {"status": "jammed", "t_open": 0.4, "duration": 0.1, "n_initial": 4,
+                      "removed": 8, "removed_by_hand": 1, "discs_out_at_1s": 8,
+                      "flow_rate_mass": 40.0, "flow_rate_discs": 20.0, "jammed": True,
+                      "jam_at": 0.07, "jams": 1, "peak_ratio_bottom": 3.0,
+                      "peak_ratio_bottom_windowed": 2.25, "peak_ratio_side": 2.0,
+                      "peak_ratio_side_windowed": 1.5, "pattern": "funnel",
+                      "surface_sink_time": {"left_wall": 0.05, "centre": None, "right_wall": 0.05},
+                      "moved_fraction_end": 0.75, "dead_fraction_end": 0.25,
+                      "slit": [3, 5], "outlet_y": -2.0},
+    }
+    (run_dir / "summary.json").write_text(json.dumps(summary, indent=1))
+    entries = {"discs": [], "contacts": []}
+    for n, (t, discs, contacts) in enumerate(zip(SNAPSHOT_TIMES, SNAPSHOT_DISCS, SNAPSHOT_CONTACTS)):
+        write_csv(run_dir / "snapshots" / f"discs_{n:04d}.csv", figures.SNAPSHOT_DISC_COLUMNS,
+                  [[i, x, y, 1.0, 0, 0, 0, "glass", dx, dy] for i, x, y, dx, dy in discs])
+        write_csv(run_dir / "snapshots" / f"contacts_{n:04d}.csv", figures.CONTACT_COLUMNS, contacts)
+        for kind in entries:
+            entries[kind].append(f'    <DataSet timestep="{t!r}" file="snapshots/{kind}_{n:04d}.vtu"/>')
+    for kind, lines in entries.items():
+        if kind == "contacts" and not contacts_pvd:
+            continue
+        (run_dir / f"discharge_{kind}.pvd").write_text(
+            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+            + "\n".join(lines) + "\n  </Collection>\n</VTKFile>\n")
+    write_csv(run_dir / "removals.csv", figures.REMOVAL_COLUMNS,
+              [[t, i, m, 0.0, -90.0, how] for t, i, m, how in REMOVALS])
+    write_csv(run_dir / "flow_series.csv", figures.FLOW_COLUMNS,
+              [[0.0, 4, 0, 0, 0, 0.0, 9.0, 9.0, 9.0, 3, 2.5],
+               [0.05, 3, 1, 5, 10, 0.5, 7.9, 8.8, 7.9, "", ""],
+               [0.1, 2, 1, 8, 16, 0.75, 7.0, 8.0, 7.0, 4, 3.0]])
+    geometry = {w["name"]: w for w in DISCHARGE_WALLS}
+    rows = []
+    for t, k in zip(SERIES_TIMES, range(3)):
+        for wall, samples in SERIES.items():
+            for b, normal in enumerate(samples[k]):
+                rows.append([t, wall, b, *bin_geometry(geometry[wall], b), normal * DISC_WEIGHT, 0.0])
+    write_csv(run_dir / "wall_series.csv", figures.WALL_SERIES_COLUMNS, rows)
+    totals = []
+    for t, k in zip(SERIES_TIMES, range(3)):
+        for wall, samples in SERIES.items():
+            totals.append([t, wall, sum(samples[k]) * DISC_WEIGHT, 0.0, 0.0, 0.0])
+        totals += [[t, "L", 0, 0, 0, 0], [t, "R", 0, 0, 0, 0]]
+    write_csv(run_dir / "wall_totals_series.csv", figures.WALL_TOTALS_COLUMNS, totals)
+    return run_dir
+
+
+def test_read_pvd_sorts_by_timestep(tmp_path):
+    path = tmp_path / "a.pvd"
+    path.write_text('<VTKFile><Collection><DataSet timestep="0.1" file="b.vtu"/>'
+                    '<DataSet timestep="0" file="a.vtu"/>'
+                    '<DataSet timestep="0.049999999999994493" file="c.vtu"/></Collection></VTKFile>')
+    assert figures.read_pvd(str(path)) == [(0.0, "a.vtu"), (0.049999999999994493, "c.vtu"),
+                                           (0.1, "b.vtu")]
+    path.write_text('<VTKFile><Collection><DataSet file="b.vtu"/></Collection></VTKFile>')
+    with pytest.raises(SystemExit, match="a.pvd.*timestep"):
+        figures.read_pvd(str(path))
+    path.write_text("<VTKFile><Collection>")
+    with pytest.raises(SystemExit, match="a.pvd.*XML"):
+        figures.read_pvd(str(path))
+
+
+@pytest.mark.parametrize("contacts_pvd", [True, False])
+def test_snapshot_index_pairs_csv_twins(tmp_path, contacts_pvd):
+    run = make_discharge_run(tmp_path / "run", contacts_pvd=contacts_pvd)
+    snaps = figures.snapshot_index(str(run))
+    assert [s["t"] for s in snaps] == list(SNAPSHOT_TIMES)
+    assert snaps[2]["discs"] == str(run / "snapshots" / "discs_0002.csv")
+    assert snaps[2]["contacts"] == str(run / "snapshots" / "contacts_0002.csv")
+
+
+def test_select_snapshots_takes_the_nearest_once(tmp_path):
+    snaps = figures.snapshot_index(str(make_discharge_run(tmp_path / "run")))
+    # 0.04 and 0.06 are both nearest to 0.05; 0.2 is nearest to 0.1; -1 to 0.
+    picked = figures.select_snapshots(snaps, [0.2, 0.04, 0.06])
+    assert [s["t"] for s in picked] == [0.05, 0.1]
+    assert [s["t"] for s in figures.select_snapshots(snaps, [-1])] == [0.0]
+    assert figures.select_snapshots(snaps) == snaps
+    with pytest.raises(SystemExit, match="no discharge snapshots"):
+        figures.select_snapshots([], None)
+
+
+def test_displacement_in_radii():
+    discs = {"dx": np.array([3.0, 0.0]), "dy": np.array([4.0, -0.5]), "r": np.array([2.0, 1.0])}
+    np.testing.assert_allclose(figures.displacement_radii(discs), [2.5, 0.5])
+
+
+def test_wall_series_matrix_by_hand():
+    # Rows out of order, and the t = 0.2 sample lacks bin 1.
+    series = {"t": np.array([0.1, 0.0, 0.0, 0.1, 0.2, 0.0]),
+              "wall": np.array(["w", "w", "w", "w", "w", "v"]),
+              "bin": np.array([1, 1, 0, 0, 0, 0]),
+              "s_mid": np.array([3.0, 3.0, 1.0, 1.0, 1.0, 9.0]),
+              "x_mid": np.zeros(6), "y_mid": np.array([7.0, 7.0, 9.0, 9.0, 9.0, 0.0]),
+              "depth_mid": np.array([3.0, 3.0, 1.0, 1.0, 1.0, 10.0]),
+              "normal": np.array([5.0, 2.0, 4.0, 8.0, 1.0, 99.0]),
+              "shear": np.array([0.5, 0.2, 0.4, 0.8, 0.1, 9.9])}
+    m = figures.wall_series_matrix(series, "w")
+    np.testing.assert_allclose(m["t"], [0.0, 0.1, 0.2])
+    np.testing.assert_array_equal(m["bin"], [0, 1])
+    np.testing.assert_allclose(m["depth_mid"], [1.0, 3.0])
+    np.testing.assert_allclose(m["normal"], [[4, 2], [8, 5], [1, np.nan]])
+    np.testing.assert_allclose(m["shear"][1], [0.8, 0.5])
+    assert figures.wall_series_matrix(series, "nope") is None
+
+
+def test_static_ratio_masks_weak_bins():
+    normal = [[8.0, 2.0, 1.9, 0.0], [16.0, 1.0, 5.0, 3.0]]
+    # Largest static bin 8: a quarter is 2, so bins 0 (8) and 1 (2) are kept, 1.9 and 0 are not.
+    ratio, static, keep = figures.static_ratio(normal)
+    np.testing.assert_array_equal(keep, [True, True, False, False])
+    np.testing.assert_allclose(static, [8, 2, 1.9, 0])
+    np.testing.assert_allclose(ratio, [[1, 1, np.nan, np.nan], [2, 0.5, np.nan, np.nan]])
+    # With a fifth (1.6) the 1.9 bin is kept too: 5 / 1.9.
+    ratio, _, keep = figures.static_ratio(normal, fraction=0.2)
+    np.testing.assert_array_equal(keep, [True, True, True, False])
+    np.testing.assert_allclose(ratio[1, 2], 5 / 1.9)
+    # A wall with no static load has no kept bin.
+    ratio, _, keep = figures.static_ratio([[0.0, 0.0], [1.0, 2.0]])
+    assert not keep.any() and np.isnan(ratio).all()
+
+
+def test_cell_edges():
+    np.testing.assert_allclose(figures.cell_edges([0.0, 1.0, 3.0]), [-0.5, 0.5, 2.0, 4.0])
+    np.testing.assert_allclose(figures.cell_edges([2.0]), [1.5, 2.5])
+
+
+def test_flow_fit_line_intercept():
+    # From the 5th point on M = 3 + 10 t exactly; the first four are off the line.
+    t = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7])
+    m = np.array([0.0, 9.0, 1.0, 2.0, 8.0, 9.0, 10.0])
+    assert figures.flow_fit_line(t, m, 10.0) == pytest.approx((0.5, 0.7, 3.0))
+    assert figures.flow_fit_line(t[:4], m[:4], 10.0) is None
+    assert figures.flow_fit_line(t, m, None) is None
+
+
+def test_flow_series_empty_cells(tmp_path):
+    run = make_discharge_run(tmp_path / "run")
+    flow = figures.read_csv(str(run / "flow_series.csv"), figures.FLOW_COLUMNS, empty=float("nan"))
+    assert np.isnan(flow["arch_crown_y"][1]) and flow["arch_crown_y"][2] == 3.0
+    with pytest.raises(SystemExit, match="flow_series.csv.*arch_discs"):
+        figures.read_csv(str(run / "flow_series.csv"), figures.FLOW_COLUMNS)
+
+
+def test_discharge_frames(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    run = make_discharge_run(tmp_path / "run")
+    out = tmp_path / "frames.png"
+    assert figures.plot_discharge_frames(str(run), str(out), ncols=2) == str(out)
+    assert_png(out)
+    fig = kept[0]
+    panels = [ax for ax in fig.axes if ax.get_title().startswith("t = ")]
+    assert [ax.get_title() for ax in panels] == ["t = 0.00 s", "t = 0.05 s", "t = 0.10 s"]
+    assert "tiny discharge" in fig._suptitle.get_text() and "funnel" in fig._suptitle.get_text()
+    assert "jammed" in fig._suptitle.get_text()
+    for ax, contacts in zip(panels, SNAPSHOT_CONTACTS):
+        # Forces at plot_network's scale (r_ref = radius of disc 0 = 1).
+        lines = [c for c in ax.collections if isinstance(c, figures.LineCollection)]
+        expected = figures.network_segments(
+            {k: np.array([row[n] for row in contacts], dtype=float)
+             for n, k in enumerate(figures.CONTACT_COLUMNS) if k in ("x", "y", "nx", "ny", "e_n", "e_s")},
+            1.0, DISC_WEIGHT)
+        np.testing.assert_allclose(np.array(lines[0].get_segments()).reshape(-1, 2, 2), expected)
+        # The gate (3,0)-(5,0) is open: no solid line along it (the slit-end dots are markers).
+        for line in ax.get_lines():
+            if line.get_linestyle() == "-":
+                assert not (list(line.get_xdata()) == [3, 5] and list(line.get_ydata()) == [0, 0])
+        assert ax.get_ylim()[0] <= -2.0                 # down to the outlet
+    # Dead discs (moved < 1 radius) grey; at 0.05 s discs 1 (2 radii) and 3 (1.4) are coloured.
+    faces = [c for c in panels[1].collections if isinstance(c, figures.EllipseCollection)][0]
+    grey = matplotlib.colors.to_rgba("0.88")
+    is_grey = [tuple(f) == grey for f in faces.get_facecolors()]
+    assert is_grey == [True, False, True, False]
+    # Only the snapshots nearest the asked times.
+    figures.plot_discharge_frames(str(run), str(out), times=[0.09])
+    assert [ax.get_title() for ax in kept[1].axes if ax.get_title().startswith("t = ")] == ["t = 0.10 s"]
+
+
+def test_wall_ratio_heat_maps(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    run = make_discharge_run(tmp_path / "run")
+    out = tmp_path / "ratios.png"
+    figures.plot_wall_ratios(str(run), str(out))
+    assert_png(out)
+    fig = kept[0]
+    strips = [ax for ax in fig.axes if ax.collections and "per bin" in ax.get_title(loc="left")]
+    assert len(strips) == 3                                   # left, right, bottom walls
+    # Left wall: static [0, 8, 2, 1.9, 10]; a quarter of 10 is 2.5, so bins 1 (8) and 4 (10)
+    # are kept: ratios over time [1, 2, 0.5] and [1, 3, 0]; 0 is clipped to 0.1.
+    mesh = strips[0].collections[0]
+    values = np.ma.masked_invalid(mesh.get_array()).reshape(5, 3)    # (bin, time)
+    expected = np.ma.masked_invalid(np.log10(np.array(
+        [[np.nan] * 3, [1, 2, 0.5], [np.nan] * 3, [np.nan] * 3, [1, 3, 0.1]])))
+    np.testing.assert_array_equal(np.ma.getmaskarray(values), np.ma.getmaskarray(expected))
+    np.testing.assert_allclose(values.compressed(), expected.compressed())
+    assert "max 3\u00d7 at t = 0.050 s" in strips[0].get_title(loc="left")
+    # Bottom walls: the gate is left out, bottom_left and bottom_right are drawn.
+    assert len(strips[2].collections) == 2
+    assert "gate" not in strips[2].get_title(loc="left").replace("gate left out", "")
+    assert "bottom_left: max 3\u00d7" in strips[2].get_title(loc="left")
+    # Totals: one line per wall (gate left out), ratio to the first sample.
+    totals = fig.axes[3]
+    labels = [line.get_label() for line in totals.get_lines() if not line.get_label().startswith("_")]
+    assert labels == ["left (max 2.37)", "right (max 1.25)", "bottom_left (max 1.75)",
+                      "bottom_right (max 1)"]
+    left = totals.get_lines()[0]
+    # static 0 + 8 + 2 + 1.9 + 10 = 21.9; later 52 and 10
+    np.testing.assert_allclose(left.get_ydata(), [1, 52 / 21.9, 10 / 21.9])
+    title = fig._suptitle.get_text()
+    assert "bottom 3 (windowed 2.25), side 2 (windowed 1.5)" in title
+
+
+def test_flow_figure(tmp_path, monkeypatch):
+    kept = capture_figures(monkeypatch)
+    run = make_discharge_run(tmp_path / "run")
+    out = tmp_path / "flow.png"
+    figures.plot_flow(str(run), str(out))
+    assert_png(out)
+    ax = kept[0].axes[0]
+    lines = {line.get_label(): line for line in ax.get_lines()}
+    keystone = lines["keystone removed by hand (1)"]
+    np.testing.assert_allclose(keystone.get_xdata(), [0.08])
+    np.testing.assert_allclose(keystone.get_ydata(), [12.0])          # 6th removal, 6 x 2 g
+    # Fit: slope 40 through the 5th removal on: t = .05,.08,.09,.095, M = 10,12,14,16.
+    fit = [line for label, line in lines.items() if label.startswith("fit: 40 g/s")][0]
+    b = np.mean([10, 12, 14, 16]) - 40 * np.mean([0.05, 0.08, 0.09, 0.095])
+    np.testing.assert_allclose(fit.get_xdata(), [0.05, 0.095])
+    np.testing.assert_allclose(fit.get_ydata(), [b + 40 * 0.05, b + 40 * 0.095])
+    surfaces = kept[0].axes[2]
+    labels = [line.get_label() for line in surfaces.get_lines() if not line.get_label().startswith("_")]
+    assert labels == ["left: sinks at 0.05 s", "centre: does not sink", "right: sinks at 0.05 s"]
+    assert "8 of 4 discs out (1 by hand), 1 jams" in kept[0]._suptitle.get_text()
+
+
+def test_discharge_cli(tmp_path):
+    run = str(make_discharge_run(tmp_path / "run"))
+    for args in (["frames", run, "--times", "0", "0.1", "--ncols", "1"], ["ratios", run],
+                 ["flow", run]):
+        out = tmp_path / f"{args[0]}.png"
+        done = subprocess.run([sys.executable, "-m", "compare.figures", *args, "--out", str(out)],
+                              cwd=REPO_ROOT, capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        assert_png(out)
+    outdir = tmp_path / "all"
+    done = subprocess.run([sys.executable, "-m", "compare.figures", "discharge", run,
+                           "--outdir", str(outdir)], cwd=REPO_ROOT, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    for name in ("frames.png", "wall_ratios.png", "flow.png"):
+        assert_png(outdir / name)
+
+
+def test_discharge_figures_need_a_discharge_run(tmp_path):
+    run = str(make_run(tmp_path / "static"))
+    for plot in (figures.plot_discharge_frames, figures.plot_wall_ratios, figures.plot_flow):
+        with pytest.raises(SystemExit, match="summary.json.*not a discharge run"):
+            plot(run, str(tmp_path / "x.png"))
