@@ -543,11 +543,7 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
 
     axn.set_xlabel("side-wall normal force per contact [disc weights]")
     axs.set_xlabel("wall friction per contact [disc weights], + = downward")
-    axn.set_ylabel("depth below the top of the silo [cm]")
-    axs.axvline(0.0, color="black", linewidth=0.8)
-    axn.invert_yaxis()
-    for ax in (axn, axs):
-        ax.grid(True, alpha=0.4)
+    _finish_side_axes(axn, axs)
     handles, names = axn.get_legend_handles_labels()
     for g, style, marker in sorted(split_drawn):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8,
@@ -562,6 +558,15 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
                  fontsize=11)
     fig.tight_layout()
     return _save(fig, out_png)
+
+
+def _finish_side_axes(axn, axs):
+    """Shared look of the two side-wall panels: depth down, zero line for the friction."""
+    axn.set_ylabel("depth below the top of the silo [cm]")
+    axs.axvline(0.0, color="black", linewidth=0.8)
+    axn.invert_yaxis()
+    for ax in (axn, axs):
+        ax.grid(True, alpha=0.4)
 
 
 def _plot_side_bins(run_dirs, out_png, labels):
@@ -600,11 +605,7 @@ def _plot_side_bins(run_dirs, out_png, labels):
     width = "/".join(f"{w:g}" for w in sorted(widths))
     axn.set_xlabel(f"side-wall normal force per {width} cm bin [disc weights]")
     axs.set_xlabel(f"wall friction (shear) per {width} cm bin [disc weights], + = downward")
-    axn.set_ylabel("depth below the top of the silo [cm]")
-    axs.axvline(0.0, color="black", linewidth=0.8)
-    axn.invert_yaxis()
-    for ax in (axn, axs):
-        ax.grid(True, alpha=0.4)
+    _finish_side_axes(axn, axs)
     handles, names = axn.get_legend_handles_labels()
     for g, style in sorted(split_drawn):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8))

@@ -17,13 +17,8 @@ using json = nlohmann::ordered_json;
 
 namespace {
 
-std::string fmt(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
-json num_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+std::string fmt(double v) { return fmt17(v); }
+json num_or_null(double v) { return finite_or_null(v); }
 
 // Where the slit is: the gate's ends (or the points L and R).
 struct Slit {

@@ -69,15 +69,17 @@ void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std
   }
 }
 
-namespace {
-
-std::string fmt(double v) {
+std::string fmt17(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
 }
 
 json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+namespace {
+
+std::string fmt(double v) { return fmt17(v); }
 
 std::string vtu(const std::vector<double>& px, const std::vector<double>& py, int points_per_cell, int vtk_type,
                 const std::vector<std::pair<std::string, std::vector<double>>>& scalars,

@@ -41,6 +41,10 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
                       const std::vector<double>* disp_x, const std::vector<double>* disp_y);
 
+// A double at full precision (%.17g), and a JSON number or null when not finite.
+std::string fmt17(double v);
+nlohmann::ordered_json finite_or_null(double v);
+
 // Atomic text file write: path.tmp then rename.
 void write_file_atomic(const std::string& path, const std::string& text);
 
