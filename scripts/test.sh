@@ -1,8 +1,15 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs every test (GoogleTest + pytest through ctest).
+# Installs what is missing, builds, and runs every test (GoogleTest + pytest through ctest),
+# then the same tests on a sanitizer build (build-asan/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 bash scripts/build.sh
 /usr/bin/python3 scripts/make_paper_scenes.py --check
 ctest --test-dir build --output-on-failure -j "$(nproc)"
+
+# The same tests on an AddressSanitizer + UndefinedBehaviorSanitizer build (any report fails).
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDEM_SANITIZE=ON -DDEM_PYTHON=/usr/bin/python3 >/dev/null
+cmake --build build-asan -j "$(nproc)"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+  ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
