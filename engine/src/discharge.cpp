@@ -96,7 +96,7 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   return {};
 }
 
-double flow_rate(const std::vector<Removal>& removals, double t_end) {
+double flow_rate(const std::vector<Removal>& removals) {
   std::vector<double> t, m;
   double cum = 0;
   for (const Removal& r : removals) {
@@ -105,7 +105,6 @@ double flow_rate(const std::vector<Removal>& removals, double t_end) {
     t.push_back(r.t);
     m.push_back(cum);
   }
-  (void)t_end;
   if (t.size() < 10) return std::numeric_limits<double>::quiet_NaN();
   const std::size_t a = 4;
   double st = 0, sm = 0, stt = 0, stm = 0, k = 0;
@@ -391,7 +390,7 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
   int out_1s = 0;
   for (const Removal& r : res.removals)
     if (!r.keystone && r.t <= 1.0 + 1e-12) ++out_1s;
-  const double q = flow_rate(res.removals, res.duration);
+  const double q = flow_rate(res.removals);
   const double m_disc = w.discs.size() ? w.discs.mass[0] : (res.removals.empty() ? 1.0 : res.removals[0].mass);
   res.metrics = {
       {"status", res.status},

@@ -42,6 +42,6 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
 
 // Least-squares slope of cumulative removed mass against time, after the start transient
 // (from the 5th removal on); NaN with fewer than 10 removals.
-double flow_rate(const std::vector<Removal>& removals, double t_end);
+double flow_rate(const std::vector<Removal>& removals);
 
 }  // namespace dem

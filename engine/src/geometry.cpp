@@ -65,4 +65,13 @@ bool closest_point(const Geometry& g, int k, double cx, double cy, ObstacleHit& 
   return true;
 }
 
+double obstacle_distance(const Geometry& g, int k, double cx, double cy) {
+  const int nw = static_cast<int>(g.walls.size());
+  if (k >= nw) return std::hypot(g.points[k - nw].x - cx, g.points[k - nw].y - cy);
+  const Wall& w = g.walls[k];
+  if (!w.active) return std::numeric_limits<double>::infinity();
+  const double u = std::clamp(projection(w, cx, cy), 0.0, 1.0);
+  return std::hypot(w.ax + u * (w.bx - w.ax) - cx, w.ay + u * (w.by - w.ay) - cy);
+}
+
 }  // namespace dem

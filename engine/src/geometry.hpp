@@ -45,4 +45,8 @@ struct ObstacleHit {
 };
 bool closest_point(const Geometry& g, int k, double cx, double cy, ObstacleHit& hit);
 
+// Distance from (cx, cy) to any part of obstacle k, ends included, whoever owns the contact
+// (infinite for a removed wall): for candidate lists and initial-overlap checks.
+double obstacle_distance(const Geometry& g, int k, double cx, double cy);
+
 }  // namespace dem

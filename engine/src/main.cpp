@@ -130,26 +130,22 @@ int cmd_run(int argc, char** argv) {
   std::string save_to;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
-    auto value = [&](const char* what) -> const char* {
-      if (a + 1 >= argc) return nullptr;
-      (void)what;
-      return argv[++a];
-    };
+    auto value = [&]() -> const char* { return a + 1 < argc ? argv[++a] : nullptr; };
     if (k == "--help" || k == "-h") {
       std::fputs(kRunHelp, stdout);
       return 0;
     } else if (k == "--out") {
-      const char* v = value("--out");
+      const char* v = value();
       if (!v) return bad("--out needs a directory");
       out = v;
     } else if (k == "--dt") {
-      const char* v = value("--dt");
+      const char* v = value();
       if (!v || !number_arg(v, ov.dt) || !(ov.dt > 0)) return bad("--dt needs a number > 0");
     } else if (k == "--end-time") {
-      const char* v = value("--end-time");
+      const char* v = value();
       if (!v || !number_arg(v, ov.end_time) || !(ov.end_time > 0)) return bad("--end-time needs a number > 0");
     } else if (k == "--scheme") {
-      const char* v = value("--scheme");
+      const char* v = value();
       if (!v) return bad("--scheme needs paper_eq18, paper_eq19 or velocity_verlet");
       ov.scheme = v;
     } else if (k == "--force-dt") {
@@ -159,11 +155,11 @@ int cmd_run(int argc, char** argv) {
     } else if (k == "--no-plots") {
       plots = false;
     } else if (k == "--from") {
-      const char* v = value("--from");
+      const char* v = value();
       if (!v) return bad("--from needs a state file");
       ov.from = v;
     } else if (k == "--save-state") {
-      const char* v = value("--save-state");
+      const char* v = value();
       if (!v) return bad("--save-state needs a file name");
       save_to = v;
     } else if (!k.empty() && k[0] == '-') {

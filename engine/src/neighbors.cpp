@@ -27,17 +27,6 @@ void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key
   }
 }
 
-// Distance from c to obstacle k, ignoring which part owns the contact (a candidate test).
-double reach_distance(const Geometry& g, int k, double cx, double cy) {
-  const int nw = static_cast<int>(g.walls.size());
-  if (k >= nw) return std::hypot(g.points[k - nw].x - cx, g.points[k - nw].y - cy);
-  const Wall& w = g.walls[k];
-  if (!w.active) return std::numeric_limits<double>::infinity();
-  const double ex = w.bx - w.ax, ey = w.by - w.ay;
-  double u = ((cx - w.ax) * ex + (cy - w.ay) * ey) / (ex * ex + ey * ey);
-  u = std::clamp(u, 0.0, 1.0);
-  return std::hypot(w.ax + u * ex - cx, w.ay + u * ey - cy);
-}
 }  // namespace
 
 void Neighbors::rebuild(const Discs& d, const Geometry& g) {
@@ -110,7 +99,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g) {
   const int nk = g.obstacle_count();
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < nk; ++k)
-      if (reach_distance(g, k, d.x[i], d.y[i]) < d.r[i] + skin) new_walls_.push_back(WallContact{i, k});
+      if (obstacle_distance(g, k, d.x[i], d.y[i]) < d.r[i] + skin) new_walls_.push_back(WallContact{i, k});
   merge_history(walls, new_walls_, [](const WallContact& w) {
     return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k);
   });

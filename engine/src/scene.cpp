@@ -414,19 +414,8 @@ void check_initial_discs(const SceneSpec& s) {
                        "] x [" + show(y0) + ", " + show(y1) + "])");
   }
   for (const auto& c : nb.walls) {
-    ObstacleHit h{};
     const int nw = static_cast<int>(g.walls.size());
-    // Any part of a wall (ends included) closer than r is an overlap.
-    double dist;
-    if (c.k < nw) {
-      const Wall& w = g.walls[c.k];
-      const double ex = w.bx - w.ax, ey = w.by - w.ay;
-      const double u = std::clamp(((d.x[c.i] - w.ax) * ex + (d.y[c.i] - w.ay) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-      dist = std::hypot(w.ax + u * ex - d.x[c.i], w.ay + u * ey - d.y[c.i]);
-    } else {
-      dist = std::hypot(g.points[c.k - nw].x - d.x[c.i], g.points[c.k - nw].y - d.y[c.i]);
-    }
-    (void)h;
+    const double dist = obstacle_distance(g, c.k, d.x[c.i], d.y[c.i]);
     if (dist < d.r[c.i]) {
       const std::string name = c.k < nw ? "wall \"" + g.walls[c.k].name + "\"" : "point \"" + g.points[c.k - nw].name + "\"";
       throw SceneError(s.file + ": fill: " + where(c.i) + " overlaps " + name + ": discs must start inside the walls");

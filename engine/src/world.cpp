@@ -37,6 +37,7 @@ void World::prepare() {
   select_kernel();
   geometry.link_points();
   touch_scratch_.assign(geometry.obstacle_count() + 1, 0);
+  dist_scratch_.assign(geometry.obstacle_count() + 1, 0.0);
   neighbors.rebuild(discs, geometry);  // keeps the history already in the lists
 }
 
@@ -135,6 +136,7 @@ void World::compute_forces() {
       ObstacleHit h{};
       now[a - b] = closest_point(geometry, c.k, d.x[i], d.y[i], h) && h.dist <= d.r[i] && h.dist > 0;
       if (now[a - b]) {
+        dist_scratch_[a - b] = h.dist;
         c.px = h.px; c.py = h.py;
         c.nx = (h.px - d.x[i]) / h.dist;
         c.ny = (h.py - d.y[i]) / h.dist;
@@ -152,7 +154,7 @@ void World::compute_forces() {
       WallContact& c = wl[a];
       c.touching = now[a - b];
       if (!c.touching) { c.en = c.es = c.fn = c.fs = 0; continue; }
-      const double dist = std::hypot(c.px - d.x[i], c.py - d.y[i]);
+      const double dist = dist_scratch_[a - b];
       const double nx = c.nx, ny = c.ny;
       const double du_n = d.dux[i] * nx + d.duy[i] * ny;                         // (5a)
       const double du_s = -d.dux[i] * ny + d.duy[i] * nx + d.r[i] * d.dphi[i];   // (5b)

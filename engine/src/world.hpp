@@ -53,7 +53,8 @@ class World {
   void compute_forces();
   void select_kernel();
   bool adjacent(int k1, int k2) const;  // a wall and a point at its end
-  std::vector<char> touch_scratch_;
+  std::vector<char> touch_scratch_;   // per wall entry of one disc: touching now
+  std::vector<double> dist_scratch_;  // ... and its centre distance
   void kick(double h);        // v += a h  (eq. 17 with h = dt)
   void drift_eq18();          // du = v dt, eq. (18); x += du
   void drift_eq19();          // du = (du + v dt) / 2, eq. (19); x += du

@@ -29,14 +29,19 @@ World resting_disc(Scheme scheme, double dt) {
   for (int s = 0; s < 4000; ++s) w.step();  // settle
   return w;
 }
+// The settled disc launched sliding at v0 without spin (increment set for eq. 19).
+World launched(Scheme scheme, double v0) {
+  World w = resting_disc(scheme, 5e-5);
+  w.discs.vx[0] = v0;
+  w.discs.dux[0] = v0 * w.dt;
+  return w;
+}
 }  // namespace
 
 TEST(Friction, SlidingDiscDeceleratesAtMuG) {
   for (Scheme scheme : kSchemes) {
-    World w = resting_disc(scheme, 5e-5);
     const double v0 = 50.0;
-    w.discs.vx[0] = v0;
-    w.discs.dux[0] = v0 * w.dt;
+    World w = launched(scheme, v0);
     // Sliding lasts v0 / (3 mu g) = 0.097 s; measure between 0.02 and 0.07 s.
     for (int s = 0; s < 400; ++s) w.step();
     const double t1 = w.time, v1 = w.discs.vx[0];
@@ -49,10 +54,8 @@ TEST(Friction, SlidingDiscDeceleratesAtMuG) {
 
 TEST(Friction, LaunchedSlidingDiscEndsRollingAtTwoThirds) {
   for (Scheme scheme : kSchemes) {
-    World w = resting_disc(scheme, 5e-5);
     const double v0 = 50.0;
-    w.discs.vx[0] = v0;
-    w.discs.dux[0] = v0 * w.dt;
+    World w = launched(scheme, v0);
     for (int s = 0; s < 8000; ++s) w.step();  // 0.4 s, four times the sliding time
     EXPECT_NEAR(w.discs.vx[0] / v0, 2.0 / 3.0, 2e-3) << to_string(scheme);
     EXPECT_NEAR(-w.discs.omega[0] * kR / w.discs.vx[0], 1.0, 2e-3) << to_string(scheme) << ": not rolling";
