@@ -12,6 +12,7 @@
 #include "ensemble.hpp"
 #include "state.hpp"
 #include "outputs.hpp"
+#include "resolve.hpp"
 #include "run.hpp"
 #include "scene.hpp"
 #include "stability.hpp"
@@ -28,6 +29,7 @@ const char* kMainHelp =
     "  dem run SCENE.toml --out DIR [options]   run a scene (dem run --help)\n"
     "  dem ensemble SCENE.toml --out DIR [...]  run perturbed copies of a discharge (dem ensemble --help)\n"
     "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
+    "  dem resolve SCENE.toml [--out FILE.json] the validated scene with every value resolved (JSON)\n"
     "\n"
     "exit codes: 0 ok, 2 bad input, 3 unstable run\n";
 
@@ -339,6 +341,30 @@ int cmd_params(int argc, char** argv) {
 
 }  // namespace
 
+// The validated scene as JSON (stdout or --out): what the comparison layer translates.
+int cmd_resolve(int argc, char** argv) {
+  std::string scene, out;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (k == "--out" && a + 1 < argc) out = argv[++a];
+    else if (k == "--help" || k == "-h") {
+      std::printf("usage: dem resolve SCENE.toml [--out FILE.json]\n");
+      return 0;
+    } else if (!k.empty() && k[0] != '-' && scene.empty()) scene = k;
+    else return bad("resolve: unknown or incomplete argument \"" + k + "\"");
+  }
+  if (scene.empty()) return bad("resolve: no scene file given");
+  try {
+    const SceneSpec s = load_scene(scene);
+    const std::string text = resolved_scene_json(s).dump(1) + "\n";
+    if (out.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
+    else write_file_atomic(out, text);
+  } catch (const SceneError& e) {
+    return bad(e.what());
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
@@ -347,6 +373,7 @@ int main(int argc, char** argv) {
   const std::string cmd = argv[1];
   if (cmd == "run") return cmd_run(argc - 2, argv + 2);
   if (cmd == "params") return cmd_params(argc - 2, argv + 2);
+  if (cmd == "resolve") return cmd_resolve(argc - 2, argv + 2);
   if (cmd == "ensemble") return cmd_ensemble(argc - 2, argv + 2);
   return bad("unknown command " + cmd + " (dem --help)");
 }

@@ -372,6 +372,10 @@ void read_fill(SceneSpec& s, Tab& root) {
     read_disc_file(s, t, f, mat);
     s.fill_summary = "file " + f + ": " + std::to_string(s.discs.size()) + " discs";
   }
+  // A packing saved at rest overlaps by ~1e-3 r: accepted up to this fraction of the smaller radius.
+  s.max_initial_overlap = t.non_negative("max_initial_overlap", 0.0);
+  if (s.max_initial_overlap >= 0.5)
+    t.fail("max_initial_overlap", show(s.max_initial_overlap), "must be < 0.5 (a fraction of the radius)");
   if (t.has("count") && type != "lattice") {
     const long c = t.integer("count");
     if (c != static_cast<long>(s.discs.size()))
@@ -404,8 +408,11 @@ void check_initial_discs(const SceneSpec& s) {
   for (const auto& p : nb.pairs) {
     const double dx = d.x[p.j] - d.x[p.i], dy = d.y[p.j] - d.y[p.i];
     const double sum = d.r[p.i] + d.r[p.j];
-    if (dx * dx + dy * dy < sum * sum)
-      throw SceneError(s.file + ": fill: " + where(p.i) + " overlaps " + where(p.j) + ": initial discs must not overlap");
+    const double allowed = s.max_initial_overlap * std::min(d.r[p.i], d.r[p.j]);
+    if (dx * dx + dy * dy < (sum - allowed) * (sum - allowed))
+      throw SceneError(s.file + ": fill: " + where(p.i) + " overlaps " + where(p.j) +
+                       (allowed > 0 ? " by more than fill.max_initial_overlap = " + show(s.max_initial_overlap) + " r"
+                                    : ": initial discs must not overlap (fill.max_initial_overlap allows a rested packing's overlaps)"));
   }
   const double x0 = g.min_x(), x1 = g.max_x(), y0 = g.min_y(), y1 = g.max_y();
   for (int i = 0; i < static_cast<int>(d.size()); ++i) {
@@ -416,7 +423,7 @@ void check_initial_discs(const SceneSpec& s) {
   for (const auto& c : nb.walls) {
     const int nw = static_cast<int>(g.walls.size());
     const double dist = obstacle_distance(g, c.k, d.x[c.i], d.y[c.i]);
-    if (dist < d.r[c.i]) {
+    if (dist < d.r[c.i] * (1.0 - s.max_initial_overlap)) {
       const std::string name = c.k < nw ? "wall \"" + g.walls[c.k].name + "\"" : "point \"" + g.points[c.k - nw].name + "\"";
       throw SceneError(s.file + ": fill: " + where(c.i) + " overlaps " + name + ": discs must start inside the walls");
     }

@@ -53,6 +53,7 @@ struct SceneSpec {
   bool slit_open = false;
   std::vector<DiscInit> discs;
   std::string fill_summary;
+  double max_initial_overlap = 0;  // [fill] accepted initial overlap, fraction of the smaller radius
   double skin = 0, cell = 0;       // [neighbor]
   double end_time = 0;             // [end]
   bool stop_at_rest = true;
