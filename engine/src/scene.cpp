@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
+#include <system_error>
+
+#include <unistd.h>
 
 #include "fill.hpp"
 #include "neighbors.hpp"
@@ -17,8 +21,6 @@
 namespace dem {
 
 namespace {
-
-constexpr long kMaxDiscs = 50'000'000;  // refuse absurd fills before allocating them
 
 std::string show(const toml::node& n) {
   std::ostringstream os;
@@ -37,6 +39,36 @@ std::string show(double v) {
   os.precision(12);
   os << v;
   return os.str();
+}
+
+// A limit as written in docs/scene.md: 5e7, 1e15, 2e4.
+std::string limit_text(double v) {
+  int e = 0;
+  double m = v;
+  while (m >= 10 && m == std::floor(m / 10) * 10) {
+    m /= 10;
+    ++e;
+  }
+  return e >= 3 ? show(m) + "e" + std::to_string(e) : show(v);
+}
+
+// A regular file (not a directory, device or pipe that would never end) of at most max_bytes.
+std::string regular_file_problem(const std::string& path, double max_bytes) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st)) return "cannot open " + path;
+  if (!std::filesystem::is_regular_file(st)) return path + " is not a regular file";
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return "cannot open " + path;
+  if (static_cast<double>(size) > max_bytes)
+    return path + " has " + std::to_string(size) + " bytes, more than the limit of " + limit_text(max_bytes);
+  return "";
+}
+
+// Physical memory of this machine in bytes (0 when unknown).
+double physical_memory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
 }
 
 // A TOML table being read: remembers the keys used so that unknown keys can be refused.
@@ -182,6 +214,27 @@ class Tab {
   std::set<std::string> used_;
 };
 
+// Refuses a fill of n discs beyond the disc limit or this machine's memory, before allocating it.
+void check_disc_budget(const SceneSpec& s, Tab& t, const std::string& key, const std::string& value, double n) {
+  if (n > static_cast<double>(s.max_discs))
+    t.fail(key, value, "gives " + show(n) + " discs, more than the limit of " + limit_text(static_cast<double>(s.max_discs)) +
+                           " discs (docs/scene.md, Limits)");
+  const double need = n * kBytesPerDisc, have = physical_memory();
+  if (have > 0 && need > have) {
+    std::ostringstream os;
+    os.precision(3);
+    os << "gives " << n << " discs, which need about " << need / 1e9 << " GB of memory (about " << kBytesPerDisc
+       << " bytes per disc), more than this machine's " << have / 1e9 << " GB";
+    t.fail(key, value, os.str());
+  }
+}
+
+// A coordinate, radius or size within +-kMaxCoordinate (squares and sums of squares stay finite).
+void check_coordinate(Tab& t, const std::string& key, const std::string& value, double v) {
+  if (!(std::abs(v) <= kMaxCoordinate))
+    t.fail(key, value, "beyond the limit of " + limit_text(kMaxCoordinate) + " in magnitude (docs/scene.md, Limits)");
+}
+
 int material_index(SceneSpec& s, Tab& t, const std::string& key) {
   const std::string name = t.str(key);
   for (std::size_t m = 0; m < s.material_names.size(); ++m)
@@ -198,6 +251,7 @@ double pair_value(Tab& t, const std::string& key, double rho_g, bool needs_posit
     t.fail(key + "_rho_g", "", "needs a disc material with a density on one side of the pair");
   const double v = abs ? t.num(key) : t.num(key + "_rho_g") * rho_g;
   const std::string k = abs ? key : key + "_rho_g";
+  if (!std::isfinite(v)) t.fail(k, show(abs ? v : t.num(k)), "gives a non-finite value (too large)");
   if (needs_positive ? !(v > 0) : v < 0) t.fail(k, show(abs ? v : v / rho_g), needs_positive ? "must be > 0" : "must be >= 0");
   return v;
 }
@@ -208,6 +262,8 @@ void read_walls(SceneSpec& s, Tab& root) {
     s.has_silo = true;
     s.silo_width = t.positive("width", 40.0);
     s.silo_height = t.positive("height", 40.0);
+    check_coordinate(t, "width", show(s.silo_width), s.silo_width);
+    check_coordinate(t, "height", show(s.silo_height), s.silo_height);
     s.slit_width = t.non_negative("slit_width", 8.0);
     if (s.slit_width >= s.silo_width) t.fail("slit_width", show(s.slit_width), "must be smaller than the width");
     s.slit_open = t.choice("slit", {"closed", "open"}, "closed") == "open";
@@ -239,6 +295,8 @@ void read_walls(SceneSpec& s, Tab& root) {
       w.name = t.str("name");
       t.vec2("from", w.ax, w.ay);
       t.vec2("to", w.bx, w.by);
+      for (double v : {w.ax, w.ay}) check_coordinate(t, "from", show(v), v);
+      for (double v : {w.bx, w.by}) check_coordinate(t, "to", show(v), v);
       if (std::hypot(w.bx - w.ax, w.by - w.ay) <= 0) t.fail("to", "", "the wall has zero length (from == to)");
       w.material = material_index(s, t, "material");
       w.group = t.str("group", w.name);
@@ -253,6 +311,7 @@ void read_walls(SceneSpec& s, Tab& root) {
       Point p;
       p.name = t.str("name");
       t.vec2("at", p.x, p.y);
+      for (double v : {p.x, p.y}) check_coordinate(t, "at", show(v), v);
       p.material = material_index(s, t, "material");
       p.group = t.str("group", p.name);
       t.finish();
@@ -273,10 +332,26 @@ void read_disc_file(SceneSpec& s, Tab& t, const std::string& rel, int default_ma
     const auto slash = s.file.find_last_of('/');
     if (slash != std::string::npos) path = s.file.substr(0, slash + 1) + rel;
   }
+  const std::string problem = regular_file_problem(path, 1e18);  // lines and discs are limited below
+  if (!problem.empty()) t.fail("file", '"' + rel + '"', problem);
   std::ifstream in(path);
   if (!in) t.fail("file", '"' + rel + '"', "cannot open " + path);
   std::string line;
-  std::getline(in, line);
+  long lines_read = 0;
+  // Lines of at most 4096 characters: a file without line breaks is not read into memory whole.
+  auto next_line = [&]() {
+    line.clear();
+    ++lines_read;
+    for (int c; (c = in.get()) != std::char_traits<char>::eof();) {
+      if (c == '\n') return true;
+      if (line.size() >= 4096)
+        t.fail("file", '"' + rel + '"', "line " + std::to_string(lines_read) + " is longer than 4096 characters");
+      line.push_back(static_cast<char>(c));
+    }
+    return !line.empty();
+  };
+  next_line();
+  if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
   std::vector<std::string> head;
   {
     std::stringstream ss(line);
@@ -289,9 +364,14 @@ void read_disc_file(SceneSpec& s, Tab& t, const std::string& rel, int default_ma
   };
   const int cx = col("x"), cy = col("y"), cr = col("r"), cm = col("material");
   if (cx < 0 || cy < 0 || cr < 0) t.fail("file", '"' + rel + '"', "the header must name columns x, y and r");
+  const bool with_v = t.boolean("velocities", false);  // start from the file's vx, vy, omega
+  const int cvx = col("vx"), cvy = col("vy"), cw = col("omega");
+  if (with_v && (cvx < 0 || cvy < 0 || cw < 0))
+    t.fail("velocities", "true", "the file's header must name columns vx, vy and omega");
   long lineno = 1;
-  while (std::getline(in, line)) {
+  while (next_line()) {
     ++lineno;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     std::vector<std::string> cells;
     std::stringstream ss(line);
@@ -314,7 +394,13 @@ void read_disc_file(SceneSpec& s, Tab& t, const std::string& rel, int default_ma
       mat = static_cast<int>(it - s.material_names.begin());
     }
     s.discs.push_back({get(cx), get(cy), get(cr), mat});
-    if (static_cast<long>(s.discs.size()) > kMaxDiscs) t.fail("file", '"' + rel + '"', "more than 5e7 discs");
+    if (with_v) {
+      s.discs.back().vx = get(cvx);
+      s.discs.back().vy = get(cvy);
+      s.discs.back().omega = get(cw);
+    }
+    if (static_cast<long>(s.discs.size()) > s.max_discs)
+      check_disc_budget(s, t, "file", '"' + rel + '"', static_cast<double>(s.discs.size()));
   }
 }
 
@@ -326,19 +412,24 @@ void read_fill(SceneSpec& s, Tab& root) {
   if (type == "lattice") {
     if (!s.has_silo) t.fail("type", "\"lattice\"", "a lattice fill needs a [silo] to fill");
     LatticeSpec L;
-    L.s = static_cast<int>(t.integer("s"));
-    if (L.s < 2 || L.s > 1000000) t.fail("s", std::to_string(L.s), "must be between 2 and 1e6");
+    const long s_row = t.integer("s");
+    if (s_row < 2 || s_row > 1000000) t.fail("s", std::to_string(s_row), "must be between 2 and 1e6");
+    L.s = static_cast<int>(s_row);
     L.radius = t.positive("radius", 1.0);
     L.gap = t.non_negative("gap", 0.004);
+    check_coordinate(t, "radius", show(L.radius), L.radius);
+    check_coordinate(t, "gap", show(L.gap), L.gap);
     L.rows = t.integer("rows", 0L);
     L.count = t.integer("count", 350L);
     if (L.rows < 0) t.fail("rows", std::to_string(L.rows), "must be >= 0 (0: from count)");
     if (L.count <= 0) t.fail("count", std::to_string(L.count), "must be > 0");
-    if (L.rows > kMaxDiscs || L.count > kMaxDiscs) t.fail(L.rows ? "rows" : "count", std::to_string(L.rows ? L.rows : L.count), "more than 5e7 discs");
+    if (L.rows > 0) check_disc_budget(s, t, "rows", std::to_string(L.rows), static_cast<double>(L.rows));
+    else check_disc_budget(s, t, "count", std::to_string(L.count), static_cast<double>(L.count));
     LatticeGeometry g{};
     const std::string why = lattice_geometry(L, s.silo_width, g);
     if (!why.empty()) t.fail("s", std::to_string(L.s), why);
-    if (g.n > kMaxDiscs) t.fail("rows", std::to_string(g.rows), "more than 5e7 discs");
+    check_disc_budget(s, t, L.rows > 0 ? "rows" : "count", std::to_string(L.rows > 0 ? L.rows : L.count),
+                      static_cast<double>(g.n));
     std::vector<double> x, y;
     lattice_centres(L, g, 0.0, 0.0, x, y);
     for (std::size_t k = 0; k < x.size(); ++k) s.discs.push_back({x[k], y[k], L.radius, mat});
@@ -351,7 +442,7 @@ void read_fill(SceneSpec& s, Tab& root) {
     if (!n) t.fail("discs", "", "required value is missing");
     auto a = n->as_array();
     if (!a) t.fail("discs", show(*n), "expected an array of [x, y, r]");
-    if (static_cast<long>(a->size()) > kMaxDiscs) t.fail("discs", "", "more than 5e7 discs");
+    check_disc_budget(s, t, "discs", "", static_cast<double>(a->size()));
     for (std::size_t k = 0; k < a->size(); ++k) {
       auto e = a->get(k)->as_array();
       const std::string f = "discs[" + std::to_string(k) + "]";
@@ -383,9 +474,22 @@ void read_fill(SceneSpec& s, Tab& root) {
   }
   t.finish();
   if (s.discs.empty()) throw SceneError(s.file + ": fill: no discs");
-  for (std::size_t k = 0; k < s.discs.size(); ++k)
-    if (!(s.discs[k].r > 0))
-      throw SceneError(s.file + ": fill: disc " + std::to_string(k) + " radius = " + show(s.discs[k].r) + ": must be > 0");
+  check_disc_budget(s, t, "type", '"' + type + '"', static_cast<double>(s.discs.size()));
+  for (std::size_t k = 0; k < s.discs.size(); ++k) {
+    const DiscInit& d = s.discs[k];
+    const std::string disc = s.file + ": fill: disc " + std::to_string(k);
+    if (!(d.r > 0)) throw SceneError(disc + " radius = " + show(d.r) + ": must be > 0");
+    for (double v : {d.x, d.y, d.r})
+      if (!(std::abs(v) <= kMaxCoordinate))
+        throw SceneError(disc + " at (" + show(d.x) + ", " + show(d.y) + ") r = " + show(d.r) + ": beyond the limit of " +
+                         limit_text(kMaxCoordinate) + " in magnitude (docs/scene.md, Limits)");
+    // m = rho pi r^2 and I = m r^2 / 2 must be finite and > 0 (1/m and 1/I are used).
+    const double m = s.density[d.material] * 3.14159265358979323846 * d.r * d.r, inertia = 0.5 * m * d.r * d.r;
+    if (!(m > 0 && std::isfinite(m) && inertia > 0 && std::isfinite(inertia) && std::isfinite(1 / inertia)))
+      throw SceneError(disc + " radius = " + show(d.r) + ", materials." + s.material_names[d.material] + ".density = " +
+                       show(s.density[d.material]) + ": mass " + show(m) + " or moment of inertia " + show(inertia) +
+                       " is not a finite number > 0");
+  }
 }
 
 }  // namespace
@@ -447,7 +551,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   {
     std::ifstream probe(path);
     if (!probe) throw SceneError(path + ": cannot open the scene file");
+    const std::string problem = regular_file_problem(path, kMaxSceneBytes);
+    if (!problem.empty()) throw SceneError(path + ": " + problem);
   }
+  s.max_discs = ov.max_discs > 0 ? ov.max_discs : kMaxDiscs;
   try {
     root_table = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
@@ -467,6 +574,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   if (const toml::table* pt = root.table("physics", false)) {
     Tab t(*pt, "physics", s.file);
     t.vec2("gravity", s.gx, s.gy, false);
+    if (!std::isfinite(std::hypot(s.gx, s.gy))) t.fail("gravity", "", "its magnitude is not a finite number");
     t.finish();
   }
   {
@@ -490,6 +598,9 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   {
     const toml::table* mt = root.table("materials", true);
     Tab t(*mt, "materials", s.file);
+    if (static_cast<long>(mt->size()) > kMaxMaterials)
+      t.fail("materials", std::to_string(mt->size()) + " materials",
+             "more than the limit of " + std::to_string(kMaxMaterials) + " (docs/scene.md, Limits)");
     for (const auto& [k, v] : *mt) {
       const std::string name(k.str());
       Tab m(*t.table(name, true), "materials." + name, s.file);
@@ -558,6 +669,13 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     Tab t(*nt, "neighbor", s.file);
     s.skin = t.positive("skin", s.skin);
     s.cell = t.non_negative("cell", 0.0);
+    double rmax = 0;
+    for (const auto& d : s.discs) rmax = std::max(rmax, d.r);
+    // A longer reach would pair every disc with every other (memory ~ N^2), a larger cell
+    // would search them all (time ~ N^2).
+    if (s.skin > 2 * rmax) t.fail("skin", show(s.skin), "must be <= 2 r_max = " + show(2 * rmax) + " (one diameter)");
+    if (s.cell > 10 * (2 * rmax + s.skin))
+      t.fail("cell", show(s.cell), "must be <= 10 (2 r_max + skin) = " + show(10 * (2 * rmax + s.skin)));
     t.finish();
   }
   if (const toml::table* st = root.table("start", false)) {
@@ -583,6 +701,8 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     if (const toml::node* n = t.node("snapshots")) {
       auto a = n->as_array();
       if (!a) t.fail("snapshots", show(*n), "expected an array of times [s]");
+      if (static_cast<long>(a->size()) > kMaxSnapshots)
+        t.fail("snapshots", std::to_string(a->size()) + " times", "more than the limit of " + limit_text(kMaxSnapshots));
       d.snapshots.clear();
       for (std::size_t k = 0; k < a->size(); ++k) {
         const toml::node& e = *a->get(k);
@@ -604,6 +724,12 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   if (const toml::table* ot = root.table("output", false)) {
     Tab t(*ot, "output", s.file);
     s.profile_bin = t.positive("profile_bin", s.profile_bin);
+    for (const Wall& w : s.geometry.walls) {
+      const double bins = std::hypot(w.bx - w.ax, w.by - w.ay) / s.profile_bin;
+      if (!(bins <= kMaxProfileBins))
+        t.fail("profile_bin", show(s.profile_bin), "gives " + show(bins) + " bins on wall \"" + w.name +
+                                                       "\", more than the limit of " + limit_text(kMaxProfileBins));
+    }
     s.progress = t.boolean("progress", true);
     t.finish();
   }
@@ -629,6 +755,22 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   if (ov.end_time > 0) s.end_time = ov.end_time;
   if (ov.force_dt) s.force_dt = true;
   if (!ov.from.empty()) s.start_from = ov.from;
+  // Step counts are integers: a time that is too many steps of dt is refused.
+  auto steps_limit = [&](const std::string& field, double time) {
+    if (!(time / s.dt <= kMaxSteps))
+      throw SceneError(s.file + ": " + field + " = " + show(time) + ": " + show(time / s.dt) + " steps of dt = " + show(s.dt) +
+                       " s, more than the limit of " + limit_text(kMaxSteps) + " (docs/scene.md, Limits)");
+  };
+  steps_limit("end.time", s.end_time);
+  if (s.discharge.enabled) {
+    steps_limit("discharge.time", s.discharge.time);
+    steps_limit("discharge.series_interval", s.discharge.series_interval);
+    steps_limit("discharge.peak_window", s.discharge.peak_window);
+  }
+  if (!s.start_from.empty()) {
+    const std::string problem = regular_file_problem(s.start_from, 1e18);
+    if (!problem.empty()) throw SceneError(s.file + ": start.from = \"" + s.start_from + "\": " + problem);
+  }
   check_initial_discs(s);
   return s;
 }
@@ -644,7 +786,12 @@ void build_world(const SceneSpec& s, World& w) {
   w.gy = s.gy;
   w.geometry = s.geometry;
   w.geometry.link_points();
-  for (const auto& d : s.discs) w.discs.add(d.x, d.y, d.r, s.density[d.material], d.material);
+  for (const auto& d : s.discs) {
+    w.discs.add(d.x, d.y, d.r, s.density[d.material], d.material);
+    w.discs.vx.back() = d.vx;
+    w.discs.vy.back() = d.vy;
+    w.discs.omega.back() = d.omega;
+  }
   w.neighbors.skin = s.skin;
   w.neighbors.min_cell = s.cell;
   const StabilityReport rep = stability_report(w, s.material_names);

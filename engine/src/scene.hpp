@@ -17,9 +17,21 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Limits checked before anything is allocated (docs/scene.md, "Limits"): a scene past them is
+// refused with a message, never allowed to exhaust memory or time.
+constexpr long kMaxDiscs = 50'000'000;        // discs in a fill
+constexpr double kBytesPerDisc = 1024;        // memory estimate per disc (world, lists, outputs)
+constexpr long kMaxMaterials = 1000;          // [materials] (pair tables are n^2)
+constexpr double kMaxCoordinate = 1e15;       // |coordinates|, radii, silo sizes (squares stay finite)
+constexpr double kMaxSteps = 1e12;            // end.time / dt and discharge.time / dt
+constexpr long kMaxProfileBins = 100'000;     // wall length / output.profile_bin, per wall
+constexpr long kMaxSnapshots = 10'000;        // discharge.snapshots
+constexpr double kMaxSceneBytes = 1 << 30;    // scene file size
+
 struct DiscInit {
   double x, y, r;
   int material;
+  double vx = 0, vy = 0, omega = 0;  // [cm/s], [1/s]: fill.velocities reads them from the file
 };
 
 // Section 5(2): opening the slit from the rested fill, the outlet below it, and what is recorded.
@@ -61,6 +73,7 @@ struct SceneSpec {
   double max_overlap_fraction = 0.5;
   std::string start_from;          // [start] from: a saved state (skips the fill)
   DischargeSpec discharge;         // [discharge]
+  long max_discs = kMaxDiscs;      // SceneOverrides::max_discs or kMaxDiscs
   double profile_bin = 0;          // [output]
   bool progress = true;
 };
@@ -72,6 +85,7 @@ struct SceneOverrides {
   double end_time = 0;        // 0: none
   bool force_dt = false;
   std::string from;           // "": none; a state file to start from
+  long max_discs = 0;         // 0: kMaxDiscs; lower for fuzzing (engine/fuzz)
 };
 SceneSpec load_scene(const std::string& path, const SceneOverrides& ov = {});
 

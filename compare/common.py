@@ -1,0 +1,203 @@
+"""The comparison layer's common ground: the resolved scene, a comparison case, and the one
+result form every code's reader produces.
+
+A *case* is what all three codes run: the engine's resolved scene (``dem resolve``: absolute
+pair constants, walls, points), a packing (the discs every code starts from), the contact
+variant that all three codes can express, a time step, a duration and what to record.
+A *result* holds, for one run of one code, the wall profiles at the end, the wall-force series,
+the removals, the final discs and the status; ``status != "ok"`` is never agreement.
+
+Sign conventions are the engine's (docs/outputs.md): forces BY THE DISCS ON THE WALL; normal
+positive when the discs push; shear along the wall's from -> to direction; profiles bin each
+wall from its ``from`` end in bins of ``profile_bin``, a contact counting in the bin of its
+contact point.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+PYTHON = "/usr/bin/python3"
+
+# The contact variant every code expresses: e_n = K_n * overlap (LIGGGHTS hooke/stiffness,
+# YADE ViscEl), the total normal force clamped >= 0 (LIGGGHTS limitForce on, YADE), the Coulomb
+# cap on the total normal force, shear dashpot off while sliding (all three).
+SHARED_VARIANT = {"normal_spring": "overlap", "no_tension": "total", "friction_cap": "total"}
+
+
+class CaseError(ValueError):
+    """A case that cannot be translated faithfully (names the field and the reason)."""
+
+
+def dem_binary() -> Path:
+    b = Path(os.environ.get("DEM_BINARY", ROOT / "build" / "dem"))
+    if not b.exists():
+        raise FileNotFoundError(f"engine binary {b} not found: run scripts/build.sh (or set DEM_BINARY)")
+    return b
+
+
+def resolve(scene: str | Path) -> dict:
+    """The engine's validated scene, every value resolved (``dem resolve``)."""
+    p = subprocess.run([str(dem_binary()), "resolve", str(scene)], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise CaseError(p.stderr.strip() or f"dem resolve {scene} failed with exit {p.returncode}")
+    return json.loads(p.stdout)
+
+
+def pair(resolved: dict, a: str, b: str) -> dict:
+    for p in resolved["pairs"]:
+        if sorted(p["materials"]) == sorted([a, b]):
+            return p
+    raise CaseError(f"pairs: no constants for materials {a!r} and {b!r}")
+
+
+def disc_material(resolved: dict) -> str:
+    mats = {d[3] for d in resolved["discs"]}
+    if len(mats) != 1:
+        raise CaseError("fill: the reference translations support one disc material, "
+                        f"this scene has {len(mats)}")
+    return resolved["materials"][mats.pop()]["name"]
+
+
+def inward_normal(wall: dict, centre: tuple[float, float]) -> np.ndarray:
+    """Unit normal of a wall pointing to the side where ``centre`` (the discs) lies."""
+    a, b = np.array(wall["from"], float), np.array(wall["to"], float)
+    t = (b - a) / np.linalg.norm(b - a)
+    n = np.array([-t[1], t[0]])
+    return n if np.dot(np.array(centre) - a, n) >= 0 else -n
+
+
+def tangent(wall: dict) -> np.ndarray:
+    a, b = np.array(wall["from"], float), np.array(wall["to"], float)
+    return (b - a) / np.linalg.norm(b - a)
+
+
+def bin_edges(wall: dict, profile_bin: float) -> np.ndarray:
+    length = float(np.linalg.norm(np.subtract(wall["to"], wall["from"])))
+    n = max(1, int(math.ceil(length / profile_bin - 1e-9)))
+    return np.minimum(np.arange(n + 1) * profile_bin, length)
+
+
+@dataclasses.dataclass
+class Case:
+    """One comparison run, the same for every code."""
+    name: str
+    resolved: dict              # dem resolve output, with the shared variant and dt applied
+    discs: np.ndarray           # (n, 6): x, y, r [cm], vx, vy [cm/s], omega [1/s] at the start
+    dt: float                   # [s]
+    duration: float             # [s] simulated (static: settling time; discharge: after opening)
+    mode: str = "static"        # "static" | "discharge"
+    settle: float = 0.0         # [s] discharge: settling before the gate opens
+    series_interval: float = 0.005  # [s] wall-force sampling
+    seed: int = 0               # ensemble member (perturbation already applied to discs)
+
+    @property
+    def profile_bin(self) -> float:
+        return float(self.resolved["profile_bin"])
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return (float(np.mean(self.discs[:, 0])), float(np.mean(self.discs[:, 1])))
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "dt": self.dt, "duration": self.duration, "mode": self.mode,
+                "settle": self.settle, "series_interval": self.series_interval, "seed": self.seed,
+                "n_discs": int(len(self.discs))}
+
+
+@dataclasses.dataclass
+class Result:
+    """One run of one code, in the common form."""
+    code: str                       # "native" | "liggghts" | "yade"
+    case: str
+    status: str = "ok"              # "ok" | "failed"
+    reason: str = ""                # why it failed (blow-up, lost discs, timeout, crash, ...)
+    version: str = ""
+    wall_time_s: float = float("nan")
+    steps: int = 0
+    n_initial: int = 0
+    n_final: int = 0
+    # Final wall profiles: wall name -> {"s_lo","s_hi","normal","shear"} (lists, force units).
+    profiles: dict = dataclasses.field(default_factory=dict)
+    # Wall-force series every case.series_interval: {"t": [...], "walls": {name: {"normal":
+    # [[per bin] per sample], "shear": [[...]]}}}, same bins as the profiles; t since opening
+    # for a discharge (negative while settling is not recorded), since the start otherwise.
+    series: dict = dataclasses.field(default_factory=dict)
+    # Times (s since opening) of the discs that left through the outlet.
+    removals: list = dataclasses.field(default_factory=list)
+    kinetic_energy_end: float = float("nan")
+    # Discs at the end, in the starting order (removed discs left out): x, y, r, vx, vy, omega.
+    discs_end: list = dataclasses.field(default_factory=list)
+    extra: dict = dataclasses.field(default_factory=dict)
+    out_dir: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    def to_json(self) -> dict:
+        return dataclasses.asdict(self)
+
+    def save(self, path: Path) -> None:
+        write_text_atomic(path, json.dumps(self.to_json(), indent=1, default=_json_default) + "\n")
+
+    @staticmethod
+    def load(path: Path) -> "Result":
+        return Result(**json.loads(Path(path).read_text()))
+
+
+def failed(code: str, case: str, reason: str, **kw) -> Result:
+    return Result(code=code, case=case, status="failed", reason=reason, **kw)
+
+
+def _json_default(o):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(type(o))
+
+
+def write_text_atomic(path: Path, text: str) -> None:
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def profiles_from_contacts(walls: list[dict], profile_bin: float, centre, contacts) -> dict:
+    """Bins contact forces on walls into the common profile form.
+
+    ``contacts``: iterable of (wall name, px, py, fx, fy): contact point and force BY THE DISC
+    ON THE WALL.
+    """
+    out, geo = {}, {}
+    for w in walls:
+        edges = bin_edges(w, profile_bin)
+        out[w["name"]] = {"s_lo": edges[:-1].tolist(), "s_hi": edges[1:].tolist(),
+                          "normal": [0.0] * (len(edges) - 1), "shear": [0.0] * (len(edges) - 1),
+                          "contacts": [0] * (len(edges) - 1)}
+        geo[w["name"]] = (np.array(w["from"], float), tangent(w), inward_normal(w, centre), edges)
+    for name, px, py, fx, fy in contacts:
+        if name not in geo:
+            continue
+        a, t, n, edges = geo[name]
+        s = float(np.dot(np.array([px, py]) - a, t))
+        k = int(np.clip(np.searchsorted(edges, s, side="right") - 1, 0, len(edges) - 2))
+        prof = out[name]
+        prof["normal"][k] += -float(np.dot([fx, fy], n))
+        prof["shear"][k] += float(np.dot([fx, fy], t))
+        prof["contacts"][k] += 1
+    return out
+
+
+def which(program: str) -> str | None:
+    return shutil.which(program)

@@ -1,0 +1,421 @@
+"""LIGGGHTS 3.8.0 as a compared code: translator (data file, STL wall strips written with
+meshio, input script), runner (serial or ``mpirun -np N``) and reader.
+
+What the translation does (see ../shared/docs/reference-codes.md for the measured facts):
+- true 2D: ``dimension 2``, ``boundary f f p``, z in [-2, 2], ``fix enforce2d``;
+- discs: atom type 1; with ``dimension 2`` LIGGGHTS sets mass = density x pi r^2 (checked: a
+  disc resting on the floor loads it with exactly rho pi r^2 g), the engine's mass per 1 cm;
+  ``fix nve/sphere`` in 2D gives the disc inertia m r^2 / 2 (checked by the calibration runs);
+- law: ``hooke/stiffness``, ``tangential history``, ``absolute_damping on`` (eta absolute),
+  ``limitForce on`` (total normal force clamped >= 0): the engine's SHARED_VARIANT
+  (e_n = K_n overlap, no_tension = total, Coulomb cap on the total normal force);
+- walls: every wall segment is a mesh of strips (2 triangles each, z = +-2, at most
+  profile_bin / 2 long, aligned with the profile bins from the wall's ``from`` end); the strip
+  forces (``mesh/surface/stress``, dumped with ``dump mesh/vtk``) give the binned profile;
+- the slit ends L and R are mesh edges, which LIGGGHTS treats as point contacts; their force
+  lands on the strip that owns the edge (the engine reports points apart: the comparison folds
+  them into the neighbouring bin);
+- discharge: the gate mesh jumps 200 cm down in one step at the opening (same run: a new
+  ``run`` would recompute forces without history updates); discs crossing the outlet plane
+  ``outlet_depth`` below the floor are deleted by ``massflow/mesh`` and logged with their time.
+
+What LIGGGHTS cannot express exactly: the paper's incremental normal spring and its no-tension
+rule on the elastic force (eqs. 7a, 8), and the Coulomb cap on the elastic normal force (eq.
+13): the comparison runs use the shared variant in every code. Walls are meshes, so a wall's
+end acts as a point contact where the engine has explicit points.
+"""
+from __future__ import annotations
+
+import glob
+import math
+import os
+import re
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import meshio  # STL meshes; LIGGGHTS' POLYDATA dumps are parsed here
+import numpy as np
+
+from .common import (SHARED_VARIANT, Case, CaseError, Result, bin_edges, disc_material, failed,
+                     inward_normal, pair, tangent, write_text_atomic)
+
+NAME = "liggghts"
+Z_HALF = 2.0          # [cm] half thickness of the periodic z slab
+BOX_BELOW = 220.0     # [cm] room below the floor for the opened gate and the falling discs
+
+
+def available() -> bool:
+    from shutil import which
+    return which("liggghts") is not None
+
+
+def version() -> str:
+    try:
+        p = subprocess.run(["liggghts", "-h"], capture_output=True, text=True, timeout=30)
+        m = re.search(r"LIGGGHTS \(?([^\n]*?Version[^\n]*)", p.stdout) or re.search(r"(LIGGGHTS[^\n]*)", p.stdout)
+        return m.group(1).strip() if m else "liggghts (version not printed)"
+    except (OSError, subprocess.TimeoutExpired):
+        return "liggghts (not runnable)"
+
+
+def _check_variant(case: Case) -> None:
+    c = case.resolved["contact"]
+    if c != SHARED_VARIANT:
+        raise CaseError(f"contact: LIGGGHTS expresses only {SHARED_VARIANT}, the case asks for {c}")
+
+
+def _strips(wall: dict, profile_bin: float):
+    """Strip ends along the wall, at most profile_bin / 2 long, bins' edges included."""
+    a, b = np.array(wall["from"], float), np.array(wall["to"], float)
+    length = float(np.linalg.norm(b - a))
+    edges = bin_edges(wall, profile_bin)
+    s = [0.0]
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        n = max(1, int(math.ceil((hi - lo) / min(1.6, profile_bin / 2) - 1e-9)))
+        s += [lo + (hi - lo) * (k + 1) / n for k in range(n)]
+    s[-1] = length
+    return a, (b - a) / length, np.array(s)
+
+
+def write_wall_stl(wall: dict, profile_bin: float, path: Path) -> int:
+    """A wall segment as strips of 2 triangles spanning z = -Z_HALF..Z_HALF (ASCII STL)."""
+    a, t, s = _strips(wall, profile_bin)
+    pts, tris = [], []
+    for k in range(len(s)):
+        p = a + s[k] * t
+        pts += [[p[0], p[1], -Z_HALF], [p[0], p[1], Z_HALF]]
+    for k in range(len(s) - 1):
+        i = 2 * k
+        tris += [[i, i + 2, i + 3], [i, i + 3, i + 1]]
+    meshio.write(str(path), meshio.Mesh(np.array(pts), [("triangle", np.array(tris))]), file_format="stl",
+                 binary=False)
+    return len(tris)
+
+
+def _matrix(case: Case, key: str) -> str:
+    r = case.resolved
+    dm = disc_material(r)
+    wall_mats = {w["material"] for w in r["walls"]} | {p["material"] for p in r["points"]}
+    if len(wall_mats) > 1:
+        raise CaseError(f"walls: LIGGGHTS translation supports one wall material, got {sorted(wall_mats)}")
+    dd = pair(r, dm, dm)[key]
+    dw = pair(r, dm, wall_mats.pop())[key] if wall_mats else dd
+    # type 1 discs, type 2 walls; the matrix must be complete and symmetric (2-2 never acts).
+    return f"{dd!r} {dw!r} {dw!r} {dw!r}"
+
+
+def _wall_names(case: Case):
+    return [w["name"] for w in case.resolved["walls"] if w.get("active", True)]
+
+
+def _mesh_id(name: str) -> str:
+    return "w_" + re.sub(r"[^A-Za-z0-9_]", "_", name)
+
+
+def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
+    """Writes discs.data, one STL per wall (and the outlet), and in.liggghts into out_dir."""
+    _check_variant(case)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    r = case.resolved
+    rho = {m["name"]: m["density"] for m in r["materials"]}[disc_material(r)]
+    d = np.asarray(case.discs, float)
+    if d.ndim != 2 or d.shape[1] != 6 or not np.all(np.isfinite(d)) or np.any(d[:, 2] <= 0):
+        raise CaseError("discs: need finite rows x, y, r > 0, vx, vy, omega")
+    walls = [w for w in r["walls"] if w.get("active", True)]
+    xs = [c for w in walls for c in (w["from"][0], w["to"][0])] + [p["at"][0] for p in r["points"]]
+    ys = [c for w in walls for c in (w["from"][1], w["to"][1])] + [p["at"][1] for p in r["points"]]
+    rmax = float(d[:, 2].max())
+    xlo = min(xs + list(d[:, 0])) - 4 * rmax
+    xhi = max(xs + list(d[:, 0])) + 4 * rmax
+    ylo = min(ys + list(d[:, 1])) - 4 * rmax - (BOX_BELOW if case.mode == "discharge" else 0)
+    yhi = max(ys + list(d[:, 1])) + 4 * rmax
+    lines = ["LIGGGHTS data file written by compare/liggghts_backend.py", "",
+             f"{len(d)} atoms", "2 atom types", "",
+             f"{xlo!r} {xhi!r} xlo xhi", f"{ylo!r} {yhi!r} ylo yhi", f"{-Z_HALF!r} {Z_HALF!r} zlo zhi", "",
+             "Atoms", ""]
+    # atom_style granular: id type diameter density x y z; in 2D mass = density pi r^2.
+    for k, (x, y, rad, *_v) in enumerate(d):
+        lines.append(f"{k + 1} 1 {2 * rad!r} {rho!r} {x!r} {y!r} 0.0")
+    lines += ["", "Velocities", ""]
+    for k, (_x, _y, _r, vx, vy, om) in enumerate(d):
+        lines.append(f"{k + 1} {vx!r} {vy!r} 0.0 0.0 0.0 {om!r}")
+    write_text_atomic(out_dir / "discs.data", "\n".join(lines) + "\n")
+
+    meshes = []
+    for w in walls:
+        mid = _mesh_id(w["name"])
+        write_wall_stl(w, case.profile_bin, out_dir / f"{mid}.stl")
+        meshes.append(mid)
+    script = _script(case, meshes, xlo, xhi, threads)
+    path = out_dir / "in.liggghts"
+    write_text_atomic(path, script)
+    return path
+
+
+def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int) -> str:
+    r = case.resolved
+    g = np.array(r["gravity"], float)
+    gmag = float(np.linalg.norm(g))
+    dt = case.dt
+    sample = max(1, int(round(case.series_interval / dt)))
+    settle_steps = int(round(case.settle / dt)) if case.mode == "discharge" else 0
+    run_steps = int(round(case.duration / dt))
+    total = settle_steps + run_steps
+    skin = float(r["neighbor"]["skin"]) or 0.2
+    law = "model hooke/stiffness tangential history absolute_damping on limitForce on"
+    s = [f"# LIGGGHTS input for the comparison case {case.name}; generated by compare/liggghts_backend.py.",
+         "# Units cgs; forces per 1 cm of thickness. Do not edit: regenerate.",
+         "echo none", "atom_style granular", "atom_modify map array", "dimension 2",
+         "boundary f f p", "newton off", "communicate single vel yes", "units cgs",
+         "read_data discs.data",
+         f"neighbor {skin!r} bin", "neigh_modify delay 0",
+         f"pair_style gran {law}", "pair_coeff * *",
+         f"fix m_kn all property/global kn peratomtypepair 2 {_matrix(case, 'kn')}",
+         f"fix m_kt all property/global kt peratomtypepair 2 {_matrix(case, 'ks')}",
+         f"fix m_gn all property/global gamman_abs peratomtypepair 2 {_matrix(case, 'eta_n')}",
+         f"fix m_gt all property/global gammat_abs peratomtypepair 2 {_matrix(case, 'eta_s')}",
+         f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {_matrix(case, 'mu')}",
+         f"timestep {dt!r}"]
+    if gmag > 0:
+        s.append(f"fix gravi all gravity {gmag!r} vector {g[0] / gmag!r} {g[1] / gmag!r} 0.0")
+    for mid in meshes:
+        s.append(f"fix {mid} all mesh/surface/stress file {mid}.stl type 2")
+    gate = _mesh_id(r["discharge"]["gate"]) if case.mode == "discharge" else None
+    if meshes:
+        s.append(f"fix walls all wall/gran model hooke/stiffness tangential history mesh n_meshes {len(meshes)} "
+                 f"meshes {' '.join(meshes)} absolute_damping on limitForce on")
+    if case.mode == "discharge":
+        s += [f"fix outlet all mesh/surface/planar file outlet.stl type 2",
+              f"fix mf all massflow/mesh mesh outlet vec_side 0 -1 0 count once delete_atoms yes "
+              f"file removals.txt writeTime screen no",
+              # The gate jumps 200 cm down during the first step after settling (same run).
+              f"variable gate_v equal (step=={settle_steps})*{-200.0 / dt!r}",
+              "variable zero equal 0.0",
+              f"fix gate_move all move/mesh mesh {gate} linear/variable v_zero v_gate_v v_zero"]
+    s += ["fix integr all nve/sphere", "fix e2d all enforce2d",
+          "compute rke all erotate/sphere",
+          "thermo_style custom step time atoms ke c_rke",
+          "thermo_modify lost error norm no",
+          f"thermo {sample}"]
+    if case.mode == "discharge":
+        # lost atoms are expected: deleted at the outlet
+        s[-2] = "thermo_modify lost ignore norm no"
+    for mid in meshes:
+        s.append(f"dump d_{mid} all mesh/vtk {sample} mesh_{mid}_*.vtk output face stresscomponents area {mid}")
+    s += [f"dump d_end all custom {total} discs_*.dump id x y radius vx vy omegaz",
+          "dump_modify d_end format \"%d %.17g %.17g %.17g %.17g %.17g %.17g\" sort id",
+          f"run {total}"]
+    return "\n".join(s) + "\n"
+
+
+def write_outlet_stl(out_dir: Path, xlo: float, xhi: float, depth: float) -> None:
+    y = -depth
+    pts = np.array([[xlo, y, -Z_HALF], [xhi, y, -Z_HALF], [xhi, y, Z_HALF], [xlo, y, Z_HALF]])
+    tris = np.array([[0, 1, 2], [0, 2, 3]])
+    meshio.write(str(out_dir / "outlet.stl"), meshio.Mesh(pts, [("triangle", tris)]), file_format="stl",
+                 binary=False)
+
+
+def command(script: Path, ranks: int = 1) -> list[str]:
+    base = ["liggghts", "-echo", "none", "-in", script.name]
+    if ranks > 1:
+        return ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + base
+    return base
+
+
+def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
+    """Runs the real liggghts (``threads`` > 1: MPI ranks); never raises for a failed run."""
+    out_dir = Path(out_dir)
+    try:
+        script = write_inputs(case, out_dir, threads)
+        if case.mode == "discharge":
+            d = np.asarray(case.discs, float)
+            walls = case.resolved["walls"]
+            xs = [c for w in walls for c in (w["from"][0], w["to"][0])] + list(d[:, 0])
+            pad = 4 * float(d[:, 2].max())
+            write_outlet_stl(out_dir, min(xs) - pad + 1e-3, max(xs) + pad - 1e-3,
+                             float(case.resolved["discharge"]["outlet_depth"]))
+    except CaseError as e:
+        return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
+    for old in glob.glob(str(out_dir / "mesh_*.vtk")) + glob.glob(str(out_dir / "discs_*.dump")):
+        os.remove(old)
+    log = out_dir / "liggghts.log"
+    t0 = time.monotonic()
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    with open(log, "w") as f:
+        p = subprocess.Popen(["stdbuf", "-o0"] + command(script, threads), cwd=out_dir, stdout=f,
+                             stderr=subprocess.STDOUT, start_new_session=True, env=env)
+        try:
+            rc = p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+            return failed(NAME, case.name, f"timed out after {timeout:.0f} s", out_dir=str(out_dir))
+    wall = time.monotonic() - t0
+    text = log.read_text(errors="replace")
+    if rc != 0 or "ERROR" in text:
+        err = next((l for l in text.splitlines() if "ERROR" in l), f"exit code {rc}")
+        return failed(NAME, case.name, f"liggghts failed (exit {rc}): {err.strip()}", out_dir=str(out_dir),
+                      wall_time_s=wall)
+    res = read(case, out_dir)
+    res.wall_time_s = wall
+    res.extra["ranks"] = threads
+    return res
+
+
+def read_polydata_vtk(path: str) -> tuple[np.ndarray, list[np.ndarray], dict]:
+    """Legacy VTK 5.1 ASCII POLYDATA as LIGGGHTS writes it (meshio reads no POLYDATA):
+    points, polygons (OFFSETS/CONNECTIVITY), and the FIELD arrays of CELL_DATA."""
+    tok = Path(path).read_text().split()
+    if "POLYDATA" not in tok[:20]:
+        raise ValueError(f"{path}: not a POLYDATA VTK file")
+    k = tok.index("POINTS")
+    n = int(tok[k + 1])
+    pts = np.array(tok[k + 3:k + 3 + 3 * n], float).reshape(n, 3)
+    k = tok.index("POLYGONS")
+    o = tok.index("OFFSETS", k)
+    c = tok.index("CONNECTIVITY", o)
+    offsets = np.array(tok[o + 2:c], int)
+    nconn = int(offsets[-1])
+    conn = np.array(tok[c + 2:c + 2 + nconn], int)
+    polys = [conn[a:b] for a, b in zip(offsets[:-1], offsets[1:])]
+    fields = {}
+    if "CELL_DATA" in tok:
+        k = tok.index("CELL_DATA")
+        f = tok.index("FIELD", k)
+        nf = int(tok[f + 2])
+        i = f + 3
+        for _ in range(nf):
+            name, ncomp, ntup = tok[i], int(tok[i + 1]), int(tok[i + 2])
+            i += 4
+            fields[name] = np.array(tok[i:i + ncomp * ntup], float).reshape(ntup, ncomp)
+            i += ncomp * ntup
+    return pts, polys, fields
+
+
+def _read_mesh_vtk(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """Cell centroids and forces (stress x area: force by the discs on the wall) of one dump."""
+    pts, polys, data = read_polydata_vtk(path)
+    cen = np.array([pts[p].mean(axis=0) for p in polys])
+    if "stress" not in data or "area" not in data:
+        raise ValueError(f"{path}: no stress/area cell data (has {sorted(data)})")
+    return cen, data["stress"][:, :2] * data["area"].reshape(-1)[:, None]
+
+
+def _bin_forces(wall: dict, case: Case, cen: np.ndarray, force: np.ndarray):
+    edges = bin_edges(wall, case.profile_bin)
+    a = np.array(wall["from"], float)
+    t = tangent(wall)
+    n = inward_normal(wall, case.centre)
+    s = (cen[:, :2] - a) @ t
+    k = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, len(edges) - 2)
+    normal = np.bincount(k, weights=-(force @ n), minlength=len(edges) - 1)
+    shear = np.bincount(k, weights=force @ t, minlength=len(edges) - 1)
+    return edges, normal, shear
+
+
+def _thermo(text: str) -> list[tuple[int, float, int, float, float]]:
+    rows, on = [], False
+    for line in text.splitlines():
+        f = line.split()
+        if f[:4] == ["Step", "Time", "Atoms", "KinEng"]:
+            on = True
+            continue
+        if on:
+            try:
+                rows.append((int(f[0]), float(f[1]), int(f[2]), float(f[3]), float(f[4])))
+            except (ValueError, IndexError):
+                on = False
+    return rows
+
+
+def read(case: Case, out_dir: Path) -> Result:
+    out_dir = Path(out_dir)
+    res = Result(code=NAME, case=case.name, version=version(), out_dir=str(out_dir))
+    res.n_initial = len(case.discs)
+    text = (out_dir / "liggghts.log").read_text(errors="replace") if (out_dir / "liggghts.log").exists() else ""
+    thermo = _thermo(text)
+    if not thermo:
+        return failed(NAME, case.name, "no thermo output in liggghts.log", out_dir=str(out_dir))
+    res.steps = thermo[-1][0]
+    ke = np.array([t[3] + t[4] for t in thermo])
+    if not np.all(np.isfinite(ke)):
+        return failed(NAME, case.name, "non-finite kinetic energy (blow-up)", out_dir=str(out_dir))
+    dumps = sorted(glob.glob(str(out_dir / "discs_*.dump")), key=lambda p: int(re.findall(r"(\d+)", p)[-1]))
+    if not dumps:
+        return failed(NAME, case.name, "missing final disc dump", out_dir=str(out_dir))
+    ids, rows = _read_dump(dumps[-1])
+    res.discs_end = rows.tolist()
+    res.n_final = len(rows)
+    rho = {m["name"]: m["density"] for m in case.resolved["materials"]}[disc_material(case.resolved)]
+    if len(rows):
+        mass = rho * math.pi * rows[:, 2] ** 2
+        res.kinetic_energy_end = float(np.sum(0.5 * mass * (rows[:, 3] ** 2 + rows[:, 4] ** 2)
+                                              + 0.25 * mass * rows[:, 2] ** 2 * rows[:, 5] ** 2))
+    else:
+        res.kinetic_energy_end = 0.0
+    if case.mode != "discharge" and res.n_final != res.n_initial:
+        return failed(NAME, case.name, f"lost discs: {res.n_initial} at the start, {res.n_final} at the end",
+                      out_dir=str(out_dir))
+    walls = [w for w in case.resolved["walls"] if w.get("active", True)]
+    # Blow-up: a disc outside the walls' box (closed container) or kinetic energy growth.
+    if len(rows) and case.mode != "discharge":
+        xs = [c for w in walls for c in (w["from"][0], w["to"][0])]
+        ys = [c for w in walls for c in (w["from"][1], w["to"][1])]
+        pad = 2 * float(np.max(rows[:, 2]))
+        if walls and (np.any(rows[:, 0] < min(xs) - pad) or np.any(rows[:, 0] > max(xs) + pad)
+                      or np.any(rows[:, 1] < min(ys) - pad)):
+            return failed(NAME, case.name, "discs left the closed container (blow-up)", out_dir=str(out_dir))
+    dt = case.dt
+    settle_steps = int(round(case.settle / dt)) if case.mode == "discharge" else 0
+    series_t, series = [], {w["name"]: {"normal": [], "shear": []} for w in walls}
+    for w in walls:
+        mid = _mesh_id(w["name"])
+        files = sorted(glob.glob(str(out_dir / f"mesh_{mid}_*.vtk")), key=lambda p: int(re.findall(r"(\d+)", p)[-1]))
+        if not files:
+            return failed(NAME, case.name, f"missing wall-force dumps of {w['name']}", out_dir=str(out_dir))
+        steps = []
+        for f in files:
+            step = int(re.findall(r"(\d+)", f)[-1])
+            if step < settle_steps:
+                continue
+            cen, force = _read_mesh_vtk(f)
+            edges, nrm, shr = _bin_forces(w, case, cen, force)
+            series[w["name"]]["normal"].append(nrm.tolist())
+            series[w["name"]]["shear"].append(shr.tolist())
+            steps.append(step)
+        if not series_t:
+            series_t = [(st - settle_steps) * dt for st in steps]
+        res.profiles[w["name"]] = {"s_lo": edges[:-1].tolist(), "s_hi": edges[1:].tolist(),
+                                   "normal": series[w["name"]]["normal"][-1],
+                                   "shear": series[w["name"]]["shear"][-1]}
+    res.series = {"t": series_t, "walls": series}
+    if case.mode == "discharge":
+        res.removals = _removals(out_dir / "removals.txt", settle_steps * dt)
+    res.extra["ke_max_second_half"] = float(np.max(ke[len(ke) // 2:]))
+    return res
+
+
+def _read_dump(path: str) -> tuple[np.ndarray, np.ndarray]:
+    with open(path) as f:
+        lines = f.read().splitlines()
+    k = next(i for i, l in enumerate(lines) if l.startswith("ITEM: ATOMS"))
+    data = np.array([[float(v) for v in l.split()] for l in lines[k + 1:] if l.strip()]).reshape(-1, 7)
+    data = data[np.argsort(data[:, 0])]
+    return data[:, 0].astype(int), data[:, 1:7]
+
+
+def _removals(path: Path, t_open: float) -> list[float]:
+    """Times (since opening) of the discs the outlet deleted (massflow/mesh file, writeTime)."""
+    if not path.exists():
+        return []
+    out = []
+    for line in path.read_text().splitlines():
+        f = line.split()
+        if not f or not re.match(r"^[-+0-9.eE]+$", f[0]):
+            continue
+        out.append(float(f[0]) - t_open)
+    return sorted(out)
