@@ -35,32 +35,45 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g) {
   x0_ = d.x;
   y0_ = d.y;
 
-  // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block.
-  double rmax = 0, xmin = 0, xmax = 0, ymin = 0, ymax = 0;
-  if (n > 0) {
-    xmin = xmax = d.x[0];
-    ymin = ymax = d.y[0];
-  }
+  // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block. Extents and
+  // cell indices in long double, where no difference of finite coordinates overflows; discs at
+  // non-finite positions (a run blowing up, stopped after this step) are in no cell and get no
+  // pairs. Sparse scenes (discs flung far apart, tiny discs in a huge box) would need huge grids:
+  // the cells are coarsened until there are at most 4 n + 64 of them.
+  double rmax = 0;
+  long double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+  bool any = false;
   for (int i = 0; i < n; ++i) {
-    rmax = std::max(rmax, d.r[i]);
-    xmin = std::min(xmin, d.x[i]); xmax = std::max(xmax, d.x[i]);
-    ymin = std::min(ymin, d.y[i]); ymax = std::max(ymax, d.y[i]);
+    if (std::isfinite(d.r[i])) rmax = std::max(rmax, d.r[i]);
+    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i])) continue;
+    const long double x = d.x[i], y = d.y[i];
+    if (!any) {
+      xmin = xmax = x;
+      ymin = ymax = y;
+      any = true;
+    }
+    xmin = std::min(xmin, x); xmax = std::max(xmax, x);
+    ymin = std::min(ymin, y); ymax = std::max(ymax, y);
   }
-  cell_ = std::max(min_cell, 2 * rmax + skin);
-  long nx = static_cast<long>((xmax - xmin) / cell_) + 1;
-  long ny = static_cast<long>((ymax - ymin) / cell_) + 1;
-  // Sparse scenes (discs flung far apart) would need huge grids: coarsen instead.
-  while (nx * ny > 4L * n + 64) {
-    cell_ *= 2;
-    nx = static_cast<long>((xmax - xmin) / cell_) + 1;
-    ny = static_cast<long>((ymax - ymin) / cell_) + 1;
-  }
+  long double cell = std::max(min_cell, 2 * rmax + skin);
+  if (!std::isfinite(cell)) cell = std::numeric_limits<long double>::max();  // one cell for all
+  if (!(cell > 0)) cell = 1;  // zero radii and skin (or NaN): nothing can pair, any size will do
+  const long double max_cells = 4.0L * n + 64;
+  auto cells_along = [&](long double extent) { return std::floor(extent / cell) + 1; };
+  while (cells_along(xmax - xmin) * cells_along(ymax - ymin) > max_cells) cell *= 2;
+  cell_ = static_cast<double>(cell);
+  const long nx = static_cast<long>(cells_along(xmax - xmin));
+  const long ny = static_cast<long>(cells_along(ymax - ymin));
   const long ncell = nx * ny;
   cell_of_.resize(n);
   cell_start_.assign(ncell + 1, 0);
   for (int i = 0; i < n; ++i) {
-    const long cx = static_cast<long>((d.x[i] - xmin) / cell_);
-    const long cy = static_cast<long>((d.y[i] - ymin) / cell_);
+    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i])) {
+      cell_of_[i] = -1;
+      continue;
+    }
+    const long cx = std::min(nx - 1, static_cast<long>((d.x[i] - xmin) / cell));
+    const long cy = std::min(ny - 1, static_cast<long>((d.y[i] - ymin) / cell));
     cell_of_[i] = static_cast<int>(cy * nx + cx);
     ++cell_start_[cell_of_[i] + 1];
   }
@@ -68,12 +81,14 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g) {
   order_.resize(n);
   {
     std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (int i = 0; i < n; ++i) order_[fill[cell_of_[i]]++] = i;
+    for (int i = 0; i < n; ++i)
+      if (cell_of_[i] >= 0) order_[fill[cell_of_[i]]++] = i;
   }
 
   new_pairs_.clear();
   std::vector<int> found;
   for (int i = 0; i < n; ++i) {
+    if (cell_of_[i] < 0) continue;
     const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
     found.clear();
     for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b)

@@ -223,8 +223,8 @@ void check_disc_budget(const SceneSpec& s, Tab& t, const std::string& key, const
   if (have > 0 && need > have) {
     std::ostringstream os;
     os.precision(3);
-    os << "gives " << n << " discs, which need about " << need / 1e9 << " GB of memory (about " << kBytesPerDisc
-       << " bytes per disc), more than this machine's " << have / 1e9 << " GB";
+    os << "gives " << n << " discs, which need about " << need / 1e9 << " GB of memory (about " << kBytesPerDisc / 1024
+       << " kB per disc), more than this machine's " << have / 1e9 << " GB";
     t.fail(key, value, os.str());
   }
 }
@@ -423,8 +423,10 @@ void read_fill(SceneSpec& s, Tab& root) {
     L.count = t.integer("count", 350L);
     if (L.rows < 0) t.fail("rows", std::to_string(L.rows), "must be >= 0 (0: from count)");
     if (L.count <= 0) t.fail("count", std::to_string(L.count), "must be > 0");
-    if (L.rows > 0) check_disc_budget(s, t, "rows", std::to_string(L.rows), static_cast<double>(L.rows));
-    else check_disc_budget(s, t, "count", std::to_string(L.count), static_cast<double>(L.count));
+    // A first bound keeps the row arithmetic exact; the disc count is checked below.
+    if (L.rows > s.max_discs || L.count > s.max_discs)
+      t.fail(L.rows > s.max_discs ? "rows" : "count", std::to_string(L.rows > s.max_discs ? L.rows : L.count),
+             "more than the limit of " + limit_text(static_cast<double>(s.max_discs)) + " discs (docs/scene.md, Limits)");
     LatticeGeometry g{};
     const std::string why = lattice_geometry(L, s.silo_width, g);
     if (!why.empty()) t.fail("s", std::to_string(L.s), why);
@@ -599,8 +601,8 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     const toml::table* mt = root.table("materials", true);
     Tab t(*mt, "materials", s.file);
     if (static_cast<long>(mt->size()) > kMaxMaterials)
-      t.fail("materials", std::to_string(mt->size()) + " materials",
-             "more than the limit of " + std::to_string(kMaxMaterials) + " (docs/scene.md, Limits)");
+      throw SceneError(s.file + ": materials: " + std::to_string(mt->size()) + " materials, more than the limit of " +
+                       std::to_string(kMaxMaterials) + " (docs/scene.md, Limits)");
     for (const auto& [k, v] : *mt) {
       const std::string name(k.str());
       Tab m(*t.table(name, true), "materials." + name, s.file);
