@@ -62,6 +62,7 @@ RESULT_FILE = "yade_result.json"
 SERIES_FILE = "yade_series.csv"
 PROCESS_FILE = "yade_process.json"
 LOG_FILE = "yade.log"
+SCAN_TIME = 0.005          # [s] longest interval between the in-script checks
 EQUAL_REL = 1e-12          # disc-wall constant equal to the disc material's: wall value 0
 
 LIMITATIONS = [
@@ -200,6 +201,8 @@ def case_data(case: Case) -> dict:
     if n_run < 1:
         raise CaseError("duration: at least one step")
     sample_every = max(1, int(round(case.series_interval / dt)))
+    # checks and candidate lists for the guard and the remover: at least every SCAN_TIME
+    scan_every = max(1, min(sample_every, int(SCAN_TIME / dt)))
     gate, outlet_y = None, None
     if case.mode == "discharge":
         dis = r.get("discharge") or {}
@@ -228,6 +231,7 @@ def case_data(case: Case) -> dict:
     return {
         "name": case.name, "mode": case.mode, "dt": dt,
         "n_settle": n_settle, "n_run": n_run, "sample_every": sample_every,
+        "scan_every": scan_every,
         "gravity": g,
         "discs": [[float(v) for v in row] for row in d],
         "disc_material": disc, "mu_disc_disc": disc["mu"],

@@ -12,8 +12,9 @@
 #   backend) + Law2_ScGeom_ViscElPhys_Basic, friction per material pair via MatchMaker;
 # - NewtonIntegrator(damping=0) (leapfrog), fixed dt, no time stepper;
 # - monitor (every sample_every steps, after the forces and before the integrator): wall
-#   contact forces (normal + elastic shear + viscous shear as the law applied them), checks
-#   (non-finite state, discs outside the container, kinetic energy above the initial budget);
+#   contact forces (normal + elastic shear + viscous shear as the law applied them);
+# - scanner (every scan_every steps, same place): checks (non-finite state, discs outside the
+#   container, energy above the initial budget) and the candidate discs of guard and remover;
 # - discharge: settle n_settle steps, erase the gate, run n_run steps; a remover erases discs
 #   whose centre is below outlet_y and logs the step;
 # - final (one step at the end, before the integrator): contacts, discs with velocities
@@ -127,7 +128,9 @@ def setup():
         InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Facet_Sphere_ScGeom()],
                         [Ip2_ViscElMat_ViscElMat_ViscElPhys(frictAngle=MatchMaker(matches=matches))],
                         [Law2_ScGeom_ViscElPhys_Basic()]),
-        PyRunner(command="monitor()", iterPeriod=C["sample_every"], initRun=True, label="monitor_engine"),
+        PyRunner(command="scan()", iterPeriod=C["scan_every"], initRun=True, label="scan_engine"),
+        PyRunner(command="monitor()", iterPeriod=C["sample_every"], initRun=True,
+                 dead=C["n_settle"] > 0, label="monitor_engine"),
         PyRunner(command="final()", iterPeriod=1, dead=True, label="final_engine"),
         NewtonIntegrator(damping=0.0, gravity=(g[0], g[1], 0.0)),
     ]
@@ -320,8 +323,8 @@ def _scan():
     elif ke + pe > 1.5 * S["E0"] + 1e-9 * (abs(S["E0"]) + C["energy_scale"]):
         return (f"blow-up at step {O.iter}: kinetic + potential energy {ke + pe!r} exceeds 1.5 x the "
                 f"initial energy budget {S['E0']!r} (kinetic {ke!r})")
-    # Candidate lists valid until the next scan (sample_every steps): band = reach in that time.
-    T = C["sample_every"] * S["dt"]
+    # Candidate lists valid until the next scan (scan_every steps): band = reach in that time.
+    T = C["scan_every"] * S["dt"]
     gmag = math.hypot(gx, gy)
     band = 2.0 * (vmax * T + 0.5 * gmag * T * T) + 0.05 * C["rmax"]
     if S["guarded"]:
@@ -339,16 +342,25 @@ def _scan():
     return None
 
 
+def scan():
+    """Every scan_every steps, after the forces of this step and before the integrator."""
+    try:
+        if S["failed"]:
+            return
+        err = _scan()
+        if err:
+            _fail(err)
+    except Exception:
+        _fail("scan: " + traceback.format_exc(limit=3))
+
+
 def monitor():
-    """Every sample_every steps, after the forces of this step and before the integrator."""
+    """Every sample_every steps from the start (static) or the opening (discharge), after the
+    forces of this step and before the integrator."""
     try:
         if S["failed"]:
             return
         it = O.iter
-        err = _scan()
-        if err:
-            _fail(err)
-            return
         io = S["i_open"]
         if it >= io and (it - io) % S["case"]["sample_every"] == 0 and it <= S["i_end"]:
             t = (it - io) * S["dt"]
