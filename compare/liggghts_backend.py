@@ -413,9 +413,9 @@ def _removals(path: Path, t_open: float) -> list[float]:
     if not path.exists():
         return []
     out = []
-    for line in path.read_text().splitlines():
+    for line in path.read_text().splitlines():  # "ID time diameter x y z u v w" (writeTime)
         f = line.split()
-        if not f or not re.match(r"^[-+0-9.eE]+$", f[0]):
+        if len(f) < 2 or line.lstrip().startswith("#"):
             continue
-        out.append(float(f[0]) - t_open)
+        out.append(float(f[1]) - t_open)
     return sorted(out)

@@ -2,9 +2,9 @@
 """Writes the Janssen validation scene: reference_inputs/scenes/janssen_w20.toml and its loose
 random packing janssen_w20_loose.csv (seeded, reproducible).
 
-A bin W = 20 cm wide with mu = mu_w = 0.5 (validation.md, issue 4): about 1800 discs with
+A bin W = 20 cm wide with mu = mu_w = 0.5 (validation.md, issue 4): about 4500 discs with
 radii uniform in [0.4, 0.6] cm, placed on a loose jittered grid (no overlaps) that settles
-under gravity to a random packing about 90 cm deep, tall enough that the Janssen length
+under gravity to a random packing about 220 cm deep, tall enough that the Janssen length
 lambda = W / (2 K mu_w) is well below a third of the fill. The springs are the paper's Table 2
 values (per 1 cm of thickness); the dashpots are halved to stay critical for these lighter discs. `--check` fails when the files are stale.
 """
@@ -15,10 +15,10 @@ import sys
 import numpy as np
 
 OUT = pathlib.Path(__file__).resolve().parent.parent / "reference_inputs" / "scenes"
-W, H_WALL = 20.0, 160.0          # cm
+W, H_WALL = 20.0, 400.0          # cm
 R_MIN, R_MAX = 0.4, 0.6          # cm
 PITCH = 1.25                     # cm, grid pitch of the loose start (> 2 R_MAX)
-N = 1800
+N = 4500
 SEED = 20261122
 
 SCENE = """# Janssen validation scene (issue 4): a 2D bin W = {W} cm wide, mu = mu_w = 0.5, a random
@@ -90,7 +90,7 @@ material = "sand"
 count = {N}
 
 [end]
-time = 2.5                       # s: the fall and the settling
+time = 3.5                       # s: the fall and the settling
 stop_at_rest = true
 rest_factor = 1e-4
 

@@ -1,0 +1,230 @@
+"""Writes the agreement report: report.md, agreement.json and PNG plots (issue 4, point 7)."""
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import janssen  # noqa: E402
+from .common import write_text_atomic  # noqa: E402
+
+COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green"}
+MARKERS = {"native": "o", "liggghts": "s", "yade": "^"}
+
+
+def _savefig(fig, path: Path) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    os.replace(tmp, path)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return "n/a" if not math.isfinite(v) else f"{v:.4g}"
+    if isinstance(v, (list, tuple)) and len(v) and all(isinstance(x, (int, float)) for x in v):
+        return " ± ".join(_fmt(float(x)) for x in v[:2])
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items() if not isinstance(x, (dict, list)) or k in ("native",))
+    return str(v)
+
+
+def plot_profiles(prof_json: Path, png: Path) -> None:
+    data = json.loads(prof_json.read_text())
+    walls = [w for w in data["walls"] if w.get("active", True)]
+    fig, axes = plt.subplots(1, len(walls), figsize=(3.2 * len(walls), 4.2), squeeze=False)
+    for ax, w in zip(axes[0], walls):
+        for code, d in data["codes"].items():
+            p = d["profiles"].get(w["name"])
+            if d["status"] != "ok" or not p:
+                continue
+            mid = 0.5 * (np.array(p["s_lo"]) + np.array(p["s_hi"]))
+            ax.plot(np.array(p["normal"]) / 1e3, mid, MARKERS[code] + "-", ms=3, lw=1, color=COLORS[code],
+                    label=code, alpha=0.8)
+        ax.set_title(w["name"], fontsize=9)
+        ax.set_xlabel("normal force per bin [10^3 dyn/cm]")
+        ax.invert_yaxis()
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("distance along the wall from its 'from' end [cm]")
+    axes[0][0].legend(fontsize=8)
+    failed = [f"{c}: {d['reason']}" for c, d in data["codes"].items() if d["status"] != "ok"]
+    fig.suptitle(f"{data['case']}: wall profiles, all codes" + ("\nFAILED " + "; ".join(failed) if failed else ""),
+                 fontsize=10)
+    fig.tight_layout()
+    _savefig(fig, png)
+
+
+def plot_janssen(fits: dict, png: Path, name: str) -> None:
+    fig, ax = plt.subplots(figsize=(6, 5))
+    for code, f in fits.items():
+        if "error" in f:
+            continue
+        z, p = np.array(f["z"]), np.array(f["p"])
+        ax.plot(p / 1e3, z, MARKERS[code], ms=4, color=COLORS[code], alpha=0.6, label=f"{code} (bins)")
+        zz = np.linspace(0, z.max(), 200)
+        ax.plot(janssen.model(zz, f["p_inf"], f["lambda"], f["z0"]) / 1e3, zz, "-", color=COLORS[code],
+                label=f"{code} fit: p_inf {f['p_inf'] / 1e3:.3g}e3, λ {f['lambda']:.3g} cm, K {f['K']:.2f}")
+    ax.invert_yaxis()
+    ax.set_xlabel("side-wall pressure, mean of both walls [10^3 dyn/cm per cm]")
+    ax.set_ylabel("depth below the surface z [cm]")
+    ax.set_title(f"{name}: Janssen fits (floor region W/2 left out)", fontsize=10)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    _savefig(fig, png)
+
+
+def plot_calibration(rows: list, png: Path) -> None:
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
+    names = [r["case"] for r in rows]
+    x = np.arange(len(names))
+    for k, (key, label) in enumerate((("e", "restitution e"), ("t_c", "contact duration t_c [ms]"),
+                                      ("omega_end", "rebound spin ω [1/s]"))):
+        ax = axes[k]
+        for j, code in enumerate(("native", "liggghts", "yade")):
+            vals = [r["codes"].get(code, {}).get(key, np.nan) for r in rows]
+            vals = np.array(vals, float) * (1e3 if key == "t_c" else 1)
+            ax.bar(x + (j - 1) * 0.27, vals, 0.27, color=COLORS[code], label=code)
+        if key in ("e", "t_c"):
+            ode = [(r["ode"] or {}).get(key, np.nan) for r in rows]
+            ax.plot(x, np.array(ode, float) * (1e3 if key == "t_c" else 1), "k_", ms=18, mew=2, label="ODE (head-on)")
+        ax.set_xticks(x)
+        ax.set_xticklabels([n.replace("_", "\n", 2) for n in names], fontsize=7)
+        ax.set_title(label, fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    _savefig(fig, png)
+
+
+def plot_discharge(series_json: Path, png: Path, name: str) -> None:
+    data = json.loads(series_json.read_text())
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    for code, runs in data.items():
+        for k, r in enumerate(runs):
+            t = np.sort(np.array(r["removals"], float))
+            if r["status"] != "ok":
+                continue
+            ax.step(np.concatenate([[0], t]), np.arange(len(t) + 1), where="post", color=COLORS[code], alpha=0.7,
+                    lw=1, label=code if k == 0 else None)
+    ax.set_xlabel("time since opening [s]")
+    ax.set_ylabel("discs out")
+    ax.set_title(f"{name}: discharge, every member of every code", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _savefig(fig, png)
+
+
+def write(report: dict, out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    pngs = []
+    if report.get("calibration"):
+        plot_calibration(report["calibration"], out / "calibration.png")
+        pngs.append(("Calibration collisions", "calibration.png"))
+    for st in report.get("static", []):
+        pj = out / "static" / st["case"] / "profiles.json"
+        if pj.exists():
+            plot_profiles(pj, out / f"profiles_{st['case']}.png")
+            pngs.append((f"Wall profiles, {st['case']}", f"profiles_{st['case']}.png"))
+        if st.get("janssen"):
+            plot_janssen(st["janssen"], out / f"janssen_{st['case']}.png", st["case"])
+            pngs.append((f"Janssen fits, {st['case']}", f"janssen_{st['case']}.png"))
+    for name in report.get("discharge", {}):
+        sj = out / "discharge" / name / "series.json"
+        if sj.exists():
+            plot_discharge(sj, out / f"discharge_{name}.png", name)
+            pngs.append((f"Discharge, {name}", f"discharge_{name}.png"))
+
+    agreement = {"profile": report["profile"], "codes": report["codes"], "passed": report["passed"],
+                 "metrics": report["metrics"]}
+    write_text_atomic(out / "agreement.json", json.dumps(agreement, indent=1, default=float) + "\n")
+
+    L = [f"# Agreement report ({report['profile']} profile)", "",
+         f"**Overall: {'PASS' if report['passed'] else 'FAIL'}** — "
+         f"{sum(m['pass'] for m in report['metrics'])} of {len(report['metrics'])} metrics within tolerance; "
+         f"{report.get('elapsed_s', float('nan')):.0f} s.", "",
+         "Codes: " + "; ".join(f"{c}: {v}" for c, v in report["codes"].items()), "",
+         "## Method", "",
+         "- One scene (the engine's TOML, resolved by `dem resolve`) is translated for each code; every code "
+         "uses the contact law all three can express: e_n = K_n x overlap, the total normal force clamped at 0, "
+         "the Coulomb cap on the total normal force, shear dashpot off while sliding (`compare/common.py`), "
+         "velocity Verlet, the same dt.",
+         "- Static cases start every code from the same frozen packing (the native engine's fill with that law, "
+         "velocities zeroed, no contact history) and rest for the same time.",
+         "- Discharge is compared over ensembles (members differ by a seeded 1e-3 cm perturbation of the lattice): "
+         "means against 3 combined standard errors + 10 % of the mean; jams against the binomial spread.",
+         "- A run that crashed, timed out, blew up, lost discs or wrote no output fails every metric that needs it.",
+         "", "## Agreement table", "",
+         "| scene | metric | values | tolerance | pass | note |", "|---|---|---|---|---|---|"]
+    for m in report["metrics"]:
+        L.append(f"| {m['scene']} | {m['metric']} | {_fmt(m['values'])} | {_fmt(m['tolerance'])} | "
+                 f"{'PASS' if m['pass'] else '**FAIL**'} | {m['note']} |")
+    if report.get("calibration"):
+        L += ["", "## Calibration collisions", "", "| case | code | e | t_c [s] | v_t end [cm/s] | ω end [1/s] |",
+              "|---|---|---|---|---|---|"]
+        for r in report["calibration"]:
+            if r["ode"]:
+                L.append(f"| {r['case']} | ODE | {r['ode']['e']:.5f} | {r['ode']['t_c']:.4e} | | |")
+            for c, v in r["codes"].items():
+                L.append(f"| {r['case']} | {c} | {v['e']:.5f} | {v['t_c']:.4e} | {v['v_t_end']:.4f} | {v['omega_end']:.4f} |")
+            if r["failures"]:
+                L.append(f"| {r['case']} | FAILED | {r['failures']} | | | |")
+    if report.get("static"):
+        L += ["", "## Static cases: wall totals (force by the discs on each wall)", "",
+              "| case | code | status | wall | normal | shear | wall time [s] |", "|---|---|---|---|---|---|---|"]
+        for st in report["static"]:
+            for c, r in st["results"].items():
+                if r["status"] != "ok":
+                    L.append(f"| {st['case']} | {c} | FAILED: {r['reason']} | | | | |")
+                    continue
+                for w, t in r["totals"].items():
+                    L.append(f"| {st['case']} | {c} | ok | {w} | {t['normal']:.6g} | {t['shear']:.6g} | {r['wall_time_s']:.1f} |")
+            if st.get("janssen"):
+                L += ["", f"Janssen fits ({st['case']}):", "",
+                      "| code | p_inf | lambda [cm] | z0 [cm] | mu_w,eff | K | mobilised sum F_t / sum F_n | phi | fill height [cm] | r² |",
+                      "|---|---|---|---|---|---|---|---|---|---|"]
+                for c, f in st["janssen"].items():
+                    if "error" in f:
+                        L.append(f"| {c} | fit failed: {f['error']} | | | | | | | | |")
+                        continue
+                    L.append(f"| {c} | {f['p_inf']:.4g} | {f['lambda']:.3g} | {f['z0']:.3g} | {f['mu_w_eff']:.3g} | "
+                             f"{f['K']:.3g} | {f['mobilised_friction']:.3g} | {f['phi']:.3f} | {f['fill_height']:.1f} | {f['r2']:.2f} |")
+                L.append("")
+    if report.get("discharge"):
+        L += ["", "## Discharge ensembles", "",
+              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jam fraction | peak side | peak bottom |",
+              "|---|---|---|---|---|---|---|---|"]
+        for name, s in report["discharge"].items():
+            for c, v in s.items():
+                L.append(f"| {name} | {c} | {v['members']} ({v['failed']}) | {_fmt(v['discs_out'])} | "
+                         f"{_fmt(v['flow_rate'])} | {_fmt(v['jam_fraction'])} | {_fmt(v['peak_ratio_side'])} | "
+                         f"{_fmt(v['peak_ratio_bottom'])} |")
+                for f in v["failures"]:
+                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | |")
+    if report.get("mpi"):
+        m = report["mpi"]
+        L += ["", "## Scale-out: LIGGGHTS under MPI", "",
+              f"{m['n_discs']} discs, {m['steps']} steps, from the same scene description:", "",
+              "| ranks | status | wall time [s] | µs per particle-step |", "|---|---|---|---|"]
+        for k, v in m["ranks"].items():
+            L.append(f"| {k} | {v['status']} {v['reason']} | {_fmt(v['wall_time_s'])} | {_fmt(v['us_per_particle_step'])} |")
+    L += ["", "## Plots", ""] + [f"### {t}\n\n![{t}]({p})\n" for t, p in pngs]
+    L += ["## What the translations cannot express exactly", "",
+          "- The paper's incremental normal spring and its no-tension rule on the elastic force (eqs. 7a, 8) and "
+          "the Coulomb cap on the elastic normal force (eq. 13): neither LIGGGHTS nor YADE has them; all codes "
+          "run the shared variant here (the native engine's paper law is compared in `out/paper_silo`).",
+          "- LIGGGHTS walls are triangle meshes: a wall's end acts as a point contact of the mesh that owns it, "
+          "where the engine has the explicit points L and R.",
+          "- YADE combines the two materials of a contact in series; the translation solves the wall material "
+          "for the resolved disc-wall constants (see compare/yade_backend.py).", ""]
+    write_text_atomic(out / "report.md", "\n".join(L) + "\n")

@@ -1,0 +1,211 @@
+"""The comparison layer: translators, the LIGGGHTS runner and reader on files the real program
+wrote, the Janssen fit, the calibration measures and the rule that a failed reference run never
+counts as agreement."""
+import copy
+import json
+import math
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+from compare import calibration as cal
+from compare import janssen, liggghts_backend, native_backend, study
+from compare.common import SHARED_VARIANT, Case, CaseError, Result, failed, resolve
+
+ROOT = Path(__file__).resolve().parents[2]
+SILO = ROOT / "reference_inputs" / "scenes" / "silo_17_18.toml"
+needs_liggghts = pytest.mark.skipif(shutil.which("liggghts") is None and os.environ.get("CI") != "true",
+                                    reason="liggghts not installed (CI installs it)")
+
+
+@pytest.fixture(autouse=True)
+def _engine(dem_binary, monkeypatch):
+    monkeypatch.setenv("DEM_BINARY", str(dem_binary))
+
+
+def floor_case(x=5.5, v=(0.0, 0.0, 0.0), duration=0.1):
+    r = resolve(SILO)
+    r["contact"] = dict(SHARED_VARIANT)
+    r["walls"] = [w for w in r["walls"] if w["group"] == "bottom"]
+    r["points"] = []
+    discs = np.array([[x, 1.0 - 1e-3, 1.0, *v]])
+    return Case(name="floor", resolved=r, discs=discs, dt=5e-5, duration=duration)
+
+
+# ------------------------------------------------------------------ Janssen fit
+
+def test_janssen_fit_recovers_known_parameters_from_noisy_profiles():
+    rng = np.random.default_rng(7)
+    z = np.linspace(1, 200, 100)
+    truth = {"p_inf": 1.5e5, "lambda": 45.0, "z0": 2.5}
+    p = janssen.model(z, truth["p_inf"], truth["lambda"], truth["z0"])
+    noisy = p * (1 + 0.03 * rng.standard_normal(len(z)))
+    f = janssen.fit(z, noisy)
+    assert f["p_inf"] == pytest.approx(truth["p_inf"], rel=0.03)
+    assert f["lambda"] == pytest.approx(truth["lambda"], rel=0.06)
+    assert f["z0"] == pytest.approx(truth["z0"], abs=1.0)
+    exact = janssen.fit(z, p)
+    assert exact["lambda"] == pytest.approx(truth["lambda"], rel=1e-6)
+    # mu_w,eff and K from the definitions: p_inf = rho_b g W / (2 mu_w), lambda = W / (2 K mu_w)
+    d = janssen.derived({"p_inf": 2.65 * 0.8 * 980 * 20 / (2 * 0.4), "lambda": 20 / (2 * 0.7 * 0.4)}, 2.65 * 0.8, 980, 20)
+    assert d["mu_w_eff"] == pytest.approx(0.4) and d["K"] == pytest.approx(0.7)
+
+
+def test_janssen_fit_refuses_too_few_points():
+    with pytest.raises(ValueError, match="at least 4"):
+        janssen.fit([1, 2, 3], [1, 2, 3])
+
+
+# ------------------------------------------------------------------ translators
+
+def test_native_translation_round_trips_through_dem_resolve(tmp_path):
+    r = resolve(SILO)
+    r["contact"] = dict(SHARED_VARIANT)
+    d = np.array(r["discs"], float)
+    case = Case(name="rt", resolved=r, discs=np.column_stack([d[:, :3], np.zeros((len(d), 3))]), dt=5e-5, duration=0.1)
+    scene = native_backend.write_inputs(case, tmp_path)
+    back = resolve(scene)
+    assert back["pairs"] == r["pairs"]          # absolute constants survive bit for bit
+    assert [(w["name"], w["from"], w["to"]) for w in back["walls"]] == [(w["name"], w["from"], w["to"]) for w in r["walls"]]
+    assert back["points"] == r["points"]
+    assert back["contact"] == SHARED_VARIANT
+    assert np.array_equal(np.array(back["discs"])[:, :3], d[:, :3])
+
+
+def test_liggghts_translation_units_and_wall_strips(tmp_path):
+    case = floor_case()
+    script = liggghts_backend.write_inputs(case, tmp_path)
+    text = script.read_text()
+    r = case.resolved
+    dd, dw = r["pairs"][0], r["pairs"][1]
+    assert f"kn peratomtypepair 2 {dd['kn']!r} {dw['kn']!r} {dw['kn']!r}" in text
+    assert f"gammat_abs peratomtypepair 2 {dd['eta_s']!r} {dw['eta_s']!r}" in text
+    assert "absolute_damping on limitForce on" in text and "dimension 2" in text
+    # data file: diameter 2r, density rho (LIGGGHTS 2D: mass = density pi r^2)
+    atoms = (tmp_path / "discs.data").read_text().split("Atoms")[1].split("Velocities")[0].split()
+    assert float(atoms[2]) == 2.0 and float(atoms[3]) == 2.65
+    # strips: every profile bin edge is a strip edge, strips <= 1 cm, z = +-2
+    for w in r["walls"]:
+        m = meshio.read(tmp_path / f"w_{w['name']}.stl")
+        xs = np.unique(np.round(m.points[:, 0], 9))
+        assert set(np.arange(w["from"][0], w["to"][0] + 1e-9, 2.0)).issubset(set(xs))
+        assert np.max(np.diff(xs)) <= 1.0 + 1e-9
+        assert set(np.round(m.points[:, 2], 9)) == {-2.0, 2.0}
+
+
+def test_translators_refuse_a_law_the_codes_cannot_express(tmp_path):
+    case = floor_case()
+    case.resolved["contact"] = {"normal_spring": "incremental", "no_tension": "elastic", "friction_cap": "elastic"}
+    with pytest.raises(CaseError, match="contact"):
+        liggghts_backend.write_inputs(case, tmp_path)
+    res = liggghts_backend.run(case, tmp_path)
+    assert not res.ok and "translation" in res.reason
+
+
+# ------------------------------------------------------------------ real runs
+
+@needs_liggghts
+def test_liggghts_reader_on_a_real_run_floor_carries_the_disc_weight(tmp_path):
+    case = floor_case()
+    res = liggghts_backend.run(case, tmp_path, timeout=120)
+    assert res.ok, res.reason
+    mg = 2.65 * math.pi * 980.0
+    total = sum(sum(p["normal"]) for p in res.profiles.values())
+    assert total == pytest.approx(mg, rel=1e-6)
+    assert sum(sum(p["shear"]) for p in res.profiles.values()) == pytest.approx(0.0, abs=1e-6 * mg)
+    # the bin holding the contact point (x = 5.5 -> bottom_left bin 2) carries it all
+    assert res.profiles["bottom_left"]["normal"][2] == pytest.approx(mg, rel=1e-6)
+    assert res.n_final == 1 and len(res.series["t"]) > 1
+
+
+@needs_liggghts
+def test_liggghts_rolling_disc_has_the_disc_inertia(tmp_path):
+    """A disc sliding on the floor ends rolling at v0 / (1 + I / (m r^2)) = 2/3 v0 for a disc."""
+    res = liggghts_backend.run(floor_case(x=5.0, v=(100.0, 0.0, 0.0), duration=0.3), tmp_path, timeout=120)
+    assert res.ok, res.reason
+    vx, omega = res.discs_end[0][3], res.discs_end[0][5]
+    assert vx == pytest.approx(200.0 / 3.0, rel=1e-3)
+    assert omega == pytest.approx(-vx / 1.0, rel=1e-3)
+
+
+@needs_liggghts
+def test_calibration_head_on_liggghts_matches_native_and_ode(tmp_path):
+    r = resolve(SILO)
+    for case, geo in cal.cases(r):
+        if case.name not in ("disc_disc_head_on", "disc_wall_oblique"):
+            continue
+        a = native_backend.run(case, tmp_path / "n" / case.name)
+        b = liggghts_backend.run(case, tmp_path / "l" / case.name, timeout=120)
+        assert a.ok and b.ok, (a.reason, b.reason)
+        ma, mb = cal.measure(case, geo, a.discs_end), cal.measure(case, geo, b.discs_end)
+        assert abs(ma["e"] - mb["e"]) <= cal.TOL["e"]
+        assert abs(ma["t_c"] - mb["t_c"]) <= case.dt
+        if geo["v_t"]:
+            assert mb["omega_end"] == pytest.approx(ma["omega_end"], rel=cal.TOL["omega_rel"])
+        else:
+            ode = cal.ode_reference(case, geo)
+            assert ma["e"] == pytest.approx(ode["e"], abs=0.02)
+            assert abs(ma["t_c"] - ode["t_c"]) <= case.dt
+
+
+@needs_liggghts
+def test_liggghts_runner_reports_a_broken_input_clearly(tmp_path, monkeypatch):
+    case = floor_case()
+    real = liggghts_backend._script
+    monkeypatch.setattr(liggghts_backend, "_script",
+                        lambda *a, **k: real(*a, **k).replace("fix e2d all enforce2d", "fix e2d all no_such_fix"))
+    res = liggghts_backend.run(case, tmp_path, timeout=120)
+    assert not res.ok
+    assert "liggghts failed" in res.reason and "ERROR" in res.reason
+
+
+@needs_liggghts
+def test_liggghts_runner_reports_a_timeout(tmp_path):
+    res = liggghts_backend.run(floor_case(duration=50.0), tmp_path, timeout=2)
+    assert not res.ok and "timed out" in res.reason
+
+
+@needs_liggghts
+def test_liggghts_blow_up_is_a_failure(tmp_path):
+    """dt 40x above the bound: discs leave the closed silo or energy explodes -> failed."""
+    r = resolve(SILO)
+    r["contact"] = dict(SHARED_VARIANT)
+    d = np.array(r["discs"], float)[:60]
+    case = Case(name="blow", resolved=r, discs=np.column_stack([d[:, :3], np.zeros((len(d), 3))]), dt=4e-3,
+                duration=0.4)
+    res = liggghts_backend.run(case, tmp_path, timeout=120)
+    assert not res.ok, "a blown-up LIGGGHTS run must not read as a result"
+
+
+# ------------------------------------------------------------------ agreement rules
+
+def test_a_failed_reference_run_never_counts_as_agreement():
+    case = floor_case()
+    good = Result(code="native", case="floor", profiles={"bottom_left": {"s_lo": [0], "s_hi": [2], "normal": [1.0], "shear": [0.0]}})
+    bad = failed("liggghts", "floor", "lost discs: 350 at the start, 349 at the end")
+    metrics, detail = study.static_compare(case, {"native": good, "liggghts": bad})
+    assert metrics and not any(m["pass"] for m in metrics)
+    assert all("lost discs" in m["note"] for m in metrics)
+    runs = {"native": [(good, {"discs_out": 3, "flow_rate": 50.0, "jammed": False, "peak_ratio_side": 2.0,
+                               "peak_ratio_bottom": 3.0})], "yade": [(failed("yade", "x", "timed out after 900 s"), {})]}
+    m, _ = study.discharge_compare("d", runs)
+    assert m and not any(x["pass"] for x in m) and "timed out" in m[0]["note"]
+
+
+def test_calibration_measures_from_an_analytic_end_state():
+    """Free flight after the contact: the measures invert the end state exactly."""
+    r = resolve(SILO)
+    case, geo = cal.cases(r)[0]
+    e, t_c, T = 0.5, 7e-4, case.duration
+    t_start = cal.GAP / geo["v_n"]
+    v0, v1 = geo["v_n"] * (1 - e) / 2, geo["v_n"] * (1 + e) / 2     # momentum kept, restitution e
+    flight = T - (t_start + t_c)
+    gap = (v1 - v0) * flight
+    x0, x1 = -1.0, 1.0 + gap
+    m = cal.measure(case, geo, [[x0, 0, 1, v0, 0, 0], [x1, 0, 1, v1, 0, 0]])
+    assert m["e"] == pytest.approx(e, rel=1e-12) and m["t_c"] == pytest.approx(t_c, rel=1e-9)
