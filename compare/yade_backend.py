@@ -28,6 +28,16 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
 - discharge: settle, erase the gate body, run on; discs whose centre is below -outlet_depth are
   erased at the start of the step in which they are found (per-step check while any disc is
   near the outlet plane) and their times logged.
+- failures (``run`` never raises; the Result says why): translation refused (CaseError from
+  write_inputs), yade exit != 0 (python error, SIGABRT from an inconsistent material set),
+  timeout (the process group is killed), missing or unreadable outputs, non-finite state, a disc
+  outside the container (only when gravity holds discs in a box of walls with an area: the box of
+  the walls and the initial discs, enlarged by 2 r_max; below it is allowed after the opening),
+  kinetic + potential energy above 1.5 x the initial budget (kinetic + potential + elastic), lost
+  discs. The in-script checks run every SCAN_TIME (or series interval, if shorter).
+- files in out_dir: yade_case.json (the translated case), yade_script.py (copy of
+  yade_template.py), yade.log, yade_process.json (exit code, wall time), yade_result.json and
+  yade_series.csv (written by the script, full precision).
 
 What YADE cannot express exactly (see also the module's ``LIMITATIONS``): the paper's incremental
 normal spring and elastic-force rules (only the shared variant); the engine's integration
@@ -303,10 +313,15 @@ def execute(out_dir: Path, timeout: float = 600, threads: int = 1) -> dict:
 
 
 def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
-    """write_inputs, run yade, read. Raises only CaseError (a case YADE cannot express); a run
-    that fails in any way is a failed Result with the reason."""
+    """write_inputs, run yade, read. Never raises: a case YADE cannot express (write_inputs'
+    CaseError) and a run that fails in any way are failed Results with the reason."""
     out_dir = Path(out_dir)
-    write_inputs(case, out_dir, threads)
+    try:
+        write_inputs(case, out_dir, threads)
+    except CaseError as e:
+        return failed(NAME, case.name, f"translation: {e}", version=version(), out_dir=str(out_dir))
+    except Exception as e:          # noqa: BLE001 - a run never raises
+        return failed(NAME, case.name, f"could not write the YADE inputs: {e!r}", out_dir=str(out_dir))
     return run_written(case, out_dir, timeout, threads)
 
 

@@ -131,8 +131,11 @@ def test_case_errors(base, tmp_path):
     with pytest.raises(CaseError, match="contact"):
         yb.write_inputs(Case(name="v", resolved=r, discs=discs, dt=1e-4, duration=0.01), tmp_path)
     r = scene(base, [_wall("floor", (-5.0, 0.0), (5.0, 0.0))], dw={"kn": 3.0 * 9.45308e7})
+    case = Case(name="k", resolved=r, discs=discs, dt=1e-4, duration=0.01)
     with pytest.raises(CaseError, match=r"pairs\[sand,wall\]\.kn"):
-        yb.write_inputs(Case(name="k", resolved=r, discs=discs, dt=1e-4, duration=0.01), tmp_path)
+        yb.write_inputs(case, tmp_path)
+    res = yb.run(case, tmp_path)                     # run() never raises: a failed Result
+    assert not res.ok and res.reason.startswith("translation: pairs[sand,wall].kn")
 
 
 # ------------------------------------------------------------------------------------------
@@ -326,6 +329,17 @@ def test_nan_radius_slipped_past_validation_is_a_failed_result(base, tmp_path):
     yb._write(yb.case_data(case), tmp_path, 1)      # ... slipped past: the script must refuse it
     res = yb.run_written(case, tmp_path)
     assert not res.ok and "non-finite" in res.reason
+
+
+def test_yade_abort_is_a_failed_result(base, tmp_path):
+    """An inconsistent ViscElMat set makes YADE abort (SIGABRT, exit 134 in a shell)."""
+    case = _floor_case(base)
+    script = yb.write_inputs(case, tmp_path)
+    text = script.read_text()
+    assert 'ks=m["ks"], cs=m["cs"],' in text
+    script.write_text(text.replace('ks=m["ks"], cs=m["cs"],', 'ks=float("nan"), cs=m["cs"],'))
+    res = yb.run_written(case, tmp_path)
+    assert not res.ok and "abort" in res.reason and "same defined set" in res.reason
 
 
 def test_blow_up_is_a_failed_result(base, tmp_path):
