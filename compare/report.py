@@ -34,7 +34,14 @@ def _fmt(v) -> str:
     if isinstance(v, (list, tuple)) and len(v) and all(isinstance(x, (int, float)) for x in v):
         return " ± ".join(_fmt(float(x)) for x in v[:2])
     if isinstance(v, dict):
-        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items() if not isinstance(x, (dict, list)) or k in ("native",))
+        parts = []
+        for k, x in v.items():
+            if isinstance(x, dict):  # a code's measures: the scalar ones, compactly
+                x = "(" + ", ".join(f"{kk} {_fmt(xx)}" for kk, xx in x.items() if isinstance(xx, (int, float))) + ")"
+            else:
+                x = _fmt(x)
+            parts.append(f"{k} {x}")
+        return "; ".join(parts)
     return str(v)
 
 

@@ -6,6 +6,7 @@ cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 bash scripts/build.sh
 /usr/bin/python3 scripts/make_paper_scenes.py --check
+/usr/bin/python3 scripts/make_janssen_scene.py --check
 ctest --test-dir build --output-on-failure -j "$(nproc)"
 
 # The same tests on an AddressSanitizer + UndefinedBehaviorSanitizer build (any report fails).
@@ -13,3 +14,6 @@ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDEM_SANITIZE=ON -DD
 cmake --build build-asan -j "$(nproc)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
+
+# The quick agreement report: native vs the real LIGGGHTS and YADE (fails on any disagreement).
+DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m compare report --out out/agreement
