@@ -1,4 +1,5 @@
 """python3 -m compare report --out DIR [--full] [--codes native,liggghts,yade]
+python3 -m compare translate [--check]
 
 Runs the agreement study (compare/study.py) and writes DIR/report.md, DIR/agreement.json and
 the PNG plots. Exit 0 when every metric is within tolerance, 1 when any fails (a failed
@@ -19,7 +20,12 @@ def main(argv=None) -> int:
     r.add_argument("--full", action="store_true", help="the whole study (all lattices, 8-member ensembles, MPI)")
     r.add_argument("--codes", default=",".join(study.CODES), help="comma-separated subset of native,liggghts,yade")
     r.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
+    t = sub.add_parser("translate", help="write reference_inputs/liggghts/ and reference_inputs/yade/ for the paper's scenes")
+    t.add_argument("--check", action="store_true", help="exit 1 when the committed inputs differ from the generator's")
     a = ap.parse_args(argv)
+    if a.cmd == "translate":
+        from . import translate
+        return translate.main(a.check)
     codes = [c.strip() for c in a.codes.split(",") if c.strip()]
     bad = [c for c in codes if c not in study.CODES]
     if bad or "native" not in codes:

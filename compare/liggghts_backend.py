@@ -149,6 +149,8 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
         mid = _mesh_id(w["name"])
         write_wall_stl(w, case.profile_bin, out_dir / f"{mid}.stl")
         meshes.append(mid)
+    if case.mode == "discharge":  # the outlet plane spans the box (inside it by 1e-3 cm)
+        write_outlet_stl(out_dir, xlo + 1e-3, xhi - 1e-3, float(r["discharge"]["outlet_depth"]))
     script = _script(case, meshes, xlo, xhi, threads)
     path = out_dir / "in.liggghts"
     write_text_atomic(path, script)
@@ -231,13 +233,6 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
     out_dir = Path(out_dir)
     try:
         script = write_inputs(case, out_dir, threads)
-        if case.mode == "discharge":
-            d = np.asarray(case.discs, float)
-            walls = case.resolved["walls"]
-            xs = [c for w in walls for c in (w["from"][0], w["to"][0])] + list(d[:, 0])
-            pad = 4 * float(d[:, 2].max())
-            write_outlet_stl(out_dir, min(xs) - pad + 1e-3, max(xs) + pad - 1e-3,
-                             float(case.resolved["discharge"]["outlet_depth"]))
     except CaseError as e:
         return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
     for old in glob.glob(str(out_dir / "mesh_*.vtk")) + glob.glob(str(out_dir / "discs_*.dump")):
