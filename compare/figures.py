@@ -335,12 +335,19 @@ def side_wall_contacts(summary, contacts, tol=SAME_DEPTH):
 
 
 def _save(fig, out_png):
-    """Save a figure as PNG at 150 dpi, creating the folder, and close it."""
+    """Save a figure as PNG at 150 dpi, creating the folder, and close it. The PNG is written to
+    NAME.tmp in the same folder and renamed when complete (a killed run leaves no half PNG)."""
     folder = os.path.dirname(out_png)
     if folder:
         os.makedirs(folder, exist_ok=True)
-    fig.savefig(out_png, dpi=150)
-    plt.close(fig)
+    tmp = f"{out_png}.tmp"
+    try:
+        fig.savefig(tmp, dpi=150, format="png")
+        os.replace(tmp, out_png)
+    finally:
+        plt.close(fig)
+        if os.path.exists(tmp):
+            os.remove(tmp)
     return out_png
 
 

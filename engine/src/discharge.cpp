@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "outputs.hpp"
+#include "state.hpp"
 
 namespace dem {
 
@@ -115,88 +116,191 @@ double flow_rate(const std::vector<Removal>& removals) {
   return den > 0 ? (k * stm - st * sm) / den : std::numeric_limits<double>::quiet_NaN();
 }
 
-DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress) {
-  const DischargeSpec& ds = spec.discharge;
-  DischargeResult res;
-  const Slit slit = find_slit(w, ds.gate);
-  const double width = w.geometry.max_x() - w.geometry.min_x();
-  const double x_left = w.geometry.min_x(), x_right = w.geometry.max_x();
-  const double xc = 0.5 * (slit.left + slit.right);
+namespace {
+
+// Geometry of the opening, derived from the scene and the walls (the same at every resume).
+struct Frame {
+  Slit slit;
+  double width, x_left, x_right, xc, top, y_out, g;
+};
+
+Frame frame(const SceneSpec& spec, const World& w) {
+  Frame f;
+  f.slit = find_slit(w, spec.discharge.gate);
+  f.width = w.geometry.max_x() - w.geometry.min_x();
+  f.x_left = w.geometry.min_x();
+  f.x_right = w.geometry.max_x();
+  f.xc = 0.5 * (f.slit.left + f.slit.right);
+  f.top = w.geometry.max_y();
+  f.y_out = f.slit.floor - spec.discharge.outlet_depth;
+  f.g = std::hypot(w.gx, w.gy);
+  return f;
+}
+
+// Top of the fill in the left wall, centre and right wall columns.
+void surfaces(const World& w, const Frame& f, double col, double s[3]) {
+  s[0] = surface(w.discs, f.x_left, f.x_left + col, f.slit.floor);
+  s[1] = surface(w.discs, f.xc - 0.5 * col, f.xc + 0.5 * col, f.slit.floor);
+  s[2] = surface(w.discs, f.x_right - col, f.x_right + 1e-12, f.slit.floor);
+}
+
+void save_load(BinaryOut& o, const WallLoad& L) {
+  o.str(L.name); o.str(L.group);
+  o.put(L.fx); o.put(L.fy); o.put(L.normal); o.put(L.shear); o.put(L.contacts);
+  o.vec(L.bin_normal); o.vec(L.bin_shear); o.vec(L.bin_contacts);
+  o.put(L.bin); o.put(L.length);
+}
+
+void load_load(BinaryIn& r, WallLoad& L) {
+  L.name = r.str(1 << 20); L.group = r.str(1 << 20);
+  L.fx = r.get<double>(); L.fy = r.get<double>(); L.normal = r.get<double>(); L.shear = r.get<double>();
+  L.contacts = r.get<int>();
+  r.vec(L.bin_normal); r.vec(L.bin_shear); r.vec(L.bin_contacts);
+  L.bin = r.get<double>(); L.length = r.get<double>();
+}
+
+}  // namespace
+
+void DischargeState::save(BinaryOut& o) const {
+  o.put(t_open); o.put(n_initial); o.put(overlap_limit); o.put(rmean); o.put(fill_top);
+  for (double v : surf0) o.put(v);
+  o.vec(x0); o.vec(y0);
+  o.put<std::uint64_t>(static_walls.size());
+  for (const WallLoad& L : static_walls) save_load(o, L);
+  o.put(next_s);
+  o.str(status);
+  o.vec(removals);
+  o.put(jam_at); o.put(jams);
+  for (double v : sink_time) o.put(v);
+  for (const std::ostringstream* s : {&series, &totals, &flow, &pvd_d, &pvd_c}) o.str(s->str());
+  o.put<std::uint64_t>(bin_series.size());
+  for (const auto& wall : bin_series) {
+    o.put<std::uint64_t>(wall.size());
+    for (const auto& bin : wall) o.vec(bin);
+  }
+  o.put<std::uint64_t>(total_series.size());
+  for (const auto& v : total_series) o.vec(v);
+  o.vec(sample_t);
+  o.put<std::uint64_t>(next_snap);
+  o.put(last_removal); o.put(removed_mass); o.put(moved_fraction);
+}
+
+void DischargeState::load(BinaryIn& r) {
+  t_open = r.get<double>(); n_initial = r.get<int>(); overlap_limit = r.get<double>(); rmean = r.get<double>();
+  fill_top = r.get<double>();
+  for (double& v : surf0) v = r.get<double>();
+  r.vec(x0); r.vec(y0);
+  static_walls.resize(r.count(1 << 20));
+  for (WallLoad& L : static_walls) load_load(r, L);
+  next_s = r.get<long>();
+  status = r.str(64);
+  if (status == "interrupted") status = "discharged";  // it goes on
+  r.vec(removals);
+  jam_at = r.get<double>(); jams = r.get<int>();
+  for (double& v : sink_time) v = r.get<double>();
+  for (std::ostringstream* s : {&series, &totals, &flow, &pvd_d, &pvd_c}) {
+    s->str(r.str());
+    s->seekp(0, std::ios_base::end);  // append after the restored text
+  }
+  bin_series.resize(r.count(1 << 20));
+  for (auto& wall : bin_series) {
+    wall.resize(r.count(1 << 24));
+    for (auto& bin : wall) r.vec(bin);
+  }
+  total_series.resize(r.count(1 << 20));
+  for (auto& v : total_series) r.vec(v);
+  r.vec(sample_t);
+  next_snap = r.get<std::uint64_t>();
+  last_removal = r.get<double>(); removed_mass = r.get<double>(); moved_fraction = r.get<double>();
+  if (static_walls.size() != bin_series.size() || static_walls.size() != total_series.size())
+    r.fail("corrupt discharge state (walls)");
+  for (std::size_t k = 0; k < static_walls.size(); ++k)
+    if (bin_series[k].size() != static_walls[k].bin_normal.size()) r.fail("corrupt discharge state (bins)");
+}
+
+std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) {
+  const Frame f = frame(spec, w);
   double rmin = std::numeric_limits<double>::infinity(), rmean = 0;
   for (double r : w.discs.r) { rmin = std::min(rmin, r); rmean += r; }
   rmean /= std::max<std::size_t>(1, w.discs.size());
-  const double overlap_limit = spec.max_overlap_fraction * rmin;
-  const double g = std::hypot(w.gx, w.gy);
+  st.overlap_limit = spec.max_overlap_fraction * rmin;
+  st.rmean = rmean;
 
   // The static state: loads and positions at opening.
-  std::vector<WallLoad> static_walls;
   std::vector<PointLoad> static_points;
-  measure_loads(w, spec.profile_bin, static_walls, static_points);
-  res.t_open = w.time;
-  res.n_initial = static_cast<int>(w.discs.size());
+  measure_loads(w, spec.profile_bin, st.static_walls, static_points);
+  st.t_open = w.time;
+  st.n_initial = static_cast<int>(w.discs.size());
   int max_id = 0;
   for (int id : w.discs.id) max_id = std::max(max_id, id);
-  std::vector<double> x0(max_id + 1, NAN), y0(max_id + 1, NAN);
-  double fill_top = -1e300;
+  st.x0.assign(max_id + 1, NAN);
+  st.y0.assign(max_id + 1, NAN);
+  st.fill_top = -1e300;
   for (std::size_t i = 0; i < w.discs.size(); ++i) {
-    x0[w.discs.id[i]] = w.discs.x[i];
-    y0[w.discs.id[i]] = w.discs.y[i];
-    fill_top = std::max(fill_top, w.discs.y[i]);
+    st.x0[w.discs.id[i]] = w.discs.x[i];
+    st.y0[w.discs.id[i]] = w.discs.y[i];
+    st.fill_top = std::max(st.fill_top, w.discs.y[i]);
   }
-  const double col = ds.surface_column;
-  auto surfaces = [&](double s[3]) {
-    s[0] = surface(w.discs, x_left, x_left + col, slit.floor);
-    s[1] = surface(w.discs, xc - 0.5 * col, xc + 0.5 * col, slit.floor);
-    s[2] = surface(w.discs, x_right - col, x_right + 1e-12, slit.floor);
-  };
-  double surf0[3];
-  surfaces(surf0);
-  double sink_time[3] = {NAN, NAN, NAN};
+  surfaces(w, f, spec.discharge.surface_column, st.surf0);
+  for (double& v : st.sink_time) v = NAN;
 
-  if (!w.deactivate_wall(ds.gate)) {
+  if (!w.deactivate_wall(spec.discharge.gate)) return "no gate wall \"" + spec.discharge.gate + "\" to open";
+
+  st.series << "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
+  st.totals << "t,name,normal,shear,fx,fy\n";
+  st.flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,"
+             "surface_right,arch_discs,arch_crown_y\n";
+  // Per wall and bin: series of normal force (for the ratios).
+  st.bin_series.assign(st.static_walls.size(), {});
+  for (std::size_t k = 0; k < st.static_walls.size(); ++k) st.bin_series[k].resize(st.static_walls[k].bin_normal.size());
+  st.total_series.assign(st.static_walls.size(), {});
+  st.next_s = 0;
+  st.status = "discharged";
+  return "";
+}
+
+DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress) {
+  DischargeState st;
+  const std::string why = open_discharge(spec, w, st);
+  if (!why.empty()) {
+    DischargeResult res;
     res.status = "unstable";
-    res.reason = "no gate wall \"" + ds.gate + "\" to open";
+    res.reason = why;
     return res;
   }
+  return continue_discharge(spec, w, st, out, progress, nullptr);
+}
+
+DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out,
+                                   bool progress, const RunControl* ctl) {
+  const DischargeSpec& ds = spec.discharge;
+  DischargeResult res;
+  const Frame f = frame(spec, w);
+  const Slit& slit = f.slit;
+  const double xc = f.xc, top = f.top, y_out = f.y_out;
 
   namespace fs = std::filesystem;
   const std::string snapdir = out + "/snapshots";
   fs::create_directories(snapdir);
-  std::ostringstream series, totals, flow, pvd_d, pvd_c;
-  series << "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
-  totals << "t,name,normal,shear,fx,fy\n";
-  flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,surface_right,"
-          "arch_discs,arch_crown_y\n";
-  const double top = w.geometry.max_y();
 
-  // Per wall and bin: series of normal force (for the ratios).
-  std::vector<std::vector<std::vector<double>>> bin_series(static_walls.size());
-  for (std::size_t k = 0; k < static_walls.size(); ++k) bin_series[k].resize(static_walls[k].bin_normal.size());
-  std::vector<std::vector<double>> total_series(static_walls.size());
-  std::vector<double> sample_t;
-
-  std::size_t next_snap = 0;
-  const double y_out = slit.floor - ds.outlet_depth;
-  double last_removal = 0;
-  double removed_mass = 0;
   std::vector<char> dead;
   const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
   const long sample_every = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
-  double moved_fraction = 0;
   const auto t0 = std::chrono::steady_clock::now();
   auto last_print = t0;
-  res.status = "discharged";
+  if (st.status == "interrupted") st.status = "discharged";
+  std::string reason;
 
-  for (long s = 0; s <= steps_total; ++s) {
+  for (long s = st.next_s; s <= steps_total; ++s) {
     if (s > 0) w.step();
-    const double t = w.time - res.t_open;
+    const double t = w.time - st.t_open;
     if (s > 0) {
-      if (!(w.max_overlap <= overlap_limit) || !w.all_finite()) {
-        res.status = "unstable";
+      if (!(w.max_overlap <= st.overlap_limit) || !w.all_finite()) {
+        st.status = "unstable";
         std::ostringstream os;
-        os << "overlap " << w.max_overlap << " cm (limit " << overlap_limit << ") or non-finite state at t = "
+        os << "overlap " << w.max_overlap << " cm (limit " << st.overlap_limit << ") or non-finite state at t = "
            << t << " s after opening";
-        res.reason = os.str();
+        reason = os.str();
         break;
       }
       // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
@@ -206,26 +310,26 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
         if (w.discs.y[i] < y_out) {
           dead[i] = 1;
           any = true;
-          res.removals.push_back({t, w.discs.id[i], w.discs.mass[i], w.discs.vx[i], w.discs.vy[i], false});
-          removed_mass += w.discs.mass[i];
+          st.removals.push_back({t, w.discs.id[i], w.discs.mass[i], w.discs.vx[i], w.discs.vy[i], false});
+          st.removed_mass += w.discs.mass[i];
         }
       if (any) {
         w.remove_discs(dead);
-        last_removal = t;
+        st.last_removal = t;
       }
       if (w.discs.size() == 0) {
-        res.status = "emptied";
+        st.status = "emptied";
       }
       // Jam: nothing left through the outlet for jam_time while discs remain in the silo.
-      if (res.status != "emptied" && t - last_removal > ds.jam_time) {
+      if (st.status != "emptied" && t - st.last_removal > ds.jam_time) {
         bool inside = false;
         for (double y : w.discs.y) inside |= y > slit.floor;
         if (inside) {
-          ++res.jams;
-          if (res.jam_at < 0) res.jam_at = t;
+          ++st.jams;
+          if (st.jam_at < 0) st.jam_at = t;
           const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
           if (!ds.remove_keystone) {
-            res.status = "jammed";
+            st.status = "jammed";
           } else {
             // Note 4: remove the arch's top (crown) disc; without a found arch, the lowest disc over the slit.
             int pick = -1;
@@ -238,93 +342,109 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
                     (pick < 0 || w.discs.y[i] < w.discs.y[pick]))
                   pick = static_cast<int>(i);
             if (pick < 0) {
-              res.status = "jammed";
+              st.status = "jammed";
             } else {
-              res.removals.push_back({t, w.discs.id[pick], w.discs.mass[pick], w.discs.vx[pick], w.discs.vy[pick], true});
+              st.removals.push_back({t, w.discs.id[pick], w.discs.mass[pick], w.discs.vx[pick], w.discs.vy[pick], true});
               dead.assign(w.discs.size(), 0);
               dead[pick] = 1;
               w.remove_discs(dead);
-              last_removal = t;
+              st.last_removal = t;
             }
           }
         }
       }
     }
-    const bool last = s == steps_total || res.status == "jammed" || res.status == "emptied";
+    const bool last = s == steps_total || st.status == "jammed" || st.status == "emptied";
     // Samples: wall forces, flow, surface, arch.
     if (s % sample_every == 0 || last) {
       std::vector<WallLoad> walls;
       std::vector<PointLoad> points;
       measure_loads(w, spec.profile_bin, walls, points);
-      sample_t.push_back(t);
+      st.sample_t.push_back(t);
       for (std::size_t k = 0; k < walls.size(); ++k) {
         const WallLoad& L = walls[k];
         const Wall& wl = w.geometry.walls[k];
-        totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
-               << fmt(L.fy) << '\n';
-        total_series[k].push_back(L.normal);
+        st.totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
+                  << fmt(L.fy) << '\n';
+        st.total_series[k].push_back(L.normal);
         for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
           const double mid = std::min(L.length, (b + 0.5) * L.bin);
           const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
-          bin_series[k][b].push_back(L.bin_normal[b]);
-          series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym) << ','
-                 << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
+          st.bin_series[k][b].push_back(L.bin_normal[b]);
+          st.series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
+                    << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
         }
       }
       for (const PointLoad& P : points)
-        totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
-               << fmt(P.fy) << '\n';
+        st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
+                  << fmt(P.fy) << '\n';
       int inside = 0, below = 0, moved = 0;
       for (std::size_t i = 0; i < w.discs.size(); ++i) {
         (w.discs.y[i] > slit.floor ? inside : below)++;
         const int id = w.discs.id[i];
-        if (std::hypot(w.discs.x[i] - x0[id], w.discs.y[i] - y0[id]) >= w.discs.r[i]) ++moved;
+        if (std::hypot(w.discs.x[i] - st.x0[id], w.discs.y[i] - st.y0[id]) >= w.discs.r[i]) ++moved;
       }
-      const int removed = static_cast<int>(res.removals.size());
-      moved_fraction = res.n_initial ? double(moved + removed) / res.n_initial : 0.0;
+      const int removed = static_cast<int>(st.removals.size());
+      st.moved_fraction = st.n_initial ? double(moved + removed) / st.n_initial : 0.0;
       double sf[3];
-      surfaces(sf);
+      surfaces(w, f, ds.surface_column, sf);
       for (int c = 0; c < 3; ++c)
-        if (std::isnan(sink_time[c]) && !(sf[c] > surf0[c] - rmean)) sink_time[c] = t;
+        if (std::isnan(st.sink_time[c]) && !(sf[c] > st.surf0[c] - st.rmean)) st.sink_time[c] = t;
       const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
       double crown = NAN;
       for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
-      flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(removed_mass) << ','
-           << fmt(moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
-           << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
+      st.flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
+              << fmt(st.moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
+              << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
     }
     // Snapshots at the requested times (and at the end).
-    while (next_snap < ds.snapshots.size() && ds.snapshots[next_snap] <= t + 0.5 * w.dt) {
+    while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
       char stem[32];
-      std::snprintf(stem, sizeof stem, "%04zu", next_snap);
+      std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
       std::vector<double> dx(w.discs.size()), dy(w.discs.size());
       for (std::size_t i = 0; i < w.discs.size(); ++i) {
-        dx[i] = w.discs.x[i] - x0[w.discs.id[i]];
-        dy[i] = w.discs.y[i] - y0[w.discs.id[i]];
+        dx[i] = w.discs.x[i] - st.x0[w.discs.id[i]];
+        dy[i] = w.discs.y[i] - st.y0[w.discs.id[i]];
       }
       write_disc_files(snapdir, std::string("discs_") + stem, spec, w.discs, &dx, &dy);
       write_contact_files(snapdir, std::string("contacts_") + stem, w);
-      pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
-      pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
-      ++next_snap;
+      st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
+      st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+      ++st.next_snap;
     }
     if (progress && (s & 1023) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
         last_print = now;
-        std::fprintf(stderr, "\r  discharge t = %.3f / %.3f s, %zu removed   ", t, ds.time, res.removals.size());
+        std::fprintf(stderr, "\r  discharge t = %.3f / %.3f s, %zu removed   ", t, ds.time, st.removals.size());
         std::fflush(stderr);
       }
     }
-    if (res.status != "discharged" || last) break;
+    if (st.status != "discharged" || last) break;
+    st.next_s = s + 1;
+    // A stop request ends the run here (the caller writes the final checkpoint); checkpoints
+    // follow the world's step count, so a resumed run writes them at the same steps.
+    if (stop_signal()) {
+      st.status = "interrupted";
+      break;
+    }
+    if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->discharge_checkpoint)
+      ctl->discharge_checkpoint(st);
   }
   if (progress && last_print != t0) std::fprintf(stderr, "\n");
-  res.duration = w.time - res.t_open;
+  res.status = st.status;
+  res.reason = reason;
+  res.t_open = st.t_open;
+  res.n_initial = st.n_initial;
+  res.removals = st.removals;
+  res.jam_at = st.jam_at;
+  res.jams = st.jams;
+  res.duration = w.time - st.t_open;
   res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  write_file_atomic(out + "/wall_series.csv", series.str());
-  write_file_atomic(out + "/wall_totals_series.csv", totals.str());
-  write_file_atomic(out + "/flow_series.csv", flow.str());
+  write_file_atomic(out + "/wall_series.csv", st.series.str());
+  write_file_atomic(out + "/wall_totals_series.csv", st.totals.str());
+  write_file_atomic(out + "/flow_series.csv", st.flow.str());
   {
     std::ostringstream o;
     o << "t,id,mass,vx,vy,how\n";
@@ -333,11 +453,16 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
         << (r.keystone ? "keystone" : "outlet") << '\n';
     write_file_atomic(out + "/removals.csv", o.str());
   }
-  for (auto [name, body] : {std::pair{"discharge_discs.pvd", pvd_d.str()}, std::pair{"discharge_contacts.pvd", pvd_c.str()}})
+  for (auto [name, body] : {std::pair{"discharge_discs.pvd", st.pvd_d.str()}, std::pair{"discharge_contacts.pvd", st.pvd_c.str()}})
     write_file_atomic(out + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
                                             body + "  </Collection>\n</VTKFile>\n");
 
   // Ratios of peak to static: raw maximum and the maximum of a moving average.
+  const std::vector<WallLoad>& static_walls = st.static_walls;
+  const std::vector<std::vector<std::vector<double>>>& bin_series = st.bin_series;
+  const std::vector<std::vector<double>>& total_series = st.total_series;
+  const double* sink_time = st.sink_time;
+  const double moved_fraction = st.moved_fraction, fill_top = st.fill_top, width = f.width, g = f.g;
   const std::size_t win = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every * w.dt))));
   auto peaks = [&](const std::vector<double>& v, double& raw, double& windowed) {
     raw = 0;

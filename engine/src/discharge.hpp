@@ -4,9 +4,12 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "control.hpp"
+#include "outputs.hpp"
 #include "scene.hpp"
 #include "world.hpp"
 
@@ -20,7 +23,7 @@ struct Removal {
 };
 
 struct DischargeResult {
-  std::string status;      // "discharged" (end time), "jammed", "emptied", "unstable"
+  std::string status;      // "discharged" (end time), "jammed", "emptied", "unstable", "interrupted"
   std::string reason;      // unstable: what grew where
   double t_open = 0;       // [s] world time at opening
   double duration = 0;     // [s] simulated since opening
@@ -35,6 +38,46 @@ struct DischargeResult {
 // Opens the gate and runs the discharge phase, writing series and snapshots into out_dir
 // (which exists). The world must be at the state to open from.
 DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress);
+
+struct BinaryOut;
+struct BinaryIn;
+
+// Everything a discharge carries from step to step besides the world: the state at opening,
+// the series and logs so far, the loop position. Checkpoints save it (checkpoint.hpp).
+struct DischargeState {
+  // At opening.
+  double t_open = 0;         // [s] world time
+  int n_initial = 0;
+  double overlap_limit = 0;  // [cm] end.max_overlap x r_min at opening
+  double rmean = 0;          // [cm] mean radius at opening (surface sinking)
+  double fill_top = -1e300;
+  double surf0[3] = {0, 0, 0};  // surface of the wall, centre and wall columns
+  std::vector<double> x0, y0;   // positions at opening, by disc id
+  std::vector<WallLoad> static_walls;
+  // Running.
+  long next_s = 0;           // next loop step (steps since opening)
+  std::string status = "discharged";
+  std::vector<Removal> removals;
+  double jam_at = -1;
+  int jams = 0;
+  double sink_time[3] = {0, 0, 0};
+  std::ostringstream series, totals, flow, pvd_d, pvd_c;  // the text of the series files and .pvd entries
+  std::vector<std::vector<std::vector<double>>> bin_series;  // per wall and bin: normal force samples
+  std::vector<std::vector<double>> total_series;             // per wall: total normal force samples
+  std::vector<double> sample_t;
+  std::size_t next_snap = 0;
+  double last_removal = 0, removed_mass = 0, moved_fraction = 0;
+
+  void save(BinaryOut& o) const;
+  void load(BinaryIn& r);  // an "interrupted" status is read as going on
+};
+
+// Records the state at opening and removes the gate; returns "" or why it cannot open.
+std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st);
+// Runs the discharge from st (just opened, or restored from a checkpoint with the world) to its
+// end, a jam, or a stop request (status "interrupted"), then writes its files and metrics.
+DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out_dir,
+                                   bool progress, const RunControl* ctl);
 
 // Disc ids of the arch over the slit: the shortest chain of touching discs from one slit end
 // (point L or the bottom wall within 2 r of it) to the other. Empty when there is none.

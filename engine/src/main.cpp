@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "checkpoint.hpp"
+#include "control.hpp"
 #include "discharge.hpp"
 #include "elastic_params.hpp"
 #include "ensemble.hpp"
@@ -31,11 +33,11 @@ const char* kMainHelp =
     "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
     "  dem resolve SCENE.toml [--out FILE.json] the validated scene with every value resolved (JSON)\n"
     "\n"
-    "exit codes: 0 ok, 2 bad input, 3 unstable run\n";
+    "exit codes: 0 ok, 2 bad input, 3 unstable run, 130/143 interrupted by SIGINT/SIGTERM\n";
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
-    "               [--no-plots] [--from STATE] [--save-state FILE]\n"
+    "               [--no-plots] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
     "\n"
     "  --out DIR       output directory (created; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
@@ -44,12 +46,18 @@ const char* kRunHelp =
     "  --force-dt      run even if dt is above the computed stability bound\n"
     "  --from STATE    start from a saved state (overrides start.from; skips the fill)\n"
     "  --save-state F  save the final state (positions, velocities, forces, contact history)\n"
+    "  --checkpoint-every S  write DIR/checkpoint.dem every S simulated seconds (overrides\n"
+    "                  output.checkpoint_every; 0: none)\n"
+    "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
+    "                  the result is bit-identical to a run never stopped\n"
     "  --quiet         no header and no progress line\n"
     "  --no-plots      skip the PNGs (network.png, side_walls.png, made with " DEM_PYTHON_EXE " -m compare.figures)\n"
     "\n"
     "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
     "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
-    "end.max_overlap x r_min) stops with 3 and writes the last good state.\n";
+    "end.max_overlap x r_min) stops with 3 and writes the last good state. SIGINT or SIGTERM stops\n"
+    "at the end of the current step, writes a checkpoint and all outputs (status \"interrupted\")\n"
+    "and exits with 130 (SIGINT) or 143 (SIGTERM).\n";
 
 const char* kEnsembleHelp =
     "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
@@ -128,7 +136,8 @@ void make_plots(const std::string& out, bool quiet) {
 int cmd_run(int argc, char** argv) {
   std::string scene, out;
   SceneOverrides ov;
-  bool quiet = false, plots = true;
+  bool quiet = false, plots = true, resume = false;
+  double checkpoint_every = -1;  // [s] -1: the scene's output.checkpoint_every
   std::string save_to;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
@@ -160,6 +169,12 @@ int cmd_run(int argc, char** argv) {
       const char* v = value();
       if (!v) return bad("--from needs a state file");
       ov.from = v;
+    } else if (k == "--checkpoint-every") {
+      const char* v = value();
+      if (!v || !number_arg(v, checkpoint_every) || !(checkpoint_every >= 0))
+        return bad("--checkpoint-every needs a number of simulated seconds >= 0");
+    } else if (k == "--resume") {
+      resume = true;
     } else if (k == "--save-state") {
       const char* v = value();
       if (!v) return bad("--save-state needs a file name");
@@ -178,33 +193,79 @@ int cmd_run(int argc, char** argv) {
   SceneSpec spec;
   World world;
   StabilityReport stab;
+  CheckpointKey key;
+  RunResult res;
+  DischargeState dstate;
+  bool resumed_in_discharge = false;
   try {
     spec = load_scene(scene, ov);
     build_world(spec, world);
     stab = stability_report(world, spec.material_names);
-    if (!spec.start_from.empty()) load_state(world, spec.start_from);
+    key = checkpoint_key(scene, ov);
+    if (!resume && !spec.start_from.empty()) load_state(world, spec.start_from);
   } catch (const SceneError& e) {
     return bad(e.what());
   } catch (const std::runtime_error& e) {
     return bad(std::string("start.from: ") + e.what());
+  }
+  if (checkpoint_every < 0) checkpoint_every = spec.checkpoint_every;
+  if (!(checkpoint_every / world.dt <= kMaxSteps)) return bad("--checkpoint-every: more than 1e12 steps of dt");
+  if (resume) {
+    // The checkpoint replaces the fill (or start.from): the run goes on from where it was.
+    const std::string path = checkpoint_path(out);
+    if (!std::filesystem::exists(path))
+      return bad("--resume: no checkpoint " + path + " (the run wrote none: run it without --resume)");
+    try {
+      read_checkpoint(path, key, world, res, dstate, resumed_in_discharge);
+    } catch (const std::runtime_error& e) {
+      return bad(std::string("--resume: ") + e.what());
+    }
   }
   // Only a valid scene creates its output directory.
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) return bad("--out " + out + ": cannot create the directory: " + ec.message());
   if (!quiet) print_header(spec, world, stab);
-  RunResult res;
-  if (spec.start_from.empty()) {
-    res = run_scene(spec, world, spec.progress && !quiet);  // the fill, to rest
+  // Checkpoints every checkpoint_every simulated seconds (at step counts that are multiples);
+  // SIGINT / SIGTERM stop after the current step with a final checkpoint.
+  install_stop_handlers();
+  const std::string ckpt = checkpoint_path(out);
+  RunControl ctl;
+  if (checkpoint_every > 0) ctl.checkpoint_every = std::max(1L, static_cast<long>(std::llround(checkpoint_every / world.dt)));
+  ctl.fill_checkpoint = [&](const RunResult& r) { write_checkpoint(ckpt, key, world, r, nullptr); };
+  ctl.discharge_checkpoint = [&](const DischargeState& d) { write_checkpoint(ckpt, key, world, res, &d); };
+  if (resume && !quiet)
+    std::printf("  resumed from %s at t = %.4f s (step %ld, %s)\n", ckpt.c_str(), world.time, world.steps,
+                resumed_in_discharge ? "discharge" : "fill");
+  if (resumed_in_discharge) {
+    res.status = RunStatus::end_time;  // the fill is over; the discharge goes on below
+  } else if (spec.start_from.empty() || resume) {
+    if (!resume) {
+      res.last_good = world.discs;
+      res.last_good_time = world.time;
+    }
+    continue_scene(spec, world, spec.progress && !quiet, res, &ctl);  // the fill, to rest
+    if (res.status == RunStatus::interrupted) write_checkpoint(ckpt, key, world, res, nullptr);
   } else {
     res.status = RunStatus::end_time;
     res.last_good = world.discs;
     if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
   }
   nlohmann::ordered_json extra;
-  if (spec.discharge.enabled && res.status != RunStatus::unstable) {
-    if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
-    const DischargeResult dr = run_discharge(spec, world, out, spec.progress && !quiet);
+  if (spec.discharge.enabled && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {
+    std::string why;
+    if (!resumed_in_discharge) {
+      if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
+      why = open_discharge(spec, world, dstate);
+    }
+    DischargeResult dr;
+    if (why.empty()) {
+      dr = continue_discharge(spec, world, dstate, out, spec.progress && !quiet, &ctl);
+      if (dr.status == "interrupted") write_checkpoint(ckpt, key, world, res, &dstate);
+    } else {
+      dr.status = "unstable";
+      dr.reason = why;
+    }
     res.wall_seconds += dr.wall_seconds;
     extra["status"] = dr.status;
     if (dr.status == "unstable") {
@@ -228,6 +289,11 @@ int cmd_run(int argc, char** argv) {
     std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),
                  res.last_good_time, out.c_str());
     return 3;
+  }
+  if (res.status == RunStatus::interrupted || (extra.contains("status") && extra["status"] == "interrupted")) {
+    std::fprintf(stderr, "dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (dem run %s --out %s --resume goes on)\n",
+                 stop_signal(), world.time, world.steps, ckpt.c_str(), scene.c_str(), out.c_str());
+    return 128 + stop_signal();
   }
   if (!quiet) {
     if (spec.discharge.enabled)

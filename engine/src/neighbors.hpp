@@ -4,6 +4,7 @@
 // merging the old and new sorted lists. Nothing here is O(N^2).
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "discs.hpp"
@@ -45,6 +46,15 @@ class Neighbors {
   void compact(const std::vector<int>& new_index);
   // Forget the reference positions: the next step rebuilds (after geometry changes).
   void invalidate() { x0_.clear(); y0_.clear(); }
+  // The positions of the last rebuild and the cell size: with the lists, what a checkpoint
+  // needs to continue exactly as if never stopped (same lists, same rebuild steps).
+  const std::vector<double>& reference_x() const { return x0_; }
+  const std::vector<double>& reference_y() const { return y0_; }
+  void restore_reference(std::vector<double> x0, std::vector<double> y0, double cell) {
+    x0_ = std::move(x0);
+    y0_ = std::move(y0);
+    cell_ = cell;
+  }
 
  private:
   std::vector<double> x0_, y0_;  // positions at the last rebuild

@@ -9,7 +9,8 @@
 namespace dem {
 
 const char* to_string(RunStatus s) {
-  return s == RunStatus::rest ? "rest" : s == RunStatus::end_time ? "end_time" : "unstable";
+  return s == RunStatus::rest ? "rest" : s == RunStatus::end_time ? "end_time"
+         : s == RunStatus::unstable ? "unstable" : "interrupted";
 }
 
 namespace {
@@ -32,6 +33,15 @@ std::string diagnose(const World& w, double overlap_limit) {
 
 RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
   RunResult res;
+  res.last_good = w.discs;
+  res.last_good_time = w.time;
+  continue_scene(spec, w, progress, res, nullptr);
+  return res;
+}
+
+void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& res, const RunControl* ctl) {
+  res.status = RunStatus::end_time;
+  res.reason.clear();
   const double g = std::hypot(w.gx, w.gy);
   res.rest_threshold = spec.rest_factor * g * w.dt * w.dt;  // note 3: ~1e-9 cm at dt = 1e-4
   double rmin = 1e300;
@@ -40,7 +50,7 @@ RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
   const long max_steps = static_cast<long>(std::ceil(spec.end_time / w.dt - 1e-9));
   const long check_every = 10;
   const long keep_every = 1000;
-  res.last_good = w.discs;
+  const double wall_before = res.wall_seconds;
 
   const auto t0 = std::chrono::steady_clock::now();
   auto last_print = t0;
@@ -72,6 +82,14 @@ RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
         res.last_good_time = w.time;
       }
     }
+    if (stop_signal()) {
+      res.status = RunStatus::interrupted;
+      break;
+    }
+    if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->fill_checkpoint) {
+      res.wall_seconds = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      ctl->fill_checkpoint(res);
+    }
     if (progress && (w.steps & 1023) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
@@ -85,9 +103,7 @@ RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
     }
   }
   if (progress && std::chrono::duration<double>(last_print - t0).count() > 0) std::fprintf(stderr, "\n");
-  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (res.status != RunStatus::unstable && res.status != RunStatus::rest) res.status = RunStatus::end_time;
-  return res;
+  res.wall_seconds = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace dem

@@ -3,13 +3,14 @@
 
 #include <string>
 
+#include "control.hpp"
 #include "discs.hpp"
 #include "scene.hpp"
 #include "world.hpp"
 
 namespace dem {
 
-enum class RunStatus { rest, end_time, unstable };
+enum class RunStatus { rest, end_time, unstable, interrupted };
 
 struct RunResult {
   RunStatus status = RunStatus::end_time;
@@ -27,5 +28,10 @@ const char* to_string(RunStatus s);
 
 // Steps the world until its end condition. Progress goes to stderr when `progress`.
 RunResult run_scene(const SceneSpec& spec, World& w, bool progress);
+
+// The same from the state in `res` (a fresh RunResult, or one restored from a checkpoint with
+// the world): checkpoints through ctl (may be null), and a stop request (control.hpp) ends the
+// run after the current step with status `interrupted`.
+void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& res, const RunControl* ctl);
 
 }  // namespace dem

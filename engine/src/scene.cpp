@@ -733,6 +733,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
                                                        "\", more than the limit of " + limit_text(kMaxProfileBins));
     }
     s.progress = t.boolean("progress", true);
+    s.checkpoint_every = t.non_negative("checkpoint_every", 0.0);
     t.finish();
   }
   root.finish();
@@ -764,6 +765,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
                        " s, more than the limit of " + limit_text(kMaxSteps) + " (docs/scene.md, Limits)");
   };
   steps_limit("end.time", s.end_time);
+  steps_limit("output.checkpoint_every", s.checkpoint_every);
   if (s.discharge.enabled) {
     steps_limit("discharge.time", s.discharge.time);
     steps_limit("discharge.series_interval", s.discharge.series_interval);

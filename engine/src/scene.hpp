@@ -75,6 +75,7 @@ struct SceneSpec {
   DischargeSpec discharge;         // [discharge]
   long max_discs = kMaxDiscs;      // SceneOverrides::max_discs or kMaxDiscs
   double profile_bin = 0;          // [output]
+  double checkpoint_every = 0;     // [s] simulated; 0: no checkpoints (--checkpoint-every overrides)
   bool progress = true;
 };
 

@@ -1,0 +1,163 @@
+#include "checkpoint.hpp"
+
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "outputs.hpp"
+#include "state.hpp"
+
+namespace dem {
+
+namespace {
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '1'};
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
+
+std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {
+  for (std::size_t k = 0; k < n; ++k) {
+    h ^= static_cast<unsigned char>(p[k]);
+    h *= kFnvPrime;
+  }
+  return h;
+}
+
+std::string hex(std::uint64_t v) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+void write_discs(BinaryOut& o, const Discs& d) {
+  o.vec(d.r); o.vec(d.mass); o.vec(d.inv_mass); o.vec(d.inv_inertia); o.vec(d.material); o.vec(d.id);
+  o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
+  o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
+}
+
+void read_discs(BinaryIn& r, Discs& d) {
+  r.vec(d.r); r.vec(d.mass); r.vec(d.inv_mass); r.vec(d.inv_inertia); r.vec(d.material); r.vec(d.id);
+  r.vec(d.x); r.vec(d.y); r.vec(d.phi); r.vec(d.vx); r.vec(d.vy); r.vec(d.omega);
+  r.vec(d.dux); r.vec(d.duy); r.vec(d.dphi); r.vec(d.fx); r.vec(d.fy); r.vec(d.torque);
+  const std::size_t n = d.r.size();
+  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.dux, &d.duy,
+                  &d.dphi, &d.fx, &d.fy, &d.torque})
+    if (v->size() != n) r.fail("corrupt checkpoint (arrays of different lengths)");
+  if (d.material.size() != n || d.id.size() != n) r.fail("corrupt checkpoint (arrays of different lengths)");
+}
+}  // namespace
+
+std::uint64_t file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot read the scene file");
+  std::uint64_t h = kFnvOffset;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) h = fnv1a(buf, static_cast<std::size_t>(in.gcount()), h);
+  return h;
+}
+
+CheckpointKey checkpoint_key(const std::string& scene_file, const SceneOverrides& ov) {
+  CheckpointKey k;
+  k.engine = std::string("dem ") + DEM_VERSION;
+  k.scene_hash = file_hash(scene_file);
+  std::ostringstream os;
+  os << "dt=" << (ov.dt > 0 ? fmt17(ov.dt) : "") << ";scheme=" << ov.scheme
+     << ";end_time=" << (ov.end_time > 0 ? fmt17(ov.end_time) : "") << ";force_dt=" << (ov.force_dt ? 1 : 0)
+     << ";from=" << ov.from;
+  k.overrides = os.str();
+  return k;
+}
+
+std::string checkpoint_path(const std::string& out_dir) { return out_dir + "/checkpoint.dem"; }
+
+void write_checkpoint(const std::string& path, const CheckpointKey& key, const World& w, const RunResult& fill,
+                      const DischargeState* discharge) {
+  std::ostringstream buf(std::ios::binary);
+  BinaryOut o{buf};
+  buf.write(kMagic, sizeof kMagic);
+  o.str(key.engine);
+  o.put(key.scene_hash);
+  o.str(key.overrides);
+  o.put<std::int32_t>(discharge ? 1 : 0);
+  // The fill's progress (run.hpp).
+  o.put<std::int32_t>(static_cast<std::int32_t>(fill.status));
+  o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
+  o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds); o.put(fill.last_good_time);
+  write_discs(o, fill.last_good);
+  // The world, its counters and its lists exactly as they are (no rebuild on resume).
+  write_world(o, w);
+  o.put(w.particle_steps);
+  o.put(w.neighbors.rebuilds);
+  o.put(w.neighbors.cell_size());
+  o.vec(w.neighbors.reference_x());
+  o.vec(w.neighbors.reference_y());
+  if (discharge) discharge->save(o);
+  std::string body = buf.str();
+  const std::uint64_t sum = fnv1a(body.data(), body.size());
+  body.append(reinterpret_cast<const char*>(&sum), sizeof sum);
+  write_file_atomic(path, body);
+}
+
+void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w, RunResult& fill,
+                     DischargeState& discharge, bool& in_discharge) {
+  std::string body;
+  {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw std::runtime_error(path + ": cannot open the checkpoint");
+    std::ostringstream all;
+    all << f.rdbuf();
+    body = all.str();
+  }
+  std::uint64_t sum = 0;
+  if (body.size() < sizeof kMagic + sizeof sum || std::memcmp(body.data(), kMagic, sizeof kMagic) != 0)
+    throw std::runtime_error(path + ": not a dem checkpoint (or another format version)");
+  std::memcpy(&sum, body.data() + body.size() - sizeof sum, sizeof sum);
+  body.resize(body.size() - sizeof sum);
+  if (fnv1a(body.data(), body.size()) != sum) throw std::runtime_error(path + ": damaged checkpoint (checksum)");
+  std::istringstream in(body.substr(sizeof kMagic), std::ios::binary);
+  BinaryIn r{in, path};
+  const std::string engine = r.str(256);
+  if (engine != key.engine)
+    r.fail("written by " + engine + ", this is " + key.engine + ": a checkpoint resumes only with the same engine");
+  const auto scene_hash = r.get<std::uint64_t>();
+  if (scene_hash != key.scene_hash)
+    r.fail("written for a scene file with hash " + hex(scene_hash) + ", the scene file now has " + hex(key.scene_hash) +
+           ": the scene changed since the checkpoint (run it afresh without --resume)");
+  const std::string overrides = r.str(1 << 16);
+  if (overrides != key.overrides)
+    r.fail("written with the options \"" + overrides + "\", now \"" + key.overrides +
+           "\": --dt, --scheme, --end-time, --force-dt and --from must be as in the checkpointed run");
+  const auto phase = r.get<std::int32_t>();
+  if (phase != 0 && phase != 1) r.fail("corrupt checkpoint (phase)");
+  in_discharge = phase == 1;
+  const auto status = r.get<std::int32_t>();
+  if (status < 0 || status > static_cast<std::int32_t>(RunStatus::interrupted)) r.fail("corrupt checkpoint (status)");
+  fill.status = static_cast<RunStatus>(status);
+  fill.rest_reached = r.get<bool>(); fill.rest_time = r.get<double>(); fill.rest_threshold = r.get<double>();
+  fill.mean_abs_du = r.get<double>(); fill.mean_abs_dv = r.get<double>(); fill.wall_seconds = r.get<double>();
+  fill.last_good_time = r.get<double>();
+  read_discs(r, fill.last_good);
+  read_world(r, w);
+  w.particle_steps = r.get<double>();
+  const long rebuilds = r.get<long>();
+  const double cell = r.get<double>();
+  std::vector<double> x0, y0;
+  r.vec(x0);
+  r.vec(y0);
+  if (x0.size() != y0.size() || (!x0.empty() && x0.size() != w.discs.size()))
+    r.fail("corrupt checkpoint (reference positions)");
+  if (in_discharge) {
+    discharge.load(r);
+    for (int id : w.discs.id)
+      if (id < 0 || static_cast<std::size_t>(id) >= discharge.x0.size()) r.fail("corrupt checkpoint (disc ids)");
+  }
+  if (in.peek() != std::char_traits<char>::eof()) r.fail("corrupt checkpoint (trailing bytes)");
+  // Kernel, point links and scratch as for any start, then the lists exactly as saved.
+  const auto pairs = w.neighbors.pairs;
+  const auto walls = w.neighbors.walls;
+  w.prepare();
+  w.neighbors.pairs = pairs;
+  w.neighbors.walls = walls;
+  w.neighbors.rebuilds = rebuilds;
+  w.neighbors.restore_reference(std::move(x0), std::move(y0), cell);
+}
+
+}  // namespace dem

@@ -1,0 +1,111 @@
+"""Every output file is written to NAME.tmp and renamed when complete: a run killed (SIGKILL, the
+whole process group, so the PNG drawing too) at random points leaves only files that parse
+(json, CSV, VTU and PVD, PNG, the checkpoint by resuming from it); unfinished files can only be
+NAME.tmp."""
+import csv
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.image  # noqa: E402
+import meshio  # noqa: E402
+import pytest  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[2]
+BASE = (REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml").read_text()
+
+
+def check_file(path):
+    """Parses one output file by its kind; raises when it is incomplete."""
+    name = path.name
+    if name.endswith(".json"):
+        json.loads(path.read_text())
+    elif name.endswith(".csv"):
+        text = path.read_text()
+        assert text.endswith("\n"), f"{path}: no final line break"
+        rows = list(csv.reader(text.splitlines()))
+        assert rows and all(len(r) == len(rows[0]) for r in rows), f"{path}: ragged rows"
+    elif name.endswith(".vtu"):
+        meshio.read(path)
+    elif name.endswith(".pvd"):
+        ET.parse(path)
+    elif name.endswith(".png"):
+        assert matplotlib.image.imread(path).size > 0
+    elif name == "checkpoint.dem":
+        pass  # checked by resuming
+    else:
+        raise AssertionError(f"unexpected file {path}")
+
+
+def check_dir(out):
+    checked = 0
+    for path in sorted(out.rglob("*")):
+        if path.is_dir():
+            continue
+        if path.name.endswith(".tmp"):  # an unfinished file keeps its temporary name
+            assert (path.parent / path.name[:-4]).suffix in (".json", ".csv", ".vtu", ".pvd", ".png", ".dem"), path
+            continue
+        check_file(path)
+        checked += 1
+    return checked
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """The 17/18 discharge with 26 snapshots (every 0.04 s) and checkpoints every 0.02 s."""
+    path = tmp_path_factory.mktemp("scene") / "many_snapshots.toml"
+    snaps = ", ".join(f"{0.04 * k:.2f}" for k in range(26))
+    text = BASE.replace("snapshots = [0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0]", f"snapshots = [{snaps}]")
+    assert text != BASE
+    path.write_text(text.replace("[output]\n", "[output]\ncheckpoint_every = 0.02\n", 1))
+    return path
+
+
+def test_killed_runs_leave_only_complete_files(tmp_path, dem_binary, scene):
+    def run(out, *extra):
+        t0 = time.monotonic()
+        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", *extra],
+                              capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        return time.monotonic() - t0
+
+    engine = run(tmp_path / "engine_only", "--no-plots")
+    full = tmp_path / "full"
+    drawing = max(0.1, run(full) - engine)
+    assert (full / "network.png").exists() and len(list((full / "snapshots").glob("*.vtu"))) == 52
+    assert check_dir(full) > 100
+    rng = random.Random(11)
+    seen_tmp = 0
+    for k in range(6):
+        out = tmp_path / f"killed{k}"
+        p = subprocess.Popen([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        if k % 2 == 0:  # while the engine steps and writes snapshots
+            time.sleep(rng.uniform(0.05, 1.0) * engine)
+        else:  # while the PNGs are drawn (summary.json is the engine's last file)
+            while not (out / "summary.json").exists() and p.poll() is None:
+                time.sleep(0.001)
+            time.sleep(rng.uniform(0.0, 1.0) * drawing)
+        os.killpg(p.pid, signal.SIGKILL)  # dem and the python drawing its PNGs
+        p.wait(timeout=60)
+        if not out.exists():
+            continue
+        seen_tmp += any(path.name.endswith(".tmp") for path in out.rglob("*"))
+        check_dir(out)
+        if (out / "checkpoint.dem").exists():  # the checkpoint loads: resume it to the end
+            resumed = tmp_path / f"resumed{k}"
+            shutil.copytree(out, resumed)
+            r = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(resumed), "--quiet", "--no-plots",
+                                "--resume"], capture_output=True, text=True, timeout=600)
+            assert r.returncode == 0, r.stderr
+            assert (resumed / "discs.csv").read_bytes() == (full / "discs.csv").read_bytes()
+        shutil.rmtree(out)
+    print(f"engine {engine:.2f} s, drawing {drawing:.2f} s; {seen_tmp} of 6 killed runs left a .tmp file")

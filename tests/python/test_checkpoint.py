@@ -1,0 +1,215 @@
+"""Checkpoints and resume (docs/outputs.md, "Checkpoints"): a run killed with SIGKILL at random
+points and resumed with --resume ends bit-identical to the run never stopped, for a fill to rest
+and for a discharge; SIGINT / SIGTERM stop after the current step with a checkpoint, all outputs
+and status "interrupted" (exit 130 / 143); a checkpoint of another scene, engine version or
+option set is refused with exit 2."""
+import json
+import os
+import random
+import signal
+import struct
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
+DISCHARGE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
+# Files a run writes that must be equal bit for bit (summary.json: all but the wall-clock timing).
+FILL_FILES = ["discs.csv", "contacts.csv", "wall_profiles.csv", "discs.vtu", "contacts.vtu"]
+DISCHARGE_FILES = FILL_FILES + ["removals.csv", "flow_series.csv", "wall_series.csv", "wall_totals_series.csv",
+                                "discharge_discs.pvd", "discharge_contacts.pvd"]
+TIMING = ("wall_time_s", "particle_steps_per_s")
+
+
+def dem(dem_binary, *args, **kw):
+    return subprocess.run([str(dem_binary), *map(str, args)], capture_output=True, text=True, timeout=600, **kw)
+
+
+def summary(out):
+    s = json.loads((Path(out) / "summary.json").read_text())
+    for k in TIMING:
+        s.pop(k)
+    return s
+
+
+def assert_same_run(a, b, files):
+    for name in files:
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+    snaps = sorted(p.name for p in (a / "snapshots").glob("*")) if (a / "snapshots").exists() else []
+    assert snaps == sorted(p.name for p in (b / "snapshots").glob("*") if not p.name.endswith(".tmp"))
+    for name in snaps:
+        assert (a / "snapshots" / name).read_bytes() == (b / "snapshots" / name).read_bytes(), name
+    assert summary(a) == summary(b)
+
+
+def start(dem_binary, scene, out, every, extra=()):
+    return subprocess.Popen([str(dem_binary), "run", str(scene), "--out", str(out), "--no-plots", "--quiet",
+                             "--checkpoint-every", str(every), *extra],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for(proc, path, timeout=300):
+    """Waits until `path` exists (or the run ends); True when it exists."""
+    deadline = time.monotonic() + timeout
+    while not path.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.0002)
+    return path.exists()
+
+
+def stop(proc, sig):
+    if proc.poll() is None:
+        proc.send_signal(sig)
+    proc.wait(timeout=300)
+    return proc.returncode
+
+
+@pytest.fixture(scope="module")
+def full_runs(tmp_path_factory, dem_binary):
+    """The uninterrupted runs (no checkpoints), their final states and wall times."""
+    tmp = tmp_path_factory.mktemp("full")
+    wall = {}
+    for name, scene in (("silo", SILO), ("discharge", DISCHARGE)):
+        t0 = time.monotonic()
+        p = dem(dem_binary, "run", scene, "--out", tmp / name, "--no-plots", "--quiet", "--save-state", tmp / f"{name}.state")
+        wall[name] = time.monotonic() - t0
+        assert p.returncode == 0, p.stderr
+    return tmp, wall
+
+
+@pytest.mark.parametrize("case,scene,files,every", [
+    ("silo", SILO, FILL_FILES, 0.002),
+    ("discharge", DISCHARGE, DISCHARGE_FILES, 0.005),
+])
+def test_killed_and_resumed_run_is_bit_identical(tmp_path, dem_binary, full_runs, case, scene, files, every):
+    """SIGKILL at random times (a fraction of the uninterrupted run's wall time), resume, compare."""
+    full, wall = full_runs
+    rng = random.Random(7)
+    killed = attempts = 0
+    while killed < 3 and attempts < 12:
+        attempts += 1
+        out = tmp_path / f"run{attempts}"
+        proc = start(dem_binary, scene, out, every)
+        time.sleep(rng.uniform(0.1, 0.9) * wall[case])
+        assert wait_for(proc, out / "checkpoint.dem")
+        killed += stop(proc, signal.SIGKILL) == -signal.SIGKILL
+        state = tmp_path / f"run{attempts}.state"
+        p = dem(dem_binary, "run", scene, "--out", out, "--no-plots", "--quiet", "--resume", "--save-state", state)
+        assert p.returncode == 0, p.stderr
+        assert_same_run(full / case, out, files)
+        assert state.read_bytes() == (full / f"{case}.state").read_bytes()
+    assert killed >= 3, f"only {killed} of {attempts} runs could be killed before they ended"
+
+
+def test_kill_resume_kill_resume(tmp_path, dem_binary, full_runs):
+    """Killed in the fill, resumed and killed again in the discharge, resumed to the end."""
+    out = tmp_path / "run"
+    proc = start(dem_binary, DISCHARGE, out, 0.005)
+    assert wait_for(proc, out / "checkpoint.dem")
+    assert stop(proc, signal.SIGKILL) == -signal.SIGKILL
+    proc = start(dem_binary, DISCHARGE, out, 0.005, extra=("--resume",))
+    assert wait_for(proc, out / "snapshots" / "discs_0001.csv")
+    assert stop(proc, signal.SIGKILL) == -signal.SIGKILL
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume", "--checkpoint-every", "0.005")
+    assert p.returncode == 0, p.stderr
+    assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)
+
+
+@pytest.mark.parametrize("sig,code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize("phase", ["fill", "discharge"])
+def test_signal_stops_gracefully(tmp_path, dem_binary, full_runs, sig, code, phase):
+    out = tmp_path / "run"
+    proc = start(dem_binary, DISCHARGE, out, 0.01)
+    # The first checkpoint comes early in the fill; the snapshots folder at the opening.
+    assert wait_for(proc, out / ("checkpoint.dem" if phase == "fill" else "snapshots"))
+    assert stop(proc, sig) == code, proc.stderr.read()
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "interrupted"
+    phase_discharge = "discharge" in s
+    assert phase_discharge == (phase == "discharge")
+    for name in FILL_FILES + (DISCHARGE_FILES if phase_discharge else []):
+        assert (out / name).stat().st_size > 0, name
+    if phase_discharge:
+        assert s["discharge"]["status"] == "interrupted"
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 0, p.stderr
+    assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)
+
+
+def test_checkpoint_every_from_the_scene(tmp_path, dem_binary, full_runs):
+    scene = tmp_path / "silo.toml"
+    scene.write_text(SILO.read_text().replace("[output]\n", "[output]\ncheckpoint_every = 0.1   # s\n", 1))
+    out = tmp_path / "run"
+    p = dem(dem_binary, "run", scene, "--out", out, "--no-plots", "--quiet")
+    assert p.returncode == 0, p.stderr
+    assert (out / "checkpoint.dem").exists()
+    p = dem(dem_binary, "run", scene, "--out", out, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 0, p.stderr
+    a, b = summary(full_runs[0] / "silo"), summary(out)
+    for s in (a, b):
+        s["scene"].pop("file")
+    assert a == b
+    for name in FILL_FILES:
+        assert (full_runs[0] / "silo" / name).read_bytes() == (out / name).read_bytes(), name
+
+
+@pytest.fixture
+def checkpointed(tmp_path, dem_binary):
+    out = tmp_path / "run"
+    p = dem(dem_binary, "run", SILO, "--out", out, "--no-plots", "--quiet", "--checkpoint-every", "0.1")
+    assert p.returncode == 0, p.stderr
+    return out
+
+
+def fnv1a(data):
+    h = 1469598103934665603
+    for b in data:
+        h = ((h ^ b) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def test_resume_refuses_another_engine_version(checkpointed, dem_binary):
+    ckpt = checkpointed / "checkpoint.dem"
+    body = ckpt.read_bytes()[:-8]
+    version = json.loads((checkpointed / "summary.json").read_text())["engine"].encode()  # "dem 0.1.0"
+    assert version in body
+    other = b"dem 9.9.9"[:len(version)].ljust(len(version), b"9")
+    body = body.replace(version, other, 1)
+    ckpt.write_bytes(body + struct.pack("<Q", fnv1a(body)))
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2
+    assert "--resume" in p.stderr and other.decode() in p.stderr and "same engine" in p.stderr
+
+
+def test_resume_refuses_a_changed_scene(checkpointed, dem_binary, tmp_path):
+    scene = tmp_path / "changed.toml"
+    scene.write_text(SILO.read_text().replace("mu = 0.577", "mu = 0.5"))
+    p = dem(dem_binary, "run", scene, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2 and "the scene changed since the checkpoint" in p.stderr, p.stderr
+
+
+def test_resume_refuses_other_options(checkpointed, dem_binary):
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume", "--end-time", "3")
+    assert p.returncode == 2 and "--end-time" in p.stderr and "must be as in the checkpointed run" in p.stderr, p.stderr
+
+
+def test_resume_refuses_a_damaged_checkpoint(checkpointed, dem_binary):
+    ckpt = checkpointed / "checkpoint.dem"
+    data = bytearray(ckpt.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    ckpt.write_bytes(bytes(data))
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2 and "damaged checkpoint" in p.stderr, p.stderr
+    ckpt.write_bytes(b"DEMCKPT1")
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2 and "checkpoint" in p.stderr, p.stderr
+
+
+def test_resume_without_checkpoint(tmp_path, dem_binary):
+    p = dem(dem_binary, "run", SILO, "--out", tmp_path / "none", "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2 and "no checkpoint" in p.stderr
+    assert not (tmp_path / "none").exists()
+    p = dem(dem_binary, "run", SILO, "--out", tmp_path / "x", "--checkpoint-every", "-1")
+    assert p.returncode == 2 and "--checkpoint-every" in p.stderr
