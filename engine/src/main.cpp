@@ -221,6 +221,8 @@ int cmd_run(int argc, char** argv) {
       return bad(std::string("--resume: ") + e.what());
     }
   }
+  if ((!save_to.empty() || !spec.start_from.empty()) && (!world.bonds.empty() || !world.moving.empty()))
+    return bad("--save-state / --from: state files do not hold cluster bonds or moving walls yet");
   // Only a valid scene creates its output directory.
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
@@ -282,6 +284,24 @@ int cmd_run(int argc, char** argv) {
                   dr.metrics["pattern"].get<std::string>().c_str(), dr.metrics["peak_ratio_bottom"].get<double>(),
                   dr.metrics["peak_ratio_side"].get<double>());
   }
+  if (spec.shear_box.shear && res.status != RunStatus::unstable) {  // paper 2's simple shear
+    if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
+    const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet);
+    res.wall_seconds += sr.wall_seconds;
+    extra["status"] = sr.status;
+    if (sr.status == "unstable") {
+      res.status = RunStatus::unstable;
+      res.reason = sr.reason;
+      res.last_good = world.discs;
+      extra["reason"] = sr.reason;
+    }
+    extra["shear"] = sr.metrics;
+    if (!quiet && sr.metrics.contains("peak_ratio"))
+      std::printf("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
+                  sr.status.c_str(), sr.metrics["strain_final"].get<double>(), sr.metrics["peak_ratio"].get<double>(),
+                  sr.metrics["strain_at_peak"].get<double>(), sr.metrics["peak_ratio_windowed"].get<double>(),
+                  sr.metrics["sigma_initial"].get<double>());
+  }
   write_outputs(out, spec, world, res, stab, &extra);
   if (!save_to.empty() && res.status != RunStatus::unstable) save_state(world, save_to);
   if (plots && res.status != RunStatus::unstable) make_plots(out, quiet);
@@ -296,7 +316,7 @@ int cmd_run(int argc, char** argv) {
     return 128 + stop_signal();
   }
   if (!quiet) {
-    if (spec.discharge.enabled)
+    if (spec.discharge.enabled || spec.shear_box.shear)
       std::printf("  %s at t = %.4f s after %ld steps", extra["status"].get<std::string>().c_str(), world.time, world.steps);
     else
       std::printf("  %s at t = %.4f s after %ld steps", to_string(res.status), world.time, world.steps);

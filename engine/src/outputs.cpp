@@ -152,6 +152,18 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
     fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(0);
   }
+  for (const Bond& c : w.bonds) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+    const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+    const double R = std::hypot(dx, dy);
+    if (R == 0) continue;
+    const double nx = dx / R, ny = dy / R, at = c.ai / (c.ai + c.aj) * R;
+    o << "db," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(d.x[c.i] + nx * at) << ',' << fmt(d.y[c.i] + ny * at)
+      << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+      << fmt(c.fs) << '\n';
+    lx.insert(lx.end(), {d.x[c.i], d.x[c.j]});
+    ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
+    fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(3);
+  }
   const int nw = static_cast<int>(w.geometry.walls.size());
   for (const WallContact& c : w.neighbors.walls) {
     if (!c.touching) continue;

@@ -15,6 +15,7 @@
 
 #include "fill.hpp"
 #include "neighbors.hpp"
+#include "shear_scene.hpp"
 #include "stability.hpp"
 #include "world.hpp"
 
@@ -653,8 +654,11 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
       }
     }
   }
+  read_shear_tables(s, root_table);  // [shear_box] (adds its walls), [shear], [clusters]
+  for (const char* k : {"shear_box", "shear", "clusters"}) root.node(k);
   read_walls(s, root);
   read_fill(s, root);
+  finish_shear_tables(s);  // the plate above the discs; cluster indices
   {
     Tab t(*root.table("end", true), "end", s.file);
     s.end_time = t.positive("time");
@@ -796,6 +800,7 @@ void build_world(const SceneSpec& s, World& w) {
     w.discs.vy.back() = d.vy;
     w.discs.omega.back() = d.omega;
   }
+  build_shear_world(s, w);  // bonds, rotating walls, plate (paper 2); nothing for other scenes
   w.neighbors.skin = s.skin;
   w.neighbors.min_cell = s.cell;
   const StabilityReport rep = stability_report(w, s.material_names);

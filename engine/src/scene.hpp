@@ -6,8 +6,10 @@
 #include <string>
 #include <vector>
 
+#include "clusters.hpp"
 #include "geometry.hpp"
 #include "model.hpp"
+#include "shear_box.hpp"
 
 namespace dem {
 
@@ -73,6 +75,8 @@ struct SceneSpec {
   double max_overlap_fraction = 0.5;
   std::string start_from;          // [start] from: a saved state (skips the fill)
   DischargeSpec discharge;         // [discharge]
+  ShearBoxSpec shear_box;          // [shear_box], [shear] (paper 2)
+  ClusterSpec clusters;            // [clusters] (paper 2)
   long max_discs = kMaxDiscs;      // SceneOverrides::max_discs or kMaxDiscs
   double profile_bin = 0;          // [output]
   double checkpoint_every = 0;     // [s] simulated; 0: no checkpoints (--checkpoint-every overrides)

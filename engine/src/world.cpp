@@ -8,16 +8,23 @@
 namespace dem {
 
 void World::step() {
+  const bool walls_move = !moving.empty();  // one test per step, none per contact
   if (scheme == Scheme::velocity_verlet) {
     kick(0.5 * dt);  // v(t + dt/2)
     drift_eq18();    // du = v(t + dt/2) dt; x += du
+    if (walls_move) { kick_walls(0.5 * dt); drift_walls(false); }
   }
-  if (neighbors.needs_rebuild(discs)) neighbors.rebuild(discs, geometry);
+  if (walls_move && walls_moved_far()) neighbors.invalidate();
+  if (neighbors.needs_rebuild(discs)) rebuild_lists();
   (this->*force_kernel_)();  // eqs. (3)-(15) from the increments of the last move
   switch (scheme) {
     case Scheme::paper_eq18: kick(dt); drift_eq18(); break;   // (17), (18)
     case Scheme::paper_eq19: kick(dt); drift_eq19(); break;   // (17), (19)
     case Scheme::velocity_verlet: kick(0.5 * dt); break;      // v(t + dt)
+  }
+  if (walls_move) {
+    if (scheme == Scheme::velocity_verlet) kick_walls(0.5 * dt);
+    else { kick_walls(dt); drift_walls(scheme == Scheme::paper_eq19); }
   }
   time += dt;
   ++steps;
@@ -38,7 +45,23 @@ void World::prepare() {
   geometry.link_points();
   touch_scratch_.assign(geometry.obstacle_count() + 1, 0);
   dist_scratch_.assign(geometry.obstacle_count() + 1, 0.0);
-  neighbors.rebuild(discs, geometry);  // keeps the history already in the lists
+  if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
+  rebuild_lists();  // keeps the history already in the lists
+}
+
+void World::rebuild_lists() {
+  neighbors.rebuild(discs, geometry);
+  if (!moving.empty()) walls_listed();
+  if (bonds.empty()) return;
+  // Bonded pairs have their own list: drop them from the candidates (both lists sorted by (i, j)).
+  auto& p = neighbors.pairs;
+  std::size_t o = 0, b = 0;
+  for (std::size_t a = 0; a < p.size(); ++a) {
+    while (b < bonds.size() && (bonds[b].i < p[a].i || (bonds[b].i == p[a].i && bonds[b].j < p[a].j))) ++b;
+    if (b < bonds.size() && bonds[b].i == p[a].i && bonds[b].j == p[a].j) continue;
+    p[o++] = p[a];
+  }
+  p.resize(o);
 }
 
 void World::init() {
@@ -82,7 +105,7 @@ void World::drift_eq19() {
   }
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
 void World::compute_forces() {
   Discs& d = discs;
   const std::size_t n = d.size();
@@ -118,6 +141,36 @@ void World::compute_forces() {
     d.torque[i] -= d.r[i] * c.fs;  // (15c); f_s is the same seen from j (5b is symmetric)
     d.torque[j] -= d.r[j] * c.fs;
   }
+
+  if constexpr (BONDS) {
+    // Paper 2: inside a cluster both springs act in tension and without limit, with dashpots.
+    for (Bond& b : bonds) {
+      const int i = b.i, j = b.j;
+      const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
+      const double R = std::sqrt(dx * dx + dy * dy);
+      const double nx = dx / R, ny = dy / R;
+      const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
+      const double du_n = ddx * nx + ddy * ny;                                       // (5a)
+      const double du_s = -ddx * ny + ddy * nx + b.ai * d.dphi[i] + b.aj * d.dphi[j];  // (5b)
+      const PairProps& p = pair(d.material[i], d.material[j]);
+      if constexpr (NS == NormalSpring::incremental)
+        b.en += p.kn * du_n;        // (7a), without (8): tension allowed
+      else
+        b.en = p.kn * (b.rest - R);  // the overlap option: measured from the bonded distance
+      b.es += p.ks * du_s;          // (11a), without (13): no cap
+      b.fn = b.en + p.eta_n * du_n * inv_dt;
+      b.fs = b.es + p.eta_s * du_s * inv_dt;
+      worst = std::max(worst, d.r[i] + d.r[j] - R);
+      const double fx = -b.fn * nx + b.fs * ny;
+      const double fy = -b.fn * ny - b.fs * nx;
+      d.fx[i] += fx; d.fy[i] += fy;
+      d.fx[j] -= fx; d.fy[j] -= fy;
+      d.torque[i] -= b.ai * b.fs;
+      d.torque[j] -= b.aj * b.fs;
+    }
+  }
+  if constexpr (MOVING)
+    for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
 
   // Walls and points: the same law with a fixed partner of zero radius.
   auto& wl = neighbors.walls;
@@ -156,8 +209,18 @@ void World::compute_forces() {
       if (!c.touching) { c.en = c.es = c.fn = c.fs = 0; continue; }
       const double dist = dist_scratch_[a - b];
       const double nx = c.nx, ny = c.ny;
-      const double du_n = d.dux[i] * nx + d.duy[i] * ny;                         // (5a)
-      const double du_s = -d.dux[i] * ny + d.duy[i] * nx + d.r[i] * d.dphi[i];   // (5b)
+      double du_n, du_s;
+      if constexpr (MOVING) {
+        // The wall's material point at the contact moved too: (5) with j the wall.
+        const ObstacleMotion& m = moving.motion[c.k];
+        const double ddx = d.dux[i] - (m.dux - m.dtheta * (c.py - m.pivot_y));
+        const double ddy = d.duy[i] - (m.duy + m.dtheta * (c.px - m.pivot_x));
+        du_n = ddx * nx + ddy * ny;                                      // (5a)
+        du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i];                // (5b)
+      } else {
+        du_n = d.dux[i] * nx + d.duy[i] * ny;                            // (5a)
+        du_s = -d.dux[i] * ny + d.duy[i] * nx + d.r[i] * d.dphi[i];      // (5b)
+      }
       const double overlap = d.r[i] - dist;
       worst = std::max(worst, overlap);
       const int km = c.k < n_walls ? geometry.walls[c.k].material
@@ -167,6 +230,13 @@ void World::compute_forces() {
       d.fx[i] += -c.fn * nx + c.fs * ny;  // (15a)
       d.fy[i] += -c.fn * ny - c.fs * nx;  // (15b)
       d.torque[i] -= d.r[i] * c.fs;       // (15c)
+      if constexpr (MOVING) {  // the reaction on the obstacle
+        ObstacleMotion& m = moving.motion[c.k];
+        const double wx = c.fn * nx - c.fs * ny, wy = c.fn * ny + c.fs * nx;
+        m.fx += wx;
+        m.fy += wy;
+        m.moment += (c.px - m.pivot_x) * wy - (c.py - m.pivot_y) * wx;
+      }
     }
     b = e;
   }
@@ -175,11 +245,18 @@ void World::compute_forces() {
 
 void World::select_kernel() {
   // Every option combination is its own compiled kernel (no branch per contact).
+  // Bonds and moving walls are compile-time flags too: a scene without them runs paper 1's loop.
+  const bool has_bonds = !bonds.empty(), has_moving = !moving.empty();
+#define DEM_KB(NS, NT, FC, B, M)                                                          \
+  if (has_bonds == B && has_moving == M) {                                                \
+    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC, B, M>; \
+    return;                                                                               \
+  }
 #define DEM_K(NS, NT, FC)                                                              \
   if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT && \
       options.friction_cap == FrictionCap::FC) {                                        \
-    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC>; \
-    return;                                                                             \
+    DEM_KB(NS, NT, FC, false, false) DEM_KB(NS, NT, FC, true, false)                    \
+    DEM_KB(NS, NT, FC, false, true) DEM_KB(NS, NT, FC, true, true)                      \
   }
 #define DEM_K2(NS, NT) DEM_K(NS, NT, elastic) DEM_K(NS, NT, total)
 #define DEM_K3(NS) DEM_K2(NS, elastic) DEM_K2(NS, total) DEM_K2(NS, overlap)
@@ -188,6 +265,7 @@ void World::select_kernel() {
 #undef DEM_K3
 #undef DEM_K2
 #undef DEM_K
+#undef DEM_KB
 }
 
 void World::remove_discs(const std::vector<char>& dead) {
@@ -208,6 +286,18 @@ void World::remove_discs(const std::vector<char>& dead) {
   keep(d.x); keep(d.y); keep(d.phi); keep(d.vx); keep(d.vy); keep(d.omega);
   keep(d.dux); keep(d.duy); keep(d.dphi); keep(d.fx); keep(d.fy); keep(d.torque);
   neighbors.compact(new_index);
+  if (!bonds.empty()) {  // a bond goes with either of its discs; order (i, j) is kept
+    std::size_t k = 0;
+    for (const Bond& b : bonds) {
+      if (new_index[b.i] < 0 || new_index[b.j] < 0) continue;
+      Bond q = b;
+      q.i = new_index[b.i];
+      q.j = new_index[b.j];
+      bonds[k++] = q;
+    }
+    bonds.resize(k);
+    select_kernel();
+  }
 }
 
 bool World::deactivate_wall(const std::string& name) {

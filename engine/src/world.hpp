@@ -4,9 +4,11 @@
 #include <string>
 #include <vector>
 
+#include "clusters.hpp"
 #include "discs.hpp"
 #include "geometry.hpp"
 #include "model.hpp"
+#include "moving_walls.hpp"
 #include "neighbors.hpp"
 
 namespace dem {
@@ -19,6 +21,10 @@ class World {
   int n_materials = 1;
   std::vector<PairProps> props;  // n_materials x n_materials, symmetric
   ContactOptions options;
+  // Paper 2's cluster bonds, sorted by (i, j); never in the neighbour lists. Empty: no bond code.
+  std::vector<Bond> bonds;
+  // Moving walls and plates (shear box). Empty: fixed geometry, no wall-motion code.
+  MovingWalls moving;
   Scheme scheme = Scheme::paper_eq19;
   double dt = 1e-4;         // [s]
   double gx = 0, gy = -980; // gravity [cm/s^2]
@@ -35,6 +41,8 @@ class World {
   void prepare();
   // One time step; the whole algorithm is here.
   void step();
+  // Recomputes the forces from the last increments (as the start of a step does); for tests.
+  void compute_forces_now() { (this->*force_kernel_)(); }
 
   // Removes the discs with dead[i] != 0 from every array (order kept; lists remapped).
   void remove_discs(const std::vector<char>& dead);
@@ -49,9 +57,14 @@ class World {
  private:
   using ForceKernel = void (World::*)();
   ForceKernel force_kernel_ = nullptr;
-  template <NormalSpring NS, NoTension NT, FrictionCap FC>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
   void compute_forces();
   void select_kernel();
+  void rebuild_lists();       // neighbour lists without the bonded pairs
+  void kick_walls(double h);  // plates: v += F/M h (moving_walls.cpp)
+  void drift_walls(bool eq19);  // rotating walls and plates: increments and new positions
+  bool walls_moved_far() const;  // some wall moved skin/2 since the lists were built
+  void walls_listed();        // remember the wall positions of this list build
   bool adjacent(int k1, int k2) const;  // a wall and a point at its end
   std::vector<char> touch_scratch_;   // per wall entry of one disc: touching now
   std::vector<double> dist_scratch_;  // ... and its centre distance

@@ -1,0 +1,158 @@
+"""Paper 2's simple shear test through the CLI: a small box (12 cm x 6 cm) with and without
+clusters, sheared a little; outputs, the plane stresses against the plate and walls, the
+validation of the new scene tables, and the figures. The full study is scripts/shear_study.sh."""
+import csv
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def generator():
+    spec = importlib.util.spec_from_file_location("make_shear_scenes", REPO / "scripts" / "make_shear_scenes.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def small_scene(variant, alpha=50, max_strain=0.02):
+    gen = generator()
+    gen.WIDTH, gen.HEIGHT = 12.0, 6.0
+    text = gen.scene_text(alpha, variant)
+    text = text.replace("max_strain = 0.15", f"max_strain = {max_strain}")
+    text = text.replace("snapshots = [0.0, 0.05, 0.15]", f"snapshots = [0.0, {max_strain}]")
+    return text.replace("progress = true", "progress = false")
+
+
+def test_committed_scenes_are_up_to_date():
+    assert generator().main(["--check"]) == 0
+
+
+def test_generated_arrangement_has_the_papers_angles():
+    gen = generator()
+    for alpha in gen.ALPHAS:
+        pattern, s, p, h, built, rows, xy, row_of = gen.discs(alpha)
+        assert abs(built - alpha) < 1.0
+        # diagonal neighbours one gap apart, row neighbours apart, all inside the box
+        d = 2 * gen.RADIUS + gen.GAP
+        assert math.isclose(math.hypot(p / 2, h), d, rel_tol=1e-12)
+        assert p > 2 * gen.RADIUS
+        xs = [x for x, _ in xy]
+        assert min(xs) >= gen.RADIUS and max(xs) <= gen.WIDTH - gen.RADIUS + 1e-9
+    # alpha = 58: 12 rows, hence 11 inter-row planes, as the paper's Fig. 5
+    assert gen.discs(58)[5] == 12
+    members = gen.clusters(gen.discs(58)[7])
+    assert all(len(m) == 3 for m in members)
+    assert len({i for m in members for i in m}) == 3 * len(members)
+
+
+@pytest.fixture(scope="module")
+def small_runs(tmp_path_factory, dem_binary):
+    import subprocess
+    base = tmp_path_factory.mktemp("shear")
+    runs = {}
+    for variant in ("free", "clusters"):
+        scene = base / f"{variant}.toml"
+        scene.write_text(small_scene(variant))
+        out = base / variant
+        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--no-plots", "--quiet"],
+                              capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        runs[variant] = out
+    return runs
+
+
+def read_rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def test_shear_outputs(small_runs):
+    for variant, out in small_runs.items():
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["status"] == "sheared"
+        sh = summary["shear"]
+        assert sh["planes"] == sh["rows"] - 1 >= 2
+        assert sh["strain_final"] >= 0.02 - 1e-9
+        assert sh["samples"] == len(read_rows(out / "shear_series.csv"))
+        assert (sh["bonds"] > 0) == (variant == "clusters")
+        index = json.loads((out / "snapshots" / "index.json").read_text())["snapshots"]
+        assert [round(s["strain_wanted"], 6) for s in index] == [0.0, 0.02]
+        for s in index:
+            assert (out / "snapshots" / s["contacts"]).is_file()
+            assert any(w["name"] == "plate" for w in s["walls"])
+        kinds = {r["kind"] for r in read_rows(out / "contacts.csv")}
+        assert ("db" in kinds) == (variant == "clusters")
+
+
+def test_plane_stresses_match_plate_and_walls(small_runs):
+    """Each plane's sigma and tau equal the load of the part above (weight, plate, walls) up to
+    its inertia; exactly (to roundoff) with the inertia. At the start sigma exceeds the plate
+    load/b by at most the discs' weight/b."""
+    for out in small_runs.values():
+        summary = json.loads((out / "summary.json").read_text())
+        sh = summary["shear"]
+        for r in read_rows(out / "shear_planes.csv"):
+            s, t = float(r["sigma"]), float(r["tau"])
+            sc, tc = float(r["sigma_check"]), float(r["tau_check"])
+            si, ti = float(r["sigma_inertia"]), float(r["tau_inertia"])
+            assert s == pytest.approx(sc + si, rel=1e-9)
+            assert t == pytest.approx(tc + ti, abs=1e-9 * abs(s))
+        series = read_rows(out / "shear_series.csv")
+        first = series[0]
+        plate_load = sh["plate_weight"] / sh["width"]
+        assert float(first["sigma_plate"]) == pytest.approx(plate_load, rel=1e-3)  # compressed at rest
+        assert plate_load < float(first["sigma"]) < plate_load + sh["discs_weight"] / sh["width"]
+        assert abs(float(first["tau"])) < 1e-2 * float(first["sigma"])
+        assert sh["check_static_max_relative"] < 0.1
+
+
+def test_bad_tables_are_refused(tmp_path, run_dem):
+    base = small_scene("clusters")
+    cases = [
+        (base.replace("plate_volume = 1500.0", "plate_volume = 1500.0\nplate_colour = 1"), ["shear_box.plate_colour", "unknown key"]),
+        (base.replace("rate = 0.05", "rate = -0.05"), ["shear.rate", "> 0"]),
+        (base.replace('bonds = "all"', 'bonds = "some"'), ["clusters.bonds", "one of"]),
+        (base.replace("members = [\n", "members = [\n  [0, 9999],\n"), ["clusters.members[0]", "9999", "out of range"]),
+        (base.replace("members = [\n", "members = [\n  [0, 1],\n"), ["disc 0", "already in"]),
+        (base.replace("members = [\n", "members = [\n  [3],\n"), ["members[0]", "2 to 1000"]),
+        (base.replace("[shear_box]", "[shear_boxx]"), ["[shear] needs a [shear_box]"]),
+        (base + "\n[shear_boxx]\n", ["shear_boxx", "unknown key"]),
+    ]
+    for k, (text, fragments) in enumerate(cases):
+        scene = tmp_path / f"bad{k}.toml"
+        scene.write_text(text)
+        proc = run_dem("run", scene, "--out", tmp_path / f"o{k}")
+        assert proc.returncode == 2, proc.stderr
+        for f in fragments:
+            assert f in proc.stderr, (f, proc.stderr)
+        assert not (tmp_path / f"o{k}").exists()
+
+
+def test_touching_clusters_must_hold_together(tmp_path, run_dem):
+    import re
+    # discs 0 and 1 are row neighbours with a gap: not connected by touching pairs
+    text = re.sub(r"members = \[\n.*?\n\]\n", "members = [[0, 1]]\n", small_scene("touching"), flags=re.S)
+    scene = tmp_path / "t.toml"
+    scene.write_text(text)
+    proc = run_dem("run", scene, "--out", tmp_path / "o")
+    assert proc.returncode == 2, proc.stderr
+    assert "cluster 0" in proc.stderr and "not connected" in proc.stderr, proc.stderr
+
+
+def test_shear_figures(small_runs, tmp_path):
+    from compare import shear_figures as sf
+    series = sf.read_series(str(small_runs["clusters"] / "shear_series.csv"))
+    raw, at, windowed = sf.peak(series)
+    assert np.isfinite(raw) and raw >= windowed
+    png = sf.plot_ratio([("50", "free", sf.read_series(str(small_runs["free"] / "shear_series.csv"))),
+                         ("50", "clusters", series)], str(tmp_path / "fig7.png"))
+    assert Path(png).stat().st_size > 10000
+    png = sf.plot_networks([(str(small_runs["clusters"]), 0, "compressed"), (str(small_runs["clusters"]), 1, "sheared")],
+                           str(tmp_path / "net.png"))
+    assert Path(png).stat().st_size > 10000
