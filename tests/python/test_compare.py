@@ -209,3 +209,13 @@ def test_calibration_measures_from_an_analytic_end_state():
     x0, x1 = -1.0, 1.0 + gap
     m = cal.measure(case, geo, [[x0, 0, 1, v0, 0, 0], [x1, 0, 1, v1, 0, 0]])
     assert m["e"] == pytest.approx(e, rel=1e-12) and m["t_c"] == pytest.approx(t_c, rel=1e-9)
+
+
+def test_profile_comparison_tells_an_edge_contact_from_a_real_difference():
+    a = {"gate": {"normal": [0.0, 5.0, 0.0, 1.0]}, "left": {"normal": [1.0, 2.0, 3.0]}}
+    moved = {"gate": {"normal": [0.0, 0.0, 5.0, 1.0]}, "left": {"normal": [1.0, 2.0, 3.0]}}
+    worst, flips = study.cumulative_diff(a, moved)
+    assert flips == 1 and worst == 0.0
+    wrong = {"gate": {"normal": [0.0, 5.0, 0.0, 1.0]}, "left": {"normal": [3.0, 2.0, 1.0]}}
+    worst, flips = study.cumulative_diff(a, wrong)
+    assert flips == 0 and worst == pytest.approx(2.0 / 6.0)
