@@ -523,7 +523,10 @@ void check_initial_discs(const SceneSpec& s) {
   }
   const double x0 = g.min_x(), x1 = g.max_x(), y0 = g.min_y(), y1 = g.max_y();
   for (int i = 0; i < static_cast<int>(d.size()); ++i) {
-    if (d.x[i] < x0 || d.x[i] > x1 || d.y[i] < y0 || d.y[i] > std::max(y1, y0))
+    // Only along a direction the walls span: a lone floor does not bound the height.
+    const bool out_x = x1 > x0 && (d.x[i] < x0 || d.x[i] > x1);
+    const bool out_y = y1 > y0 && (d.y[i] < y0 || d.y[i] > y1);
+    if (out_x || out_y)
       throw SceneError(s.file + ": fill: " + where(i) + " is outside the walls (box [" + show(x0) + ", " + show(x1) +
                        "] x [" + show(y0) + ", " + show(y1) + "])");
   }
