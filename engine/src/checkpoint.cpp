@@ -56,7 +56,7 @@ std::uint64_t file_hash(const std::string& path) {
 
 CheckpointKey checkpoint_key(const std::string& scene_file, const SceneOverrides& ov) {
   CheckpointKey k;
-  k.engine = std::string("dem ") + DEM_VERSION;
+  k.engine = std::string("dem ") + DEM_VERSION + " (" + DEM_BUILD_ID + ")";
   k.scene_hash = file_hash(scene_file);
   std::ostringstream os;
   os << "dt=" << (ov.dt > 0 ? fmt17(ov.dt) : "") << ";scheme=" << ov.scheme

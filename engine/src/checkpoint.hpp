@@ -17,7 +17,7 @@ namespace dem {
 
 // What a checkpoint must match to be resumed.
 struct CheckpointKey {
-  std::string engine;         // "dem 0.1.0"
+  std::string engine;         // "dem 0.1.0 (GNU 12.2.0 Release)": version and build
   std::uint64_t scene_hash;   // FNV-1a 64 of the scene file's bytes
   std::string overrides;      // the command-line options that change the run (--dt, ...)
 };

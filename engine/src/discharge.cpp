@@ -183,6 +183,7 @@ void DischargeState::save(BinaryOut& o) const {
   o.vec(sample_t);
   o.put<std::uint64_t>(next_snap);
   o.put(last_removal); o.put(removed_mass); o.put(moved_fraction);
+  o.put(wall_seconds);
 }
 
 void DischargeState::load(BinaryIn& r) {
@@ -212,6 +213,7 @@ void DischargeState::load(BinaryIn& r) {
   r.vec(sample_t);
   next_snap = r.get<std::uint64_t>();
   last_removal = r.get<double>(); removed_mass = r.get<double>(); moved_fraction = r.get<double>();
+  wall_seconds = r.get<double>();
   if (static_walls.size() != bin_series.size() || static_walls.size() != total_series.size())
     r.fail("corrupt discharge state (walls)");
   for (std::size_t k = 0; k < static_walls.size(); ++k)
@@ -428,8 +430,12 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
       st.status = "interrupted";
       break;
     }
-    if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->discharge_checkpoint)
+    if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->discharge_checkpoint) {
+      const double before = st.wall_seconds;
+      st.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ctl->discharge_checkpoint(st);
+      st.wall_seconds = before;
+    }
   }
   if (progress && last_print != t0) std::fprintf(stderr, "\n");
   res.status = st.status;
@@ -440,7 +446,8 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   res.jam_at = st.jam_at;
   res.jams = st.jams;
   res.duration = w.time - st.t_open;
-  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  res.wall_seconds = st.wall_seconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.wall_seconds = res.wall_seconds;  // a final checkpoint (interrupted) counts this session
 
   write_file_atomic(out + "/wall_series.csv", st.series.str());
   write_file_atomic(out + "/wall_totals_series.csv", st.totals.str());

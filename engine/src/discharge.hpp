@@ -67,6 +67,7 @@ struct DischargeState {
   std::vector<double> sample_t;
   std::size_t next_snap = 0;
   double last_removal = 0, removed_mass = 0, moved_fraction = 0;
+  double wall_seconds = 0;   // [s] of computing in earlier sessions (before the last checkpoint)
 
   void save(BinaryOut& o) const;
   void load(BinaryIn& r);  // an "interrupted" status is read as going on
