@@ -151,24 +151,32 @@ def draw_snapshot(ax, entry, contacts, discs, f_ref, linewidth=1.0):
 
 
 def plot_networks(items, out_png, ncols=2):
-    """items: list of (run_dir, snapshot index, title). One panel each, same force scale."""
+    """items: list of (run_dir, snapshot index, title). One panel each. Compressed states (strain
+    0) share one force scale (one disc diameter = the plate's weight shared by one row); sheared
+    states share another (one diameter = a quarter of the largest force among them), so that
+    panels of one kind compare directly, as the paper's Figs. 5 and 6."""
     n = len(items)
     ncols = min(ncols, n)
     nrows = int(math.ceil(n / ncols))
+    loaded = [load_snapshot(run_dir, k) for run_dir, k, _ in items]
+    f0 = force_scale(loaded[0][3])
+    biggest = 0.0
+    for entry, contacts, _, _ in loaded:
+        if entry["strain"] > 1e-9 and len(contacts["e_n"]):
+            biggest = max(biggest, float(np.max(np.hypot(contacts["e_n"], contacts["e_s"]))))
+    f1 = biggest / 4 if biggest > 0 else f0
     fig, axes = plt.subplots(nrows, ncols, figsize=(6.2 * ncols, 3.9 * nrows), squeeze=False)
-    f_ref = None
-    for ax, (run_dir, k, title) in zip(axes.flat, items):
-        entry, contacts, discs, summary = load_snapshot(run_dir, k)
-        if f_ref is None:
-            f_ref = force_scale(summary)
+    for ax, (run_dir, k, title), (entry, contacts, discs, summary) in zip(axes.flat, items, loaded):
+        f_ref = f1 if entry["strain"] > 1e-9 else f0
         draw_snapshot(ax, entry, contacts, discs, f_ref, linewidth=0.8)
-        ax.set_title(f"{title}\nshear strain {100 * entry['strain']:.1f} %", fontsize=9)
+        ax.set_title(f"{title}\nshear strain {100 * entry['strain']:.1f} %; one diameter = {f_ref:.3g} dyn/cm",
+                     fontsize=9)
         ax.set_xticks([])
         ax.set_yticks([])
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
-    fig.suptitle(f"Contact forces e_n n + e_s t: one disc diameter = {f_ref:.3g} dyn/cm (plate weight / (b / 2r)); "
-                 "blue: bond in tension; green: cluster bonds", fontsize=9)
+    fig.suptitle("Contact forces e_n n + e_s t (segments centred on the contact points); blue: bonds in tension; "
+                 "green: cluster bonds", fontsize=9)
     fig.tight_layout()
     return _save(fig, out_png)
 

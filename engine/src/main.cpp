@@ -210,6 +210,10 @@ int cmd_run(int argc, char** argv) {
   }
   if (checkpoint_every < 0) checkpoint_every = spec.checkpoint_every;
   if (!(checkpoint_every / world.dt <= kMaxSteps)) return bad("--checkpoint-every: more than 1e12 steps of dt");
+  if ((!save_to.empty() || !spec.start_from.empty() || resume || checkpoint_every > 0) &&
+      (!world.bonds.empty() || !world.moving.empty()))
+    return bad("--save-state / --from / checkpoints / --resume: state files do not hold cluster bonds or moving "
+               "walls yet (shear-box and cluster scenes run in one go)");
   if (resume) {
     // The checkpoint replaces the fill (or start.from): the run goes on from where it was.
     const std::string path = checkpoint_path(out);
@@ -221,8 +225,6 @@ int cmd_run(int argc, char** argv) {
       return bad(std::string("--resume: ") + e.what());
     }
   }
-  if ((!save_to.empty() || !spec.start_from.empty()) && (!world.bonds.empty() || !world.moving.empty()))
-    return bad("--save-state / --from: state files do not hold cluster bonds or moving walls yet");
   // Only a valid scene creates its output directory.
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
@@ -284,7 +286,7 @@ int cmd_run(int argc, char** argv) {
                   dr.metrics["pattern"].get<std::string>().c_str(), dr.metrics["peak_ratio_bottom"].get<double>(),
                   dr.metrics["peak_ratio_side"].get<double>());
   }
-  if (spec.shear_box.shear && res.status != RunStatus::unstable) {  // paper 2's simple shear
+  if (spec.shear_box.shear && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {  // paper 2
     if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
     const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet);
     res.wall_seconds += sr.wall_seconds;

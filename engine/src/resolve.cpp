@@ -57,6 +57,19 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
                       {"series_interval", d.series_interval}, {"peak_window", d.peak_window},
                       {"snapshots", d.snapshots}};
   }
+  if (s.shear_box.enabled) {  // paper 2 (docs/scene.md): the box's walls and plate are in "walls"
+    const ShearBoxSpec& b = s.shear_box;
+    j["shear_box"] = {{"width", b.width}, {"height", b.height}, {"wall_length", b.wall_length},
+                      {"plate_material", s.material_names[b.plate_material]}, {"plate_volume", b.plate_volume},
+                      {"plate_density", b.plate_density}, {"plate_mass", b.plate_mass}, {"plate_y", b.plate_y},
+                      {"plate_horizontal", b.plate_follows_walls ? "with_walls" : "free"}};
+    if (b.shear)
+      j["shear"] = {{"rate", b.rate}, {"max_strain", b.max_strain}, {"sample_strain", b.sample_strain},
+                    {"snapshots", b.snapshots}};
+  }
+  if (s.clusters.enabled)
+    j["clusters"] = {{"bonds", to_string(s.clusters.bonds)}, {"touch_tolerance", s.clusters.touch_tolerance},
+                     {"members", s.clusters.members}};
   return j;
 }
 

@@ -202,6 +202,15 @@ void finish_shear_tables(SceneSpec& s) {
   }
   ShearBoxSpec& b = s.shear_box;
   if (!b.enabled) return;
+  if (b.shear) {  // step counts are integers; a wall must not turn far in one step
+    const double steps = std::atan(b.max_strain) / (b.rate * s.dt);
+    if (!(steps <= 1e12))
+      throw SceneError(s.file + ": shear.rate = " + show(b.rate) + ": the shear takes " + show(steps) +
+                       " steps of dt, more than the limit of 1e12 (docs/scene.md, Limits)");
+    if (!(b.rate * s.dt <= 1e-3))
+      throw SceneError(s.file + ": shear.rate = " + show(b.rate) + ": turns the walls by " + show(b.rate * s.dt) +
+                       " rad per step of dt = " + show(s.dt) + " s, more than 1e-3");
+  }
   double top = -1e300, rho = 0;
   for (const DiscInit& d : s.discs) {
     top = std::max(top, d.y + d.r);

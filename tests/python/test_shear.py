@@ -156,3 +156,26 @@ def test_shear_figures(small_runs, tmp_path):
     png = sf.plot_networks([(str(small_runs["clusters"]), 0, "compressed"), (str(small_runs["clusters"]), 1, "sheared")],
                            str(tmp_path / "net.png"))
     assert Path(png).stat().st_size > 10000
+
+
+def test_yade_runs_the_same_small_box_with_unbreakable_bonds(tmp_path, dem_binary):
+    """YADE (real binary) on the small clustered box: its bonds never break, the compressed
+    state carries the same plate load as the engine's, and the files have the engine's columns."""
+    import shutil
+    if shutil.which("yade") is None:
+        pytest.skip("yade is not installed")
+    from compare import shear_yade
+    scene = tmp_path / "clusters.toml"
+    scene.write_text(small_scene("clusters", max_strain=0.005))
+    summary = shear_yade.run(scene, tmp_path / "yade", "bonds", 5e-5, dem_binary, timeout=300)
+    assert summary["status"] == "sheared" and summary["rest"]["reached"]
+    sh = summary["shear"]
+    case = json.loads((tmp_path / "yade" / "yade_case.json").read_text())
+    assert sh["bonds"] == len(case["clusters"]["bonds"]) > 0
+    rows = read_rows(tmp_path / "yade" / "shear_series.csv")
+    first = rows[0]
+    plate_load = sh["plate_weight"] / sh["width"]
+    assert float(first["sigma_plate"]) == pytest.approx(plate_load, rel=2e-2)
+    assert plate_load < float(first["sigma"]) < plate_load + sh["discs_weight"] / sh["width"]
+    kinds = [r["kind"] for r in read_rows(tmp_path / "yade" / "snapshots" / "contacts_01.csv")]
+    assert kinds.count("db") == sh["bonds"]  # every bond still there after the shear
