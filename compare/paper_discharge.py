@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from compare import figures
+from compare.common import write_text_atomic
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -39,7 +40,7 @@ def scene_with(arr, contact, folder):
     for key, value in contact.items():
         text = re.sub(rf'(?m)^{key} = "[a-z]+"', f'{key} = "{value}"', text, count=1)
     path = folder / f"discharge_{arr}_{'_'.join(contact.values()) or 'paper'}.toml"
-    path.write_text(text)
+    write_text_atomic(path, text)
     return path
 
 
@@ -81,7 +82,7 @@ def main(argv=None):
         e = rec.get("ensemble", {})
         print(f"{tag:34s} exit {proc.returncode}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
               f"jam {e.get('jam_fraction', {}).get('value', '-')}  pattern {e.get('pattern', '-')}", flush=True)
-    (out / "discharge.json").write_text(json.dumps(results, indent=1) + "\n")
+    write_text_atomic(out / "discharge.json", json.dumps(results, indent=1) + "\n")
 
     lines = ["# The paper's silo, discharge (Kiyama & Fujimura, section 5(2))", "",
              f"Ensembles of {args.members} members (seed {args.seed}; every initial centre moved by a uniform",
@@ -108,7 +109,7 @@ def main(argv=None):
               "## Pictures (first member of each configuration)", ""]
     for f in sorted(out.glob("frames_*.png")) + sorted(out.glob("ratios_*.png")) + sorted(out.glob("flow_*.png")):
         lines.append(f"![{f.stem}]({f.name})")
-    (out / "report.md").write_text("\n".join(lines) + "\n")
+    write_text_atomic(out / "report.md", "\n".join(lines) + "\n")
     print(f"report: {out / 'report.md'}")
     return 0
 

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from compare import figures
+from compare.common import write_text_atomic
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -131,7 +132,7 @@ def write_report(out_root, records, dem):
               "- Side-wall normal force largest for 11/12 and falling as s grows (table above).",
               "- P_y grows with depth and levels off, dropping near the bottom; small negative wall friction near",
               "  the bottom corners (Fig. 7 analogue, right panel).", ""]
-    (out_root / "report.md").write_text("\n".join(lines) + "\n")
+    write_text_atomic(out_root / "report.md", "\n".join(lines) + "\n")
 
 
 def main(argv=None):
@@ -154,7 +155,7 @@ def main(argv=None):
             print(f"[{k:2d}/{len(cases)}] {r['scheme']:16s} dt={r['dt']:<6g} {r['arrangement']:6s} {verdict(r):20s}"
                   + (f" side {r['side_mean']:.1f}" if "side_mean" in r else ""), flush=True)
     records.sort(key=lambda r: (SCHEMES.index(r["scheme"]), r["dt"], r["s"]))
-    (out_root / "study.json").write_text(json.dumps(records, indent=1) + "\n")
+    write_text_atomic(out_root / "study.json", json.dumps(records, indent=1) + "\n")
     for scheme, dt in (PAPER, REFERENCE):
         tag = f"{scheme}_dt{dt:g}"
         dirs = [out_root / r["dir"] for r in records if (r["scheme"], r["dt"]) == (scheme, dt) and r["status"] != "unstable"
