@@ -113,7 +113,7 @@ def make_case(resolved, out_dir, clusters="scene", dt=5e-5):
 def run(scene, out_dir, clusters="scene", dt=5e-5, dem=None, timeout=1800):
     """Runs YADE on the scene; returns summary.json's dict (raises SystemExit on failure)."""
     dem = dem or os.environ.get("DEM_BINARY", REPO / "build" / "dem")
-    out = Path(out_dir)
+    out = Path(out_dir).resolve()  # yade runs in it: every path absolute
     out.mkdir(parents=True, exist_ok=True)
     case = make_case(resolve(scene, dem), out, clusters, dt)
     if case["shear"].get("rate", 0) <= 0:
