@@ -67,6 +67,14 @@ def disc_material(resolved: dict) -> str:
     return resolved["materials"][mats.pop()]["name"]
 
 
+def kinetic_energy(resolved: dict, discs: np.ndarray) -> float:
+    """Translational + rotational energy of discs rows (x, y, r, vx, vy, omega), per 1 cm."""
+    d = np.asarray(discs, float).reshape(-1, 6)
+    rho = {m["name"]: m["density"] for m in resolved["materials"]}[disc_material(resolved)]
+    m = rho * math.pi * d[:, 2] ** 2
+    return float(np.sum(0.5 * m * (d[:, 3] ** 2 + d[:, 4] ** 2) + 0.25 * m * d[:, 2] ** 2 * d[:, 5] ** 2))
+
+
 def inward_normal(wall: dict, centre: tuple[float, float]) -> np.ndarray:
     """Unit normal of a wall pointing to the side where ``centre`` (the discs) lies."""
     a, b = np.array(wall["from"], float), np.array(wall["to"], float)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import Case, CaseError, Result, dem_binary, disc_material, failed, write_text_atomic
+from .common import Case, CaseError, Result, dem_binary, disc_material, failed, kinetic_energy, write_text_atomic
 
 NAME = "native"
 
@@ -153,9 +153,7 @@ def read(case: Case, out_dir: Path) -> Result:
     d = discs[order]
     res.discs_end = np.column_stack([d["x"], d["y"], d["r"], d["vx"], d["vy"], d["omega"]]).tolist()
     res.n_final = len(d)
-    rho = {m["name"]: m["density"] for m in case.resolved["materials"]}[disc_material(case.resolved)]
-    m = rho * math.pi * d["r"] ** 2
-    res.kinetic_energy_end = float(np.sum(0.5 * m * (d["vx"] ** 2 + d["vy"] ** 2) + 0.25 * m * d["r"] ** 2 * d["omega"] ** 2))
+    res.kinetic_energy_end = kinetic_energy(case.resolved, np.array(res.discs_end, float))
     status = summary.get("status")
     if status == "unstable":
         return failed(NAME, case.name, f"unstable: {summary.get('reason', '')}", out_dir=str(out_dir))

@@ -15,7 +15,6 @@ discs, missing output) makes every metric that needs it fail, with the code's re
 """
 from __future__ import annotations
 
-import copy
 import importlib
 import json
 import math

@@ -27,22 +27,6 @@ std::string hex(std::uint64_t v) {
   return buf;
 }
 
-void write_discs(BinaryOut& o, const Discs& d) {
-  o.vec(d.r); o.vec(d.mass); o.vec(d.inv_mass); o.vec(d.inv_inertia); o.vec(d.material); o.vec(d.id);
-  o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
-  o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
-}
-
-void read_discs(BinaryIn& r, Discs& d) {
-  r.vec(d.r); r.vec(d.mass); r.vec(d.inv_mass); r.vec(d.inv_inertia); r.vec(d.material); r.vec(d.id);
-  r.vec(d.x); r.vec(d.y); r.vec(d.phi); r.vec(d.vx); r.vec(d.vy); r.vec(d.omega);
-  r.vec(d.dux); r.vec(d.duy); r.vec(d.dphi); r.vec(d.fx); r.vec(d.fy); r.vec(d.torque);
-  const std::size_t n = d.r.size();
-  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.dux, &d.duy,
-                  &d.dphi, &d.fx, &d.fy, &d.torque})
-    if (v->size() != n) r.fail("corrupt checkpoint (arrays of different lengths)");
-  if (d.material.size() != n || d.id.size() != n) r.fail("corrupt checkpoint (arrays of different lengths)");
-}
 }  // namespace
 
 std::uint64_t file_hash(const std::string& path) {

@@ -30,15 +30,29 @@ std::vector<WallContact> zero_padded(const std::vector<WallContact>& v) {
 }
 }  // namespace
 
+void write_discs(BinaryOut& o, const Discs& d) {
+  o.vec(d.r); o.vec(d.mass); o.vec(d.inv_mass); o.vec(d.inv_inertia); o.vec(d.material); o.vec(d.id);
+  o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
+  o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
+}
+
+void read_discs(BinaryIn& r, Discs& d) {
+  r.vec(d.r); r.vec(d.mass); r.vec(d.inv_mass); r.vec(d.inv_inertia); r.vec(d.material); r.vec(d.id);
+  r.vec(d.x); r.vec(d.y); r.vec(d.phi); r.vec(d.vx); r.vec(d.vy); r.vec(d.omega);
+  r.vec(d.dux); r.vec(d.duy); r.vec(d.dphi); r.vec(d.fx); r.vec(d.fy); r.vec(d.torque);
+  const std::size_t n = d.r.size();
+  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.dux, &d.duy,
+                  &d.dphi, &d.fx, &d.fy, &d.torque})
+    if (v->size() != n) r.fail("corrupt file (arrays of different lengths)");
+  if (d.material.size() != n || d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
+}
+
 void write_world(BinaryOut& o, const World& w) {
   o.put(w.time);
   o.put(w.steps);
   o.put(w.dt);
   o.put<std::int32_t>(static_cast<std::int32_t>(w.scheme));
-  const Discs& d = w.discs;
-  o.vec(d.r); o.vec(d.mass); o.vec(d.inv_mass); o.vec(d.inv_inertia); o.vec(d.material); o.vec(d.id);
-  o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
-  o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
+  write_discs(o, w.discs);
   std::vector<char> active;
   for (const Wall& wl : w.geometry.walls) active.push_back(wl.active ? 1 : 0);
   o.vec(active);
@@ -54,14 +68,8 @@ void read_world(BinaryIn& r, World& w) {
   if (dt != w.dt) r.fail("saved with dt = " + fmt17(dt) + ", the scene has " + fmt17(w.dt));
   if (scheme != static_cast<std::int32_t>(w.scheme)) r.fail("saved with another integration scheme");
   Discs& d = w.discs;
-  r.vec(d.r); r.vec(d.mass); r.vec(d.inv_mass); r.vec(d.inv_inertia); r.vec(d.material); r.vec(d.id);
-  r.vec(d.x); r.vec(d.y); r.vec(d.phi); r.vec(d.vx); r.vec(d.vy); r.vec(d.omega);
-  r.vec(d.dux); r.vec(d.duy); r.vec(d.dphi); r.vec(d.fx); r.vec(d.fy); r.vec(d.torque);
+  read_discs(r, d);
   const std::size_t n = d.r.size();
-  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.dux, &d.duy,
-                  &d.dphi, &d.fx, &d.fy, &d.torque})
-    if (v->size() != n) r.fail("corrupt file (arrays of different lengths)");
-  if (d.material.size() != n || d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
   for (int m : d.material)
     if (m < 0 || m >= w.n_materials) r.fail("a disc material does not exist in this scene");
   std::vector<char> active;

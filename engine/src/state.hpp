@@ -63,6 +63,9 @@ struct BinaryIn {
 // The world's state as in a state file, without the header: time, steps, dt, scheme, discs,
 // wall flags, contact lists with their history.
 void write_world(BinaryOut& o, const World& w);
+// Every per-disc array (read checks they have one length).
+void write_discs(BinaryOut& o, const Discs& d);
+void read_discs(BinaryIn& r, Discs& d);
 // Reads it into a world built from the same scene and checks that it fits; the caller then
 // calls w.prepare() (state files) or restores the lists exactly (checkpoints).
 void read_world(BinaryIn& r, World& w);
