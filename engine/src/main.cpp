@@ -44,6 +44,8 @@ const char* kRunHelp =
     "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
     "  --force-dt      run even if dt is above the computed stability bound\n"
+    "  --threads N     threads of the force and integration loops (integrator.threads, default 1);\n"
+    "                  a given N always gives the same bits; N = 1 is the serial loop\n"
     "  --from STATE    start from a saved state (overrides start.from; skips the fill)\n"
     "  --save-state F  save the final state (positions, velocities, forces, contact history)\n"
     "  --checkpoint-every S  write DIR/checkpoint.dem every S simulated seconds (overrides\n"
@@ -92,8 +94,8 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
   std::printf("  fill: %s\n", s.fill_summary.c_str());
   std::printf("  N = %zu discs, %zu walls, %zu points; gravity (%g, %g) cm/s^2\n", w.discs.size(),
               w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy);
-  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s\n", to_string(w.scheme), w.dt,
-              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "");
+  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d\n", to_string(w.scheme), w.dt,
+              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
   std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s\n", to_string(w.options.normal_spring),
               to_string(w.options.no_tension), to_string(w.options.friction_cap));
   std::printf("  %-14s %9s %9s %7s %9s %6s %7s | dt bounds [s]: %-9s %-9s %-9s %-9s %-9s\n", "pair", "m*", "omega0",
@@ -161,6 +163,12 @@ int cmd_run(int argc, char** argv) {
       ov.scheme = v;
     } else if (k == "--force-dt") {
       ov.force_dt = true;
+    } else if (k == "--threads") {
+      const char* v = value();
+      double x = 0;
+      if (!v || !number_arg(v, x) || !(x >= 1 && x <= kMaxThreads && x == std::floor(x)))
+        return bad("--threads needs an integer in [1, " + std::to_string(kMaxThreads) + "]");
+      ov.threads = static_cast<int>(x);
     } else if (k == "--quiet") {
       quiet = true;
     } else if (k == "--no-plots") {

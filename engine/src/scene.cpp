@@ -589,6 +589,9 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     s.scheme = parse_scheme(t.choice("scheme", {"paper_eq18", "paper_eq19", "velocity_verlet"}), ok);
     s.dt = t.positive("dt");
     s.force_dt = t.boolean("force_dt", false);
+    const long th = t.integer("threads", 1L);
+    if (th < 1 || th > kMaxThreads) t.fail("threads", std::to_string(th), "must be an integer in [1, " + std::to_string(kMaxThreads) + "]");
+    s.threads = static_cast<int>(th);
     t.finish();
   }
   if (const toml::table* ct = root.table("contact", false)) {
@@ -764,6 +767,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   }
   if (ov.end_time > 0) s.end_time = ov.end_time;
   if (ov.force_dt) s.force_dt = true;
+  if (ov.threads > 0) s.threads = ov.threads;
   if (!ov.from.empty()) s.start_from = ov.from;
   // Step counts are integers: a time that is too many steps of dt is refused.
   auto steps_limit = [&](const std::string& field, double time) {
@@ -793,6 +797,7 @@ void build_world(const SceneSpec& s, World& w) {
   w.options = s.contact;
   w.scheme = s.scheme;
   w.dt = s.dt;
+  w.threads = s.threads;
   w.gx = s.gx;
   w.gy = s.gy;
   w.geometry = s.geometry;

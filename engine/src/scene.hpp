@@ -23,6 +23,7 @@ struct SceneError : std::runtime_error {
 // refused with a message, never allowed to exhaust memory or time.
 constexpr long kMaxDiscs = 50'000'000;        // discs in a fill
 constexpr double kBytesPerDisc = 1024;        // memory estimate per disc (world, lists, outputs)
+constexpr long kMaxThreads = 256;             // integrator.threads, --threads
 constexpr long kMaxMaterials = 1000;          // [materials] (pair tables are n^2)
 constexpr double kMaxCoordinate = 1e15;       // |coordinates|, radii, silo sizes (squares stay finite)
 constexpr double kMaxSteps = 1e12;            // end.time / dt and discharge.time / dt
@@ -56,6 +57,7 @@ struct SceneSpec {
   Scheme scheme = Scheme::paper_eq19;
   double dt = 0;                   // [s]
   bool force_dt = false;
+  int threads = 1;                 // [integrator] threads of the force and integration loops
   ContactOptions contact;
   std::vector<std::string> material_names;
   std::vector<double> density;     // [g/cm^3]; 0 for obstacle-only materials
@@ -89,6 +91,7 @@ struct SceneOverrides {
   std::string scheme;         // "": none
   double end_time = 0;        // 0: none
   bool force_dt = false;
+  int threads = 0;            // 0: none
   std::string from;           // "": none; a state file to start from
   long max_discs = 0;         // 0: kMaxDiscs; lower for fuzzing (engine/fuzz)
 };

@@ -4,8 +4,13 @@
 #include <cmath>
 
 #include "contact_law.hpp"
+#include "parallel.hpp"
 
 namespace dem {
+
+int World::threads_for(int n) const {
+  return std::max(1, std::min(threads, n / kMinDiscsPerThread));
+}
 
 void World::step() {
   const bool walls_move = !moving.empty();  // one test per step, none per contact
@@ -43,8 +48,10 @@ bool World::adjacent(int k1, int k2) const {
 void World::prepare() {
   select_kernel();
   geometry.link_points();
-  touch_scratch_.assign(geometry.obstacle_count() + 1, 0);
-  dist_scratch_.assign(geometry.obstacle_count() + 1, 0.0);
+  const int slots = std::max(1, threads);
+  touch_scratch_.assign(slots, std::vector<char>(geometry.obstacle_count() + 1, 0));
+  dist_scratch_.assign(slots, std::vector<double>(geometry.obstacle_count() + 1, 0.0));
+  deferred_.assign(slots, {});
   if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
   rebuild_lists();  // keeps the history already in the lists
 }
@@ -69,10 +76,12 @@ void World::init() {
   (this->*force_kernel_)();  // forces at the start (Verlet's first half kick uses them)
 }
 
+// Integration loops: each disc on its own, so any thread count gives the same bits.
 void World::kick(double h) {
   Discs& d = discs;
-  const std::size_t n = d.size();
-  for (std::size_t i = 0; i < n; ++i) {  // (16), (17)
+  const long n = static_cast<long>(d.size());
+#pragma omp parallel for schedule(static) num_threads(threads_for(n)) if (threads_for(n) > 1)
+  for (long i = 0; i < n; ++i) {  // (16), (17)
     d.vx[i] += d.fx[i] * d.inv_mass[i] * h;
     d.vy[i] += d.fy[i] * d.inv_mass[i] * h;
     d.omega[i] += d.torque[i] * d.inv_inertia[i] * h;
@@ -81,8 +90,9 @@ void World::kick(double h) {
 
 void World::drift_eq18() {
   Discs& d = discs;
-  const std::size_t n = d.size();
-  for (std::size_t i = 0; i < n; ++i) {  // (18)
+  const long n = static_cast<long>(d.size());
+#pragma omp parallel for schedule(static) num_threads(threads_for(n)) if (threads_for(n) > 1)
+  for (long i = 0; i < n; ++i) {  // (18)
     d.dux[i] = d.vx[i] * dt;
     d.duy[i] = d.vy[i] * dt;
     d.dphi[i] = d.omega[i] * dt;
@@ -94,8 +104,9 @@ void World::drift_eq18() {
 
 void World::drift_eq19() {
   Discs& d = discs;
-  const std::size_t n = d.size();
-  for (std::size_t i = 0; i < n; ++i) {  // (19): the mean of the last increment and v dt
+  const long n = static_cast<long>(d.size());
+#pragma omp parallel for schedule(static) num_threads(threads_for(n)) if (threads_for(n) > 1)
+  for (long i = 0; i < n; ++i) {  // (19): the mean of the last increment and v dt
     d.dux[i] = 0.5 * (d.dux[i] + d.vx[i] * dt);
     d.duy[i] = 0.5 * (d.duy[i] + d.vy[i] * dt);
     d.dphi[i] = 0.5 * (d.dphi[i] + d.omega[i] * dt);
@@ -105,19 +116,27 @@ void World::drift_eq19() {
   }
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
-void World::compute_forces() {
+// Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
+void World::start_resultants(int i0, int i1) {
   Discs& d = discs;
-  const std::size_t n = d.size();
-  const double inv_dt = 1.0 / dt;
-  for (std::size_t i = 0; i < n; ++i) {  // gravity, the m_i g of (15a)
+  for (int i = i0; i < i1; ++i) {
     d.fx[i] = d.mass[i] * gx;
     d.fy[i] = d.mass[i] * gy;
     d.torque[i] = 0;
   }
-  double worst = 0;
+}
 
-  for (PairContact& c : neighbors.pairs) {
+// Disc-disc contacts [p0, p1) of the sorted pair list. The i side of each pair is added at once;
+// the j side too when j < own_end, otherwise (j belongs to another thread's discs) it is kept in
+// `later` and added after the parallel part, in a fixed order. Returns the largest overlap.
+template <NormalSpring NS, NoTension NT, FrictionCap FC>
+double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later) {
+  Discs& d = discs;
+  const double inv_dt = 1.0 / dt;
+  PairContact* pc = neighbors.pairs.data();
+  double worst = 0;
+  for (std::size_t p = p0; p < p1; ++p) {
+    PairContact& c = pc[p];
     const int i = c.i, j = c.j;
     const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
     const double R2 = dx * dx + dy * dy, sum = d.r[i] + d.r[j];
@@ -137,59 +156,43 @@ void World::compute_forces() {
     const double fx = -c.fn * nx + c.fs * ny;  // (15a) term on i
     const double fy = -c.fn * ny - c.fs * nx;  // (15b) term on i
     d.fx[i] += fx; d.fy[i] += fy;
-    d.fx[j] -= fx; d.fy[j] -= fy;
     d.torque[i] -= d.r[i] * c.fs;  // (15c); f_s is the same seen from j (5b is symmetric)
-    d.torque[j] -= d.r[j] * c.fs;
-  }
-
-  if constexpr (BONDS) {
-    // Paper 2: inside a cluster both springs act in tension and without limit, with dashpots.
-    for (Bond& b : bonds) {
-      const int i = b.i, j = b.j;
-      const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
-      const double R = std::sqrt(dx * dx + dy * dy);
-      const double nx = dx / R, ny = dy / R;
-      const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
-      const double du_n = ddx * nx + ddy * ny;                                       // (5a)
-      const double du_s = -ddx * ny + ddy * nx + b.ai * d.dphi[i] + b.aj * d.dphi[j];  // (5b)
-      const PairProps& p = pair(d.material[i], d.material[j]);
-      if constexpr (NS == NormalSpring::incremental)
-        b.en += p.kn * du_n;        // (7a), without (8): tension allowed
-      else
-        b.en = p.kn * (b.rest - R);  // the overlap option: measured from the bonded distance
-      b.es += p.ks * du_s;          // (11a), without (13): no cap
-      b.fn = b.en + p.eta_n * du_n * inv_dt;
-      b.fs = b.es + p.eta_s * du_s * inv_dt;
-      worst = std::max(worst, d.r[i] + d.r[j] - R);
-      const double fx = -b.fn * nx + b.fs * ny;
-      const double fy = -b.fn * ny - b.fs * nx;
-      d.fx[i] += fx; d.fy[i] += fy;
+    if (j < own_end) {
       d.fx[j] -= fx; d.fy[j] -= fy;
-      d.torque[i] -= b.ai * b.fs;
-      d.torque[j] -= b.aj * b.fs;
+      d.torque[j] -= d.r[j] * c.fs;
+    } else {
+      later->push_back(Deferred{j, fx, fy, d.r[j] * c.fs});
     }
   }
-  if constexpr (MOVING)
-    for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
+  return worst;
+}
 
+// Disc-obstacle contacts [w0, w1) of the wall list (whole groups of one disc), with the
+// per-thread scratch `slot`. Returns the largest overlap.
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING>
+double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
+  Discs& d = discs;
+  const double inv_dt = 1.0 / dt;
+  double worst = 0;
   // Walls and points: the same law with a fixed partner of zero radius.
   auto& wl = neighbors.walls;
-  const std::size_t nw = wl.size();
+  const std::size_t nw = w1;
   const int n_walls = static_cast<int>(geometry.walls.size());
   const int n_mat = n_materials;
-  for (std::size_t b = 0; b < nw;) {
+  for (std::size_t b = w0; b < nw;) {
     std::size_t e = b;
     while (e < nw && wl[e].i == wl[b].i) ++e;  // the entries of one disc: [b, e)
     const int i = wl[b].i;
     // Geometry first, so that a contact passing from a wall to its end point keeps its history
     // (the normal is continuous there; the paper is silent, a reset would kick the disc).
-    char* now = touch_scratch_.data();
+    char* now = touch_scratch_[slot].data();
+    double* dist_scratch = dist_scratch_[slot].data();
     for (std::size_t a = b; a < e; ++a) {
       WallContact& c = wl[a];
       ObstacleHit h{};
       now[a - b] = closest_point(geometry, c.k, d.x[i], d.y[i], h) && h.dist <= d.r[i] && h.dist > 0;
       if (now[a - b]) {
-        dist_scratch_[a - b] = h.dist;
+        dist_scratch[a - b] = h.dist;
         c.px = h.px; c.py = h.py;
         c.nx = (h.px - d.x[i]) / h.dist;
         c.ny = (h.py - d.y[i]) / h.dist;
@@ -207,7 +210,7 @@ void World::compute_forces() {
       WallContact& c = wl[a];
       c.touching = now[a - b];
       if (!c.touching) { c.en = c.es = c.fn = c.fs = 0; continue; }
-      const double dist = dist_scratch_[a - b];
+      const double dist = dist_scratch[a - b];
       const double nx = c.nx, ny = c.ny;
       double du_n, du_s;
       if constexpr (MOVING) {
@@ -240,6 +243,81 @@ void World::compute_forces() {
     }
     b = e;
   }
+  return worst;
+}
+
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
+void World::compute_forces() {
+  Discs& d = discs;
+  const int n = static_cast<int>(d.size());
+  const double inv_dt = 1.0 / dt;
+  const int nt = (BONDS || MOVING) ? 1 : threads_for(n);
+  double worst = 0;
+  if (nt == 1) {
+    start_resultants(0, n);
+    worst = pair_forces<NS, NT, FC>(0, neighbors.pairs.size(), n, nullptr);
+  } else {
+    // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
+    // computed by the owner of its i. What a thread adds to another's discs is added afterwards in
+    // thread order, so a given thread count always sums in the same order (bit-identical runs).
+    std::vector<double> part(nt, 0.0);
+    const auto& pairs = neighbors.pairs;
+    const auto& wl = neighbors.walls;
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_thread_index();
+      const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
+      const auto by_i = [](const auto& c, int i) { return c.i < i; };
+      const std::size_t p0 = std::lower_bound(pairs.begin(), pairs.end(), i0, by_i) - pairs.begin();
+      const std::size_t p1 = std::lower_bound(pairs.begin(), pairs.end(), i1, by_i) - pairs.begin();
+      const std::size_t w0 = std::lower_bound(wl.begin(), wl.end(), i0, by_i) - wl.begin();
+      const std::size_t w1 = std::lower_bound(wl.begin(), wl.end(), i1, by_i) - wl.begin();
+      deferred_[t].clear();
+      start_resultants(i0, i1);
+      part[t] = std::max(pair_forces<NS, NT, FC>(p0, p1, i1, &deferred_[t]),
+                         wall_forces<NS, NT, FC, false>(w0, w1, t));
+    }
+    for (int t = 0; t < nt; ++t) {
+      worst = std::max(worst, part[t]);
+      for (const Deferred& q : deferred_[t]) {
+        d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
+        d.torque[q.j] -= q.tq;
+      }
+    }
+    max_overlap = worst;
+    return;
+  }
+
+  if constexpr (BONDS) {
+    // Paper 2: inside a cluster both springs act in tension and without limit, with dashpots.
+    for (Bond& b : bonds) {
+      const int i = b.i, j = b.j;
+      const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
+      const double R = std::sqrt(dx * dx + dy * dy);
+      const double nx = dx / R, ny = dy / R;
+      const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
+      const double du_n = ddx * nx + ddy * ny;                                       // (5a)
+      const double du_s = -ddx * ny + ddy * nx + b.ai * d.dphi[i] + b.aj * d.dphi[j];  // (5b)
+      const PairProps& p = pair(d.material[i], d.material[j]);
+      if constexpr (NS == NormalSpring::incremental)
+        b.en += p.kn * du_n;        // (7a), without (8): tension allowed
+      else
+        b.en = p.kn * (b.rest - R);  // the overlap option: measured from the bonded distance
+      b.es += p.ks * du_s;          // (11a), without (13): no cap
+      b.fn = b.en + p.eta_n * du_n * inv_dt;
+      b.fs = b.es + p.eta_s * du_s * inv_dt;
+      worst = std::max(worst, d.r[i] + d.r[j] - R);
+      const double fx = -b.fn * nx + b.fs * ny;
+      const double fy = -b.fn * ny - b.fs * nx;
+      d.fx[i] += fx; d.fy[i] += fy;
+      d.fx[j] -= fx; d.fy[j] -= fy;
+      d.torque[i] -= b.ai * b.fs;
+      d.torque[j] -= b.aj * b.fs;
+    }
+  }
+  if constexpr (MOVING)
+    for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
+  worst = std::max(worst, wall_forces<NS, NT, FC, MOVING>(0, neighbors.walls.size(), 0));
   max_overlap = worst;
 }
 

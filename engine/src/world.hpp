@@ -27,6 +27,11 @@ class World {
   MovingWalls moving;
   Scheme scheme = Scheme::paper_eq19;
   double dt = 1e-4;         // [s]
+  // Threads of the force and integration loops (OpenMP; run.threads, --threads). A given count
+  // always gives bit-identical results; 1 is the plain serial loop. Scenes with bonds or moving
+  // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
+  int threads = 1;
+  static constexpr int kMinDiscsPerThread = 2048;
   double gx = 0, gy = -980; // gravity [cm/s^2]
 
   double time = 0;
@@ -59,6 +64,17 @@ class World {
   ForceKernel force_kernel_ = nullptr;
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
   void compute_forces();
+  struct Deferred {  // a pair's reaction on a disc of another thread's block
+    int j;
+    double fx, fy, tq;
+  };
+  template <NormalSpring NS, NoTension NT, FrictionCap FC>
+  double pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later);
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING>
+  double wall_forces(std::size_t w0, std::size_t w1, int slot);
+  void start_resultants(int i0, int i1);
+  int threads_for(int n) const;  // the thread count used for n discs
+  std::vector<std::vector<Deferred>> deferred_;  // per thread
   void select_kernel();
   void rebuild_lists();       // neighbour lists without the bonded pairs
   void kick_walls(double h);  // plates: v += F/M h (moving_walls.cpp)
@@ -66,8 +82,9 @@ class World {
   bool walls_moved_far() const;  // some wall moved skin/2 since the lists were built
   void walls_listed();        // remember the wall positions of this list build
   bool adjacent(int k1, int k2) const;  // a wall and a point at its end
-  std::vector<char> touch_scratch_;   // per wall entry of one disc: touching now
-  std::vector<double> dist_scratch_;  // ... and its centre distance
+  // Per thread: per wall entry of one disc, touching now and its centre distance.
+  std::vector<std::vector<char>> touch_scratch_;
+  std::vector<std::vector<double>> dist_scratch_;
   void kick(double h);        // v += a h  (eq. 17 with h = dt)
   void drift_eq18();          // du = v dt, eq. (18); x += du
   void drift_eq19();          // du = (du + v dt) / 2, eq. (19); x += du
