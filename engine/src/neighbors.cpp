@@ -4,23 +4,31 @@
 #include <cmath>
 #include <limits>
 
+#include "parallel.hpp"
+
 namespace dem {
 
-bool Neighbors::needs_rebuild(const Discs& d) const {
+bool Neighbors::needs_rebuild(const Discs& d, int nt) const {
   if (x0_.size() != d.size()) return true;
   const double lim2 = 0.25 * skin * skin;
-  for (std::size_t i = 0; i < d.size(); ++i) {
+  const long n = static_cast<long>(d.size());
+  bool far = false;
+#pragma omp parallel for schedule(static) num_threads(nt) if (nt > 1) reduction(|| : far)
+  for (long i = 0; i < n; ++i) {
     const double dx = d.x[i] - x0_[i], dy = d.y[i] - y0_[i];
-    if (dx * dx + dy * dy > lim2) return true;
+    far = far || dx * dx + dy * dy > lim2;
   }
-  return false;
+  return far;
 }
 
 namespace {
 // Keep the history of entries present in both sorted lists (same key).
 template <class T, class Key>
 void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key key) {
-  std::size_t a = 0;
+  if (new_list.empty()) return;
+  // A block's new entries start somewhere in the old list: skip there at once.
+  std::size_t a = std::lower_bound(old_list.begin(), old_list.end(), key(new_list.front()),
+                                   [&](const T& o, long long k) { return key(o) < k; }) - old_list.begin();
   for (auto& e : new_list) {
     while (a < old_list.size() && key(old_list[a]) < key(e)) ++a;
     if (a < old_list.size() && key(old_list[a]) == key(e)) e = old_list[a];
@@ -29,7 +37,7 @@ void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key
 
 }  // namespace
 
-void Neighbors::rebuild(const Discs& d, const Geometry& g) {
+void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const int n = static_cast<int>(d.size());
   ++rebuilds;
   x0_ = d.x;
@@ -85,9 +93,58 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g) {
       if (cell_of_[i] >= 0) order_[fill[cell_of_[i]]++] = i;
   }
 
-  new_pairs_.clear();
+  grid_ = Grid{static_cast<double>(xmin), static_cast<double>(ymin), nx, ny};
+  const auto pair_key = [](const PairContact& p) { return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j); };
+  const auto wall_key = [](const WallContact& w) { return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k); };
+  if (nt <= 1) {
+    new_pairs_.clear();
+    new_walls_.clear();
+    search(d, g, 0, n, new_pairs_, new_walls_);
+    merge_history(pairs, new_pairs_, pair_key);
+    merge_history(walls, new_walls_, wall_key);
+    pairs.swap(new_pairs_);
+    walls.swap(new_walls_);
+    return;
+  }
+  // Threads search contiguous blocks of discs; the lists are sorted by i, so the blocks'
+  // lists, each merged with the old entries of its discs, concatenate in order: the same lists as
+  // the serial search, whatever the thread count.
+  block_pairs_.resize(nt);
+  block_walls_.resize(nt);
+  std::vector<std::size_t> pair_at(nt + 1, 0), wall_at(nt + 1, 0);
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_thread_index();
+    const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
+    auto& bp = block_pairs_[t];
+    auto& bw = block_walls_[t];
+    bp.clear();
+    bw.clear();
+    search(d, g, i0, i1, bp, bw);
+    merge_history(pairs, bp, pair_key);
+    merge_history(walls, bw, wall_key);
+    pair_at[t + 1] = bp.size();
+    wall_at[t + 1] = bw.size();
+#pragma omp barrier
+#pragma omp single
+    {
+      for (int u = 0; u < nt; ++u) {
+        pair_at[u + 1] += pair_at[u];
+        wall_at[u + 1] += wall_at[u];
+      }
+      pairs.resize(pair_at[nt]);
+      walls.resize(wall_at[nt]);
+    }
+    std::copy(bp.begin(), bp.end(), pairs.begin() + static_cast<std::ptrdiff_t>(pair_at[t]));
+    std::copy(bw.begin(), bw.end(), walls.begin() + static_cast<std::ptrdiff_t>(wall_at[t]));
+  }
+}
+
+void Neighbors::search(const Discs& d, const Geometry& g, int i0, int i1, std::vector<PairContact>& out_pairs,
+                       std::vector<WallContact>& out_walls) const {
+  const long nx = grid_.nx, ny = grid_.ny;
   std::vector<int> found;
-  for (int i = 0; i < n; ++i) {
+  for (int i = i0; i < i1; ++i) {
     if (cell_of_[i] < 0) continue;
     const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
     found.clear();
@@ -103,22 +160,12 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g) {
         }
       }
     std::sort(found.begin(), found.end());
-    for (int j : found) new_pairs_.push_back(PairContact{i, j});
+    for (int j : found) out_pairs.push_back(PairContact{i, j});
   }
-  merge_history(pairs, new_pairs_, [](const PairContact& p) {
-    return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j);
-  });
-  pairs.swap(new_pairs_);
-
-  new_walls_.clear();
   const int nk = g.obstacle_count();
-  for (int i = 0; i < n; ++i)
+  for (int i = i0; i < i1; ++i)
     for (int k = 0; k < nk; ++k)
-      if (obstacle_distance(g, k, d.x[i], d.y[i]) < d.r[i] + skin) new_walls_.push_back(WallContact{i, k});
-  merge_history(walls, new_walls_, [](const WallContact& w) {
-    return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k);
-  });
-  walls.swap(new_walls_);
+      if (obstacle_distance(g, k, d.x[i], d.y[i]) < d.r[i] + skin) out_walls.push_back(WallContact{i, k});
 }
 
 }  // namespace dem

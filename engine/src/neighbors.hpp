@@ -38,8 +38,10 @@ class Neighbors {
   std::vector<WallContact> walls;  // sorted by (i, k)
   long rebuilds = 0;
 
-  bool needs_rebuild(const Discs& d) const;
-  void rebuild(const Discs& d, const Geometry& g);
+  // Some disc moved more than skin/2 since the last rebuild; nt threads.
+  bool needs_rebuild(const Discs& d, int nt = 1) const;
+  // New lists with the history of the old ones carried over; nt threads give the same lists.
+  void rebuild(const Discs& d, const Geometry& g, int nt = 1);
   double cell_size() const { return cell_; }
   // Discs were removed: new_index[old] is the new index or -1. Order is kept, so the lists stay
   // sorted and the history stays attached.
@@ -63,6 +65,15 @@ class Neighbors {
   std::vector<int> cell_start_, order_, cell_of_;
   std::vector<PairContact> new_pairs_;
   std::vector<WallContact> new_walls_;
+  std::vector<std::vector<PairContact>> block_pairs_;  // per thread
+  std::vector<std::vector<WallContact>> block_walls_;
+  struct Grid {
+    double xmin = 0, ymin = 0;
+    long nx = 0, ny = 0;
+  } grid_;
+  // Candidates of discs [i0, i1) from the sorted cells, sorted by (i, j) and (i, k).
+  void search(const Discs& d, const Geometry& g, int i0, int i1, std::vector<PairContact>& out_pairs,
+              std::vector<WallContact>& out_walls) const;
 };
 
 }  // namespace dem

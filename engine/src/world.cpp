@@ -20,7 +20,7 @@ void World::step() {
     if (walls_move) { kick_walls(0.5 * dt); drift_walls(false); }
   }
   if (walls_move && walls_moved_far()) neighbors.invalidate();
-  if (neighbors.needs_rebuild(discs)) rebuild_lists();
+  if (neighbors.needs_rebuild(discs, threads_for(static_cast<int>(discs.size())))) rebuild_lists();
   (this->*force_kernel_)();  // eqs. (3)-(15) from the increments of the last move
   switch (scheme) {
     case Scheme::paper_eq18: kick(dt); drift_eq18(); break;   // (17), (18)
@@ -57,7 +57,7 @@ void World::prepare() {
 }
 
 void World::rebuild_lists() {
-  neighbors.rebuild(discs, geometry);
+  neighbors.rebuild(discs, geometry, threads_for(static_cast<int>(discs.size())));
   if (!moving.empty()) walls_listed();
   if (bonds.empty()) return;
   // Bonded pairs have their own list: drop them from the candidates (both lists sorted by (i, j)).
