@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -13,15 +14,19 @@ namespace dem {
 
 using json = nlohmann::ordered_json;
 
-void write_file_atomic(const std::string& path, const std::string& text) {
+void write_stream_atomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary);
-    out << text;
+    write(out);
     out.flush();
     if (!out) throw std::runtime_error("cannot write " + tmp);
   }
   std::filesystem::rename(tmp, path);
+}
+
+void write_file_atomic(const std::string& path, const std::string& text) {
+  write_stream_atomic(path, [&](std::ostream& out) { out << text; });
 }
 
 void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points) {
@@ -81,12 +86,12 @@ namespace {
 
 std::string fmt(double v) { return fmt17(v); }
 
-std::string vtu(const std::vector<double>& px, const std::vector<double>& py, int points_per_cell, int vtk_type,
+// Streamed to the file: a 1M-disc VTU never sits in memory as text.
+void vtu(std::ostream& o, const std::vector<double>& px, const std::vector<double>& py, int points_per_cell, int vtk_type,
                 const std::vector<std::pair<std::string, std::vector<double>>>& scalars,
                 const std::vector<std::pair<std::string, std::vector<double>>>& vectors3,
                 const std::vector<std::pair<std::string, std::vector<int>>>& ints, bool cell_data) {
   const std::size_t np = px.size(), nc = np / points_per_cell;
-  std::ostringstream o;
   o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
     << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nc << "\">\n";
   o << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
@@ -115,7 +120,6 @@ std::string vtu(const std::vector<double>& px, const std::vector<double>& py, in
     o << "</DataArray>\n";
   }
   o << (cell_data ? "</CellData>\n" : "</PointData>\n") << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-  return o.str();
 }
 
 json pair_json(const PairReport& r) {
@@ -136,7 +140,9 @@ json pair_json(const PairReport& r) {
 
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
   const Discs& d = w.discs;
-  std::ostringstream o;
+  std::ofstream o;  // NAME.csv.tmp, renamed when complete
+  const std::string csv = dir + "/" + stem + ".csv";
+  o.open(csv + ".tmp", std::ios::binary);
   o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
   std::vector<double> lx, ly, fn, fs, en, es;
   std::vector<int> kind;
@@ -176,14 +182,19 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     ly.insert(ly.end(), {d.y[c.i], c.py});
     fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(is_wall ? 1 : 2);
   }
-  write_file_atomic(dir + "/" + stem + ".csv", o.str());
-  write_file_atomic(dir + "/" + stem + ".vtu",
-                    vtu(lx, ly, 2, 3, {{"f_n", fn}, {"f_s", fs}, {"e_n", en}, {"e_s", es}}, {}, {{"kind", kind}}, true));
+  o.close();
+  if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
+  std::filesystem::rename(csv + ".tmp", csv);
+  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
+    vtu(out, lx, ly, 2, 3, {{"f_n", fn}, {"f_s", fs}, {"e_n", en}, {"e_s", es}}, {}, {{"kind", kind}}, true);
+  });
 }
 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
                       const std::vector<double>* disp_x, const std::vector<double>* disp_y) {
-  std::ostringstream o;
+  std::ofstream o;  // NAME.csv.tmp, renamed when complete
+  const std::string csv = dir + "/" + stem + ".csv";
+  o.open(csv + ".tmp", std::ios::binary);
   o << "id,x,y,r,vx,vy,omega,material" << (disp_x ? ",dx,dy" : "") << "\n";
   std::vector<double> vel, disp;
   for (std::size_t i = 0; i < d.size(); ++i) {
@@ -196,11 +207,15 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
     o << '\n';
     vel.insert(vel.end(), {d.vx[i], d.vy[i], 0.0});
   }
-  write_file_atomic(dir + "/" + stem + ".csv", o.str());
-  std::vector<std::pair<std::string, std::vector<double>>> vec3 = {{"velocity", vel}};
-  if (disp_x) vec3.push_back({"displacement", disp});
-  write_file_atomic(dir + "/" + stem + ".vtu",
-                    vtu(d.x, d.y, 1, 1, {{"radius", d.r}, {"omega", d.omega}}, vec3, {{"id", d.id}}, false));
+  o.close();
+  if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
+  std::filesystem::rename(csv + ".tmp", csv);
+  std::vector<std::pair<std::string, std::vector<double>>> vec3;
+  vec3.emplace_back("velocity", std::move(vel));
+  if (disp_x) vec3.emplace_back("displacement", std::move(disp));
+  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
+    vtu(out, d.x, d.y, 1, 1, {{"radius", d.r}, {"omega", d.omega}}, vec3, {{"id", d.id}}, false);
+  });
 }
 
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,

@@ -2,6 +2,8 @@
 // Every file is written to NAME.tmp and renamed when complete.
 #pragma once
 
+#include <functional>
+#include <ostream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -47,5 +49,7 @@ nlohmann::ordered_json finite_or_null(double v);
 
 // Atomic text file write: path.tmp then rename.
 void write_file_atomic(const std::string& path, const std::string& text);
+// The same, streaming: `write` fills PATH.tmp, renamed to PATH when complete.
+void write_stream_atomic(const std::string& path, const std::function<void(std::ostream&)>& write);
 
 }  // namespace dem
