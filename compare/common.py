@@ -106,6 +106,9 @@ class Case:
     settle: float = 0.0         # [s] discharge: settling before the gate opens
     series_interval: float = 0.005  # [s] wall-force sampling
     seed: int = 0               # ensemble member (perturbation already applied to discs)
+    # [s] particle snapshots every snapshot_interval from the start (static) or the opening
+    # (discharge), read back by each backend's read_snapshots; 0: none (the study's default).
+    snapshot_interval: float = 0.0
 
     @property
     def profile_bin(self) -> float:
@@ -118,7 +121,26 @@ class Case:
     def to_json(self) -> dict:
         return {"name": self.name, "dt": self.dt, "duration": self.duration, "mode": self.mode,
                 "settle": self.settle, "series_interval": self.series_interval, "seed": self.seed,
-                "n_discs": int(len(self.discs))}
+                "snapshot_interval": self.snapshot_interval, "n_discs": int(len(self.discs))}
+
+    def snapshot_steps(self) -> int:
+        """Steps between snapshots (0: none); the interval must be a whole number of steps."""
+        if not self.snapshot_interval:
+            return 0
+        n = self.snapshot_interval / self.dt
+        k = int(round(n))
+        if not (math.isfinite(n) and k >= 1 and abs(n - k) <= 1e-6 * n):
+            raise CaseError(f"snapshot_interval: {self.snapshot_interval!r} s is not a whole number of "
+                            f"steps of dt = {self.dt!r} s")
+        return k
+
+    def snapshot_times(self) -> list[float]:
+        """Times of the snapshots (since the start, or since the opening of a discharge)."""
+        k = self.snapshot_steps()
+        if not k:
+            return []
+        n = int(round(self.duration / self.dt))
+        return [j * self.dt for j in range(0, n + 1, k)]
 
 
 @dataclasses.dataclass
@@ -160,6 +182,62 @@ class Result:
     @staticmethod
     def load(path: Path) -> "Result":
         return Result(**json.loads(Path(path).read_text()))
+
+
+@dataclasses.dataclass
+class Snapshot:
+    """The discs at one time, in the form every code's ``read_snapshots`` returns.
+
+    ``t``: seconds since the start (static) or since the opening (discharge); ``id``: each disc's
+    row in the case's starting packing (``Case.discs``), so that the same disc has the same id in
+    every code; x, y [cm], r [cm], vx, vy [cm/s], omega [1/s]: arrays in the order of ``id``
+    (ascending), NaN where a code does not write the quantity. Removed discs are absent."""
+    t: float
+    id: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    r: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    omega: np.ndarray
+
+    @staticmethod
+    def from_columns(t: float, ids, **cols) -> "Snapshot":
+        ids = np.asarray(ids).astype(int).reshape(-1)
+        order = np.argsort(ids, kind="stable")
+        out = {"t": float(t), "id": ids[order]}
+        for k in ("x", "y", "r", "vx", "vy", "omega"):
+            v = cols.get(k)
+            v = np.full(len(ids), np.nan) if v is None else np.asarray(v, float).reshape(-1)
+            if len(v) != len(ids):
+                raise ValueError(f"snapshot at t = {t}: {len(v)} values of {k} for {len(ids)} discs")
+            out[k] = v[order]
+        return Snapshot(**out)
+
+    def rows(self) -> np.ndarray:
+        """(n, 6): x, y, r, vx, vy, omega (the Result.discs_end form)."""
+        return np.column_stack([self.x, self.y, self.r, self.vx, self.vy, self.omega])
+
+
+def fold_points(walls: list[dict], points: list[dict], centre, exclude=()) -> dict:
+    """For each point (slit end) the wall it is folded into: the first wall that ends at the point
+    and is not in ``exclude`` (e.g. an opened gate); {point name: (wall name, "from" | "to": the
+    end, hence the wall's first or last bin, inward normal, tangent)}. LIGGGHTS (a mesh edge) and
+    YADE (a facet vertex) count a contact on a wall's end point in that wall's end bin; the engine
+    reports points apart, and its reader folds them in the same way."""
+    out = {}
+    for p in points:
+        at = np.array(p["at"], float)
+        for w in walls:
+            if w["name"] in exclude or not w.get("active", True):
+                continue
+            for end in ("from", "to"):
+                if np.linalg.norm(np.array(w[end], float) - at) <= 1e-9:
+                    out[p["name"]] = (w, end)
+                    break
+            if p["name"] in out:
+                break
+    return {name: (w["name"], end, inward_normal(w, centre), tangent(w)) for name, (w, end) in out.items()}
 
 
 def failed(code: str, case: str, reason: str, **kw) -> Result:

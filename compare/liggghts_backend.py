@@ -15,6 +15,9 @@ What the translation does (see ../shared/docs/reference-codes.md for the measure
 - the slit ends L and R are mesh edges, which LIGGGHTS treats as point contacts; their force
   lands on the strip that owns the edge (the engine reports points apart: the comparison folds
   them into the neighbouring bin);
+- particle snapshots (``Case.snapshot_interval``): ``dump custom/vtk`` to ``snap_STEP.vtu``
+  (XML UnstructuredGrid, read with meshio in ``read_snapshots``); its points are Float32, so the
+  positions are also dumped as per-atom variables (Float64 point data);
 - discharge: the gate mesh jumps 200 cm down in one step at the opening (same run: a new
   ``run`` would recompute forces without history updates); discs crossing the outlet plane
   ``outlet_depth`` below the floor are deleted by ``massflow/mesh`` and logged with their time.
@@ -35,10 +38,10 @@ import subprocess
 import time
 from pathlib import Path
 
-import meshio  # STL meshes; LIGGGHTS' POLYDATA dumps are parsed here
+import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
 
-from .common import (SHARED_VARIANT, Case, CaseError, Result, bin_edges, disc_material, failed,
+from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, disc_material, failed,
                      inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
 
 NAME = "liggghts"
@@ -205,6 +208,16 @@ def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int)
           f"thermo {sample}"]
     for mid in meshes:
         s.append(f"dump d_{mid} all mesh/vtk {sample} mesh_{mid}_*.vtk output face stresscomponents area {mid}")
+    snap = case.snapshot_steps()
+    if snap:
+        # custom/vtk writes the points as Float32: the positions again as Float64 point data
+        s += ["variable snap_x atom x", "variable snap_y atom y",
+              f"dump d_snap all custom/vtk {snap} snap_*.vtu id x y radius vx vy omegaz v_snap_x v_snap_y",
+              "dump_modify d_snap binary yes"]
+        if settle_steps:  # from the opening on: next dump step = opening + a whole number of intervals
+            s += [f'variable snap_next equal "(step<{settle_steps})*{settle_steps}+(step>={settle_steps})*'
+                  f'({settle_steps}+{snap}*(floor((step-{settle_steps})/{snap})+1))"',
+                  "dump_modify d_snap every v_snap_next"]
     s += [f"dump d_end all custom {total} discs_*.dump id x y radius vx vy omegaz",
           "dump_modify d_end format \"%d %.17g %.17g %.17g %.17g %.17g %.17g\" sort id",
           f"run {total}"]
@@ -233,7 +246,8 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
         script = write_inputs(case, out_dir, threads)
     except CaseError as e:
         return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
-    for old in glob.glob(str(out_dir / "mesh_*.vtk")) + glob.glob(str(out_dir / "discs_*.dump")):
+    for old in (glob.glob(str(out_dir / "mesh_*.vtk")) + glob.glob(str(out_dir / "discs_*.dump"))
+                + glob.glob(str(out_dir / "snap_*.vt[ur]"))):
         os.remove(old)
     log = out_dir / "liggghts.log"
     t0 = time.monotonic()
@@ -384,6 +398,25 @@ def read(case: Case, out_dir: Path) -> Result:
         res.removals = _removals(out_dir / "removals.txt", settle_steps * dt)
     res.extra["ke_max_second_half"] = float(np.max(ke[len(ke) // 2:]))
     return res
+
+
+def read_snapshots(case: Case, out_dir: Path) -> list[Snapshot]:
+    """Particle snapshots in the common form from the ``dump custom/vtk`` files (VTU, read with
+    meshio), times since the start (static) or the opening (discharge; dumps while settling are
+    left out). Ids: LIGGGHTS atom id - 1 = the row in the case's packing."""
+    out_dir = Path(out_dir)
+    settle_steps = int(round(case.settle / case.dt)) if case.mode == "discharge" else 0
+    out = []
+    for f in glob.glob(str(out_dir / "snap_*.vtu")):
+        m = re.fullmatch(r"snap_(\d+)\.vtu", Path(f).name)
+        if not m or int(m.group(1)) < settle_steps:
+            continue
+        mesh = meshio.read(f)
+        pd = mesh.point_data
+        out.append(Snapshot.from_columns((int(m.group(1)) - settle_steps) * case.dt, np.asarray(pd["id"]) - 1,
+                                         x=pd["snap_x"], y=pd["snap_y"], r=pd["radius"], vx=pd["vx"],
+                                         vy=pd["vy"], omega=pd["omegaz"]))
+    return sorted(out, key=lambda s: s.t)
 
 
 def _read_dump(path: str) -> tuple[np.ndarray, np.ndarray]:

@@ -1,6 +1,16 @@
 """The native engine as one of the compared codes: a Case becomes a scene TOML with the
 case's packing as a disc file, ``build/dem run`` runs it, and its outputs are read into the
-common Result form."""
+common Result form.
+
+The engine reports the slit ends (scene points L, R) apart from the walls; the reader folds a
+point's force into the end bin of the wall that ends there (the opened gate excluded), which is
+where LIGGGHTS (a mesh edge) and YADE (a facet vertex) count it (common.fold_points).
+
+Particle snapshots (``read_snapshots``): the engine writes them only during a discharge
+(``discharge.snapshots`` times: ``snapshots/discs_NNNN.vtu`` indexed by
+``discharge_discs.pvd``, docs/outputs.md); a static run writes only the final ``discs.vtu``,
+which is then the one snapshot. Both are VTU files read with meshio.
+"""
 from __future__ import annotations
 
 import csv
@@ -12,7 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import Case, CaseError, Result, dem_binary, disc_material, failed, kinetic_energy, write_text_atomic
+import meshio
+
+from .common import (Case, CaseError, Result, Snapshot, dem_binary, disc_material, failed, fold_points,
+                     kinetic_energy, write_text_atomic)
 
 NAME = "native"
 
@@ -84,10 +97,13 @@ def scene_toml(case: Case, disc_file: str) -> str:
     lines += ["[output]", f"profile_bin = {_toml_value(case.profile_bin)}", "progress = false", ""]
     if case.mode == "discharge":
         d = r["discharge"]
+        if len(case.snapshot_times()) > 10_000:
+            raise CaseError("snapshot_interval: more than the engine's 1e4 discharge.snapshots")
         lines += ["[discharge]", f"time = {_toml_value(case.duration)}", f"gate = {_toml_value(d['gate'])}",
                   f"outlet_depth = {_toml_value(d['outlet_depth'])}",
                   f"jam_time = {_toml_value(case.duration + 1.0)}   # never stop: jams are judged from removals",
-                  f"series_interval = {_toml_value(case.series_interval)}", "snapshots = []", ""]
+                  f"series_interval = {_toml_value(case.series_interval)}",
+                  f"snapshots = {_toml_value(case.snapshot_times())}", ""]
     return "\n".join(lines)
 
 
@@ -147,6 +163,9 @@ def read(case: Case, out_dir: Path) -> Result:
     res.steps = int(summary.get("steps", 0))
     res.n_initial = len(case.discs)
     res.profiles = _profiles(summary)
+    folds = _folds(case)
+    for pt in summary.get("points", []):
+        _fold(res.profiles, folds, pt["name"], pt["force"])
     discs = np.genfromtxt(run_dir / "discs.csv", delimiter=",", names=True)
     discs = np.atleast_1d(discs)
     order = np.argsort(discs["id"])
@@ -163,8 +182,41 @@ def read(case: Case, out_dir: Path) -> Result:
             with open(rem) as f:
                 res.removals = [float(row["t"]) for row in csv.DictReader(f) if row["how"] == "outlet"]
         res.series = _wall_series(run_dir / "wall_series.csv", res.profiles)
+        _fold_series(res.series, folds, run_dir / "wall_totals_series.csv")
         res.extra["native_discharge"] = summary.get("discharge", {})
     return res
+
+
+def _folds(case: Case) -> dict:
+    r = case.resolved
+    gate = [r["discharge"]["gate"]] if case.mode == "discharge" else []
+    return fold_points(r["walls"], r["points"], case.centre, exclude=gate)
+
+
+def _fold(profiles: dict, folds: dict, point: str, force, k: int | None = None) -> None:
+    """Adds a point's force (by the discs on it) to the end bin of its wall (profile, or sample k
+    of a series)."""
+    if point not in folds or not (force[0] or force[1]):
+        return
+    wall, end, n, t = folds[point]
+    prof = profiles[wall]
+    nrm, shr = (prof["normal"], prof["shear"]) if k is None else (prof["normal"][k], prof["shear"][k])
+    b = 0 if end == "from" else len(nrm) - 1
+    f = np.array(force, float)
+    nrm[b] += -float(f @ n)
+    shr[b] += float(f @ t)
+
+
+def _fold_series(series: dict, folds: dict, path: Path) -> None:
+    """The points' rows of wall_totals_series.csv folded into the wall series (same times)."""
+    if not series or not folds or not path.exists():
+        return
+    index = {t: k for k, t in enumerate(series["t"])}
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            if row["name"] in folds and float(row["t"]) in index:
+                _fold(series["walls"], folds, row["name"], (float(row["fx"]), float(row["fy"])),
+                      index[float(row["t"])])
 
 
 def _wall_series(path: Path, profiles: dict) -> dict:
@@ -188,3 +240,30 @@ def _wall_series(path: Path, profiles: dict) -> dict:
                 shr[k, b] = r["shear"]
         series["walls"][name] = {"normal": nrm.tolist(), "shear": shr.tolist()}
     return series
+
+
+def _read_disc_vtu(path: Path, t: float) -> Snapshot:
+    m = meshio.read(str(path))          # the engine's VTU: Float64 points, full precision
+    pd = m.point_data
+    vel = np.asarray(pd["velocity"], float).reshape(-1, 3)
+    return Snapshot.from_columns(t, pd["id"], x=m.points[:, 0], y=m.points[:, 1], r=pd["radius"],
+                                 vx=vel[:, 0], vy=vel[:, 1], omega=pd["omega"])
+
+
+def read_snapshots(case: Case, out_dir: Path) -> list[Snapshot]:
+    """Particle snapshots in the common form (times since the opening of a discharge).
+
+    Discharge: the files ``discharge_discs.pvd`` lists (a ParaView collection, XML that meshio
+    does not read: parsed here; each VTU it names is read with meshio). Static: the engine writes
+    no snapshots during the run, only the final ``discs.vtu`` (t = the case's duration)."""
+    import xml.etree.ElementTree as ET
+    run_dir = Path(out_dir) / "run"
+    if case.mode != "discharge":
+        return [_read_disc_vtu(run_dir / "discs.vtu", case.duration)]
+    pvd = run_dir / "discharge_discs.pvd"
+    if not pvd.exists():
+        return []
+    out = []
+    for ds in ET.parse(pvd).getroot().iter("DataSet"):
+        out.append(_read_disc_vtu(run_dir / ds.get("file"), float(ds.get("timestep"))))
+    return sorted(out, key=lambda s: s.t)

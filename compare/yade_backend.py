@@ -35,6 +35,8 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
   the walls and the initial discs, enlarged by 2 r_max; below it is allowed after the opening),
   kinetic + potential energy above 1.5 x the initial budget (kinetic + potential + elastic), lost
   discs. The in-script checks run every SCAN_TIME (or series interval, if shorter).
+- particle snapshots (Case.snapshot_interval): YADE's own VTKRecorder (spheres, velocity, id)
+  writes snapshots/discs_spheres.ITER.vtu, read with meshio by ``read_snapshots``;
 - files in out_dir: yade_case.json (the translated case), yade_script.py (copy of
   yade_template.py), yade.log, yade_process.json (exit code, wall time), yade_result.json and
   yade_series.csv (written by the script, full precision).
@@ -53,15 +55,17 @@ import functools
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import subprocess
 import time
 from pathlib import Path
 
+import meshio  # VTKRecorder snapshots (VTU)
 import numpy as np
 
-from .common import (SHARED_VARIANT, Case, CaseError, Result, disc_material, failed, pair,
+from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, pair,
                      profiles_from_contacts, write_text_atomic)
 
 NAME = "yade"
@@ -72,6 +76,7 @@ RESULT_FILE = "yade_result.json"
 SERIES_FILE = "yade_series.csv"
 PROCESS_FILE = "yade_process.json"
 LOG_FILE = "yade.log"
+SNAPSHOT_DIR = "snapshots"   # VTKRecorder output: discs_spheres.ITER.vtu
 SCAN_TIME = 0.005          # [s] longest interval between the in-script checks
 EQUAL_REL = 1e-12          # disc-wall constant equal to the disc material's: wall value 0
 
@@ -248,6 +253,7 @@ def case_data(case: Case) -> dict:
         "wall_materials": wall_mats,
         "walls": walls, "points": points,
         "gate": gate, "outlet_y": outlet_y,
+        "snapshot_every": case.snapshot_steps(),
         "rmax": rmax, "box": box, "contained": contained, "pe_ref": pe_ref,
         "energy_scale": energy_scale or 1.0,
     }
@@ -270,6 +276,8 @@ def _write(data: dict, out_dir: Path, threads: int) -> Path:
     write_text_atomic(script, TEMPLATE.read_text())
     for f in (RESULT_FILE, SERIES_FILE, PROCESS_FILE):   # no stale outputs
         (out_dir / f).unlink(missing_ok=True)
+    for f in (out_dir / SNAPSHOT_DIR).glob("discs_spheres.*.vtu"):
+        f.unlink()
     return script
 
 
@@ -447,3 +455,29 @@ def _read(case: Case, out_dir: Path) -> Result:
                   profiles=profiles, series=series, removals=removals,
                   kinetic_energy_end=float(res["kinetic_energy_end"]), discs_end=discs_end,
                   extra=extra, out_dir=str(out_dir))
+
+
+def read_snapshots(case: Case, out_dir: Path) -> list[Snapshot]:
+    """Particle snapshots in the common form from YADE's VTKRecorder files (VTU, read with meshio),
+    times since the start (static) or the opening (discharge). Recorded before the integrator, like
+    the wall forces: positions at t; velocities are leapfrog's v(t - dt/2) (an error of g dt / 2 in
+    free fall); points are Float32 in these files (YADE writes them so: about 1e-7 relative).
+    Ids: YADE body ids mapped to the rows of the case's packing (disc_body_ids of yade_result.json)."""
+    out_dir = Path(out_dir)
+    res = json.loads((out_dir / RESULT_FILE).read_text())
+    index = {int(b): k for k, b in enumerate(res["disc_body_ids"])}
+    case_data_ = json.loads((out_dir / CASE_FILE).read_text())
+    i_open = int(case_data_["n_settle"])
+    out = []
+    for f in (out_dir / SNAPSHOT_DIR).glob("discs_spheres.*.vtu"):
+        m = re.fullmatch(r"discs_spheres\.(\d+)\.vtu", f.name)
+        if not m:
+            continue
+        mesh = meshio.read(str(f))
+        pd = mesh.point_data
+        ids = [index[int(round(b))] for b in np.asarray(pd["id"], float).reshape(-1)]
+        v = np.asarray(pd["linVelVec"], float).reshape(-1, 3)
+        w = np.asarray(pd["angVelVec"], float).reshape(-1, 3)
+        out.append(Snapshot.from_columns((int(m.group(1)) - i_open) * case.dt, ids, x=mesh.points[:, 0],
+                                         y=mesh.points[:, 1], r=pd["radii"], vx=v[:, 0], vy=v[:, 1], omega=w[:, 2]))
+    return sorted(out, key=lambda s: s.t)

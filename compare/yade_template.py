@@ -18,7 +18,10 @@
 # - discharge: settle n_settle steps, erase the gate, run n_run steps; a remover erases discs
 #   whose centre is below outlet_y and logs the step;
 # - final (one step at the end, before the integrator): contacts, discs with velocities
-#   synchronised to the force step (leapfrog half step), kinetic energy.
+#   synchronised to the force step (leapfrog half step), kinetic energy;
+# - snapshots (when snapshot_every > 0): YADE's VTKRecorder (spheres, velocity, id) every
+#   snapshot_every steps from the start (static) or the opening (discharge), same place as the
+#   monitor, to snapshots/discs_spheres.ITER.vtu (read with meshio by the backend).
 # Outputs (full precision, repr): yade_result.json, yade_series.csv (t,wall,px,py,fx,fy,vertex).
 import json
 import math
@@ -132,8 +135,13 @@ def setup():
         PyRunner(command="monitor()", iterPeriod=C["sample_every"], initRun=True,
                  dead=C["n_settle"] > 0, label="monitor_engine"),
         PyRunner(command="final()", iterPeriod=1, dead=True, label="final_engine"),
-        NewtonIntegrator(damping=0.0, gravity=(g[0], g[1], 0.0)),
     ]
+    if C.get("snapshot_every"):
+        os.makedirs("snapshots", exist_ok=True)
+        O.engines = O.engines + [VTKRecorder(fileName="snapshots/discs_", recorders=["spheres", "velocity", "id"],
+                                             iterPeriod=C["snapshot_every"], initRun=True, multiblock=False,
+                                             ascii=False, dead=C["n_settle"] > 0, label="snap_engine")]
+    O.engines = O.engines + [NewtonIntegrator(damping=0.0, gravity=(g[0], g[1], 0.0))]
     _update_guarded_ends()
 
 
@@ -436,6 +444,7 @@ def write_outputs(status, reason, t_start):
         "final_contacts": [list(c) for c in fin.get("contacts", [])],
         "discs_end": fin.get("discs", []),
         "kept_index": fin.get("kept", []),
+        "disc_body_ids": S.get("disc_ids", []),
         "kinetic_energy_end": fin.get("ke", float("nan")),
         "kinetic_energy_max_sampled": S.get("ke_max", float("nan")),
         "energy_budget": S.get("E0"),
@@ -486,6 +495,9 @@ def main():
                 # next monitor call exactly at the opening, then every sample_every steps
                 monitor_engine.iterLast = O.iter - C["sample_every"]
                 monitor_engine.dead = False
+                if C.get("snapshot_every"):
+                    snap_engine.iterLast = O.iter - C["snapshot_every"]
+                    snap_engine.dead = False
         _run(S["i_end"] - O.iter)
         if not S["failed"]:
             if O.iter != S["i_end"]:

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from compare import calibration as cal
-from compare import janssen, liggghts_backend, native_backend, study
+from compare import janssen, liggghts_backend, native_backend, study, yade_backend
 from compare.common import SHARED_VARIANT, Case, CaseError, Result, failed, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -219,3 +219,103 @@ def test_profile_comparison_tells_an_edge_contact_from_a_real_difference():
     wrong = {"gate": {"normal": [0.0, 5.0, 0.0, 1.0]}, "left": {"normal": [3.0, 2.0, 1.0]}}
     worst, flips = study.cumulative_diff(a, wrong)
     assert flips == 0 and worst == pytest.approx(2.0 / 6.0)
+
+
+# ------------------------------------------------------------------ particle snapshots
+
+needs_yade = pytest.mark.skipif(shutil.which("yade") is None and os.environ.get("CI") != "true",
+                                reason="yade not installed (CI installs it)")
+BACKENDS = {"native": native_backend, "liggghts": liggghts_backend, "yade": yade_backend}
+CODES = [pytest.param("native"), pytest.param("liggghts", marks=needs_liggghts), pytest.param("yade", marks=needs_yade)]
+G = 980.0
+
+
+def slit_case(mode: str) -> Case:
+    """A 10 cm box with a 4 cm slit (gate 3..7 cm, slit ends L and R as points), disc 0 over the
+    slit and disc 1 on the floor beside it; snapshots every 0.02 s for 0.2 s. Discharge: disc 0
+    rests on the gate for 0.05 s, then falls freely through the slit and is removed 4 cm below.
+    Static: disc 0 starts at y = 5 cm at rest and falls onto the closed gate."""
+    r = resolve(SILO)
+    r["contact"] = dict(SHARED_VARIANT)
+
+    def wall(name, a, b, group):
+        return {"name": name, "group": group, "material": "wall", "active": True, "from": list(a), "to": list(b)}
+    r["walls"] = [wall("left", (0, 12), (0, 0), "side_left"), wall("right", (10, 12), (10, 0), "side_right"),
+                  wall("bottom_left", (0, 0), (3, 0), "bottom"), wall("gate", (3, 0), (7, 0), "bottom"),
+                  wall("bottom_right", (7, 0), (10, 0), "bottom")]
+    r["points"] = [{"name": "L", "group": "slit_ends", "material": "wall", "at": [3.0, 0.0]},
+                   {"name": "R", "group": "slit_ends", "material": "wall", "at": [7.0, 0.0]}]
+    r["discharge"] = {"gate": "gate", "outlet_depth": 4.0, "jam_time": 0.3}
+    y0 = 0.999 if mode == "discharge" else 5.0
+    discs = np.array([[5.0, y0, 1.0, 0.0, 0.0, 0.0], [1.5, 0.999, 1.0, 0.0, 0.0, 0.0]])
+    return Case(name=f"snap_{mode}", resolved=r, discs=discs, dt=5e-5, mode=mode,
+                settle=0.05 if mode == "discharge" else 0.0, duration=0.2, series_interval=0.01,
+                snapshot_interval=0.02)
+
+
+def _free_fall(snaps, case, t_end):
+    """Disc 0 from the first snapshot to t_end: y = y0 - g t^2 / 2, vy = -g t. Each code defines the
+    instant of release to within half a step (the engine keeps the gate's force in the first
+    half-kick, LIGGGHTS moves the gate in the step before the first dump, YADE's leapfrog starts
+    from v(-dt/2)), an offset of at most g t dt / 2 in y and g dt / 2 in vy; YADE's VTU points
+    are Float32 (1e-7 relative)."""
+    s0 = snaps[0]
+    k0 = list(s0.id).index(0)
+    x0, y0 = s0.x[k0], s0.y[k0]
+    checked = 0
+    for s in snaps:
+        if s.t > t_end + 1e-9:
+            break
+        k = list(s.id).index(0)
+        t = s.t - s0.t
+        assert s.x[k] == pytest.approx(x0, abs=1e-5)
+        assert abs(s.y[k] - (y0 - 0.5 * G * t * t)) <= 0.5 * G * t * case.dt * (1 + 1e-9) + 1e-5, (s.t, s.y[k])
+        assert abs(s.vy[k] + G * t) <= 0.5 * G * case.dt * (1 + 1e-9) + 1e-6, (s.t, s.vy[k])
+        checked += 1
+    return checked
+
+
+@pytest.mark.parametrize("code", CODES)
+def test_snapshots_of_a_discharge_follow_free_fall_and_end_as_the_final_state(code, tmp_path):
+    case = slit_case("discharge")
+    be = BACKENDS[code]
+    res = be.run(case, tmp_path, timeout=120)
+    assert res.ok, res.reason
+    snaps = be.read_snapshots(case, tmp_path)
+    # one snapshot every 0.02 s from the opening to the end, ids = rows of the packing
+    assert [s.t for s in snaps] == pytest.approx(case.snapshot_times(), abs=1e-9)
+    assert len(snaps) == 11
+    t_out = res.removals[0]          # disc 0 leaves 4 cm below the floor: after sqrt(2 x 5 cm / g)
+    assert t_out == pytest.approx(math.sqrt(2 * 5.0 / G), abs=2e-3)
+    for s in snaps:
+        assert list(s.id) == ([0, 1] if s.t < t_out else [1]), s.t
+        assert np.all(s.r == 1.0)
+        k1 = list(s.id).index(1)     # disc 1 rests on the floor beside the slit throughout
+        assert s.x[k1] == pytest.approx(1.5, abs=1e-6) and s.y[k1] == pytest.approx(snaps[0].y[k1], abs=1e-6)
+    assert _free_fall(snaps, case, t_out) == 6
+    # the last snapshot is the final state (YADE: Float32 points; velocities a half step apart)
+    assert snaps[-1].t == pytest.approx(case.duration)
+    np.testing.assert_allclose(snaps[-1].rows()[:, :3], np.array(res.discs_end)[:, :3], rtol=0, atol=1e-5)
+    np.testing.assert_allclose(snaps[-1].rows()[:, 3:], np.array(res.discs_end)[:, 3:], rtol=0, atol=1e-3)
+
+
+@pytest.mark.parametrize("code", CODES)
+def test_snapshots_of_a_static_run(code, tmp_path):
+    """A disc dropped from 5 cm onto the closed gate: free fall until it lands at t = 0.09 s, at rest
+    at the end. The engine writes snapshots only during a discharge: its static run gives the final
+    discs.vtu alone."""
+    case = slit_case("static")
+    be = BACKENDS[code]
+    res = be.run(case, tmp_path, timeout=120)
+    assert res.ok, res.reason
+    snaps = be.read_snapshots(case, tmp_path)
+    if code == "native":
+        assert len(snaps) == 1
+    else:
+        assert [s.t for s in snaps] == pytest.approx(case.snapshot_times(), abs=1e-9)
+        assert snaps[0].y[0] == 5.0 and list(snaps[0].id) == [0, 1]
+        assert _free_fall(snaps, case, math.sqrt(2 * 4.0 / G)) == 5
+    last = snaps[-1]
+    assert last.t == pytest.approx(case.duration) and list(last.id) == [0, 1]
+    np.testing.assert_allclose(last.rows()[:, :3], np.array(res.discs_end)[:, :3], rtol=0, atol=1e-5)
+    assert last.y[0] == pytest.approx(1.0, abs=1e-3) and abs(last.vy[0]) < 1e-3     # at rest on the gate
