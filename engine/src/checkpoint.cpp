@@ -66,6 +66,8 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
   o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
   o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds); o.put(fill.last_good_time);
   write_discs(o, fill.last_good);
+  o.put(fill.energy_started); o.put(fill.energy.active);
+  o.put(fill.energy.budget); o.put(fill.energy.scale); o.put(fill.energy.gain);
   // The world, its counters and its lists exactly as they are (no rebuild on resume).
   write_world(o, w);
   o.put(w.particle_steps);
@@ -119,6 +121,8 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   fill.mean_abs_du = r.get<double>(); fill.mean_abs_dv = r.get<double>(); fill.wall_seconds = r.get<double>();
   fill.last_good_time = r.get<double>();
   read_discs(r, fill.last_good);
+  fill.energy_started = r.get<bool>(); fill.energy.active = r.get<bool>();
+  fill.energy.budget = r.get<double>(); fill.energy.scale = r.get<double>(); fill.energy.gain = r.get<double>();
   read_world(r, w);
   w.particle_steps = r.get<double>();
   const long rebuilds = r.get<long>();

@@ -184,6 +184,7 @@ void DischargeState::save(BinaryOut& o) const {
   o.put<std::uint64_t>(next_snap);
   o.put(last_removal); o.put(removed_mass); o.put(moved_fraction);
   o.put(wall_seconds);
+  o.put(energy.active); o.put(energy.budget); o.put(energy.scale); o.put(energy.gain);
 }
 
 void DischargeState::load(BinaryIn& r) {
@@ -214,6 +215,8 @@ void DischargeState::load(BinaryIn& r) {
   next_snap = r.get<std::uint64_t>();
   last_removal = r.get<double>(); removed_mass = r.get<double>(); moved_fraction = r.get<double>();
   wall_seconds = r.get<double>();
+  energy.active = r.get<bool>(); energy.budget = r.get<double>(); energy.scale = r.get<double>();
+  energy.gain = r.get<double>();
   if (static_walls.size() != bin_series.size() || static_walls.size() != total_series.size())
     r.fail("corrupt discharge state (walls)");
   for (std::size_t k = 0; k < static_walls.size(); ++k)
@@ -247,6 +250,7 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) 
   for (double& v : st.sink_time) v = NAN;
 
   if (!w.deactivate_wall(spec.discharge.gate)) return "no gate wall \"" + spec.discharge.gate + "\" to open";
+  st.energy.start(w, spec.max_energy_gain);
 
   st.series << "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
   st.totals << "t,name,normal,shear,fx,fy\n";
@@ -304,6 +308,13 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
            << t << " s after opening";
         reason = os.str();
         break;
+      }
+      if (s % 10 == 0) {  // energy created: a blow-up on its way (discs leaving only lower it)
+        reason = st.energy.check(w);
+        if (!reason.empty()) {
+          st.status = "unstable";
+          break;
+        }
       }
       // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
       dead.assign(w.discs.size(), 0);

@@ -68,6 +68,7 @@ struct DischargeState {
   std::size_t next_snap = 0;
   double last_removal = 0, removed_mass = 0, moved_fraction = 0;
   double wall_seconds = 0;   // [s] of computing in earlier sessions (before the last checkpoint)
+  EnergyWatch energy;        // budget from the opening (blowup.hpp)
 
   void save(BinaryOut& o) const;
   void load(BinaryIn& r);  // an "interrupted" status is read as going on

@@ -51,6 +51,10 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
   const long check_every = 10;
   const long keep_every = 1000;
   const double wall_before = res.wall_seconds;
+  if (!res.energy_started) {
+    res.energy.start(w, spec.max_energy_gain);
+    res.energy_started = true;
+  }
 
   const auto t0 = std::chrono::steady_clock::now();
   auto last_print = t0;
@@ -67,6 +71,12 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
       if (!std::isfinite(res.mean_abs_du) || !std::isfinite(res.mean_abs_dv)) {
         res.status = RunStatus::unstable;
         res.reason = diagnose(w, overlap_limit);
+        break;
+      }
+      const std::string grew = res.energy.check(w);  // energy created: a blow-up on its way
+      if (!grew.empty()) {
+        res.status = RunStatus::unstable;
+        res.reason = grew;
         break;
       }
       if (res.mean_abs_du < res.rest_threshold && res.mean_abs_dv < res.rest_threshold && !res.rest_reached) {

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "blowup.hpp"
 #include "control.hpp"
 #include "discs.hpp"
 #include "scene.hpp"
@@ -22,6 +23,8 @@ struct RunResult {
   double wall_seconds = 0;
   Discs last_good;             // state at the last check that passed (written when unstable)
   double last_good_time = 0;
+  bool energy_started = false; // the energy budget of blowup.hpp, set at the first step
+  EnergyWatch energy;
 };
 
 const char* to_string(RunStatus s);

@@ -671,6 +671,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     s.stop_at_rest = t.boolean("stop_at_rest", true);
     s.rest_factor = t.positive("rest_factor", 1e-4);
     s.max_overlap_fraction = t.positive("max_overlap", 0.5);
+    s.max_energy_gain = t.positive("max_energy_gain", 0.05);
     t.finish();
   }
   double rmean = 0;

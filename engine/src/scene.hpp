@@ -75,6 +75,7 @@ struct SceneSpec {
   bool stop_at_rest = true;
   double rest_factor = 1e-4;
   double max_overlap_fraction = 0.5;
+  double max_energy_gain = 0.05;   // end.max_energy_gain: energy created beyond this x scale stops the run
   std::string start_from;          // [start] from: a saved state (skips the fill)
   DischargeSpec discharge;         // [discharge]
   ShearBoxSpec shear_box;          // [shear_box], [shear] (paper 2)

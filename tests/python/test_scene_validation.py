@@ -78,10 +78,24 @@ def test_blow_up_stops_with_exit_3(tmp_path, run_dem):
     scene.write_text(edit(BASE, '"paper_eq19"', '"velocity_verlet"'))
     proc = run_dem("run", scene, "--out", tmp_path / "out", "--force-dt", "--quiet")
     assert proc.returncode == 3, proc.stdout + proc.stderr
-    assert "unstable run" in proc.stderr and "overlap" in proc.stderr
+    # Caught by the energy budget (blowup.hpp) before any overlap reaches half a radius: the
+    # discs start at rest, so every erg above the start energy was made by the integrator.
+    assert "unstable run" in proc.stderr and "energy created without a source" in proc.stderr, proc.stderr
+    assert "fastest disc id" in proc.stderr
     import json
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert summary["status"] == "unstable" and summary["reason"]
+    assert summary["status"] == "unstable" and "energy" in summary["reason"]
+    step = int(re.search(r"\(step (\d+)\)", summary["reason"]).group(1))
+    assert step <= 200, summary["reason"]  # 0.02 s of a fill that takes 0.4 s to rest
+
+
+def test_blow_up_by_overlap_when_energy_check_is_loose(tmp_path, run_dem):
+    """The overlap criterion alone still stops the same blow-up (end.max_energy_gain huge)."""
+    scene = tmp_path / "blow.toml"
+    scene.write_text(edit(edit(BASE, '"paper_eq19"', '"velocity_verlet"'), "[end]", "[end]\nmax_energy_gain = 1e12"))
+    proc = run_dem("run", scene, "--out", tmp_path / "out", "--force-dt", "--quiet")
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "unstable run" in proc.stderr and "overlap" in proc.stderr, proc.stderr
 
 
 def test_cli_errors(run_dem, tmp_path):
