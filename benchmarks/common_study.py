@@ -1,0 +1,235 @@
+"""Shared helpers of the work-precision and stability studies (issue 5, points 2 and 3).
+
+Both studies drive the engine binary (``--dem PATH``, else ``$DEM_BINARY``, else
+``build/dem``) as a subprocess, read its ``summary.json`` and ``discs.csv``, and write
+``results.json`` + ``report.md`` (+ PNGs) under ``--out``. Python is Debian's
+``/usr/bin/python3`` (numpy, matplotlib). Nothing here edits the engine or ``compare/``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "reference_inputs" / "scenes"
+SCHEMES = ("paper_eq18", "paper_eq19", "velocity_verlet")
+PAPER_LAW = {"normal_spring": "incremental", "no_tension": "elastic", "friction_cap": "elastic"}
+
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+
+def setup_binary(path: str | None) -> Path:
+    """The engine binary: --dem, else $DEM_BINARY, else build/dem. Exported as DEM_BINARY so
+    that compare/ (dem resolve, the native backend) uses the same one."""
+    b = Path(path or os.environ.get("DEM_BINARY") or ROOT / "build" / "dem").resolve()
+    if not b.exists():
+        raise SystemExit(f"engine binary {b} not found: build it (README) or pass --dem PATH")
+    os.environ["DEM_BINARY"] = str(b)
+    return b
+
+
+def dem() -> str:
+    return os.environ["DEM_BINARY"]
+
+
+def engine_version() -> str:
+    p = subprocess.run([dem(), "--help"], capture_output=True, text=True)
+    line = (p.stdout or p.stderr or "dem").splitlines()[0]
+    return line.split(" - ")[0].strip()
+
+
+# A run counts as at rest (not blown up, not self-excited) when its kinetic energy at the end is
+# below KE_REST x (total weight x mean radius): the energy of every disc dropped by one radius.
+KE_REST = 1e-6
+
+
+def energy_scale(out_dir: Path, summary: dict) -> float:
+    """Total weight x mean radius (force x length per unit thickness) of the run's discs."""
+    d = np.atleast_1d(np.genfromtxt(Path(out_dir) / "discs.csv", delimiter=",", names=True))
+    return float(summary["weight"]) * (float(np.mean(d["r"])) if d.size else 1.0)
+
+
+def kinetic_energy_run(out_dir: Path, summary: dict) -> float:
+    """Translational + rotational energy [force x length per unit thickness] of the run's
+    discs.csv (I = m r^2 / 2); the density comes from summary.json's disc_weight (m g of disc
+    0) and disc 0's radius. One disc material is assumed (true of every scene here)."""
+    d = np.atleast_1d(np.genfromtxt(Path(out_dir) / "discs.csv", delimiter=",", names=True))
+    if d.size == 0:
+        return 0.0
+    g = math.hypot(*summary["options"]["gravity"])
+    r0 = float(d["r"][d["id"] == 0][0]) if np.any(d["id"] == 0) else float(d["r"][0])
+    rho = float(summary["disc_weight"]) / (g * math.pi * r0 ** 2)
+    m = rho * math.pi * d["r"] ** 2
+    ke = 0.5 * m * (d["vx"] ** 2 + d["vy"] ** 2) + 0.25 * m * d["r"] ** 2 * d["omega"] ** 2
+    return float(np.sum(ke))
+
+
+def run_dem(scene: Path, out: Path, scheme: str, dt: float, end_time: float | None = None,
+            timeout: float = 900, extra: list | None = None) -> dict:
+    """``dem run SCENE --out OUT --scheme S --dt DT --force-dt --quiet --no-plots``.
+
+    Returns rc, status, loop time (summary wall_time_s), process time, steps, the summary
+    (or None) and the message of a failed run. --force-dt is always given: these studies go
+    past the engine's enforced bound on purpose."""
+    cmd = [dem(), "run", str(scene), "--out", str(out), "--scheme", scheme, "--dt", repr(float(dt)),
+           "--force-dt", "--quiet", "--no-plots"]
+    if end_time is not None:
+        cmd += ["--end-time", repr(float(end_time))]
+    cmd += list(extra or [])
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        rc, err = p.returncode, p.stderr
+    except subprocess.TimeoutExpired:
+        rc, err = None, f"timed out after {timeout} s"
+    proc = time.perf_counter() - t0
+    s = None
+    try:
+        s = json.loads((Path(out) / "summary.json").read_text())
+    except (OSError, ValueError):
+        pass
+    return {"rc": rc, "status": (s or {}).get("status", "no_summary"), "loop_s": (s or {}).get("wall_time_s"),
+            "process_s": proc, "steps": (s or {}).get("steps"), "summary": s,
+            "message": " ".join(err.strip().splitlines()[-2:]) if rc not in (0,) else ""}
+
+
+def timed(fn, repeats: int, cheap_below_s: float = 1.0):
+    """Runs fn() (which returns a dict with 'loop_s' and 'process_s'); repeats it up to
+    ``repeats`` times while one run is cheaper than ``cheap_below_s``; returns the last result
+    with the medians and every sample."""
+    res = fn()
+    loops, procs = [res.get("loop_s")], [res.get("process_s")]
+    while len(loops) < repeats and (res.get("loop_s") or 0) < cheap_below_s and res.get("rc") == 0:
+        r2 = fn()
+        loops.append(r2.get("loop_s"))
+        procs.append(r2.get("process_s"))
+    good = [x for x in loops if x is not None]
+    res["loop_s"] = float(np.median(good)) if good else None
+    res["process_s"] = float(np.median([x for x in procs if x is not None]))
+    res["loop_samples"] = loops
+    res["repeats"] = len(loops)
+    return res
+
+
+def fit_order(dts, errs, lo_err: float = 0.0, hi_err: float = math.inf, dt_max: float = math.inf):
+    """Least-squares slope of log(err) against log(dt) over the points with
+    lo_err < err < hi_err and dt <= dt_max (the asymptotic range). Returns (order, n_points,
+    (dt_min, dt_max) used) or (None, n, None) with fewer than 3 points."""
+    pts = [(d, e) for d, e in zip(dts, errs)
+           if e is not None and math.isfinite(e) and lo_err < e < hi_err and d <= dt_max * (1 + 1e-9)]
+    if len(pts) < 3:
+        return None, len(pts), None
+    x = np.log([p[0] for p in pts])
+    y = np.log([p[1] for p in pts])
+    slope = float(np.polyfit(x, y, 1)[0])
+    return slope, len(pts), (min(p[0] for p in pts), max(p[0] for p in pts))
+
+
+def write_json(path: Path, data) -> None:
+    from compare.common import write_text_atomic
+    write_text_atomic(Path(path), json.dumps(data, indent=1, default=_default) + "\n")
+
+
+def write_text(path: Path, text: str) -> None:
+    from compare.common import write_text_atomic
+    write_text_atomic(Path(path), text)
+
+
+def _default(o):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(type(o))
+
+
+def md_table(header: list, rows: list) -> str:
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def g(v, digits: int = 3) -> str:
+    """Compact number for tables ('-' for None/nan)."""
+    if v is None:
+        return "-"
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    if not math.isfinite(float(v)):
+        return "-"
+    return f"{float(v):.{digits}g}"
+
+
+def savefig(fig, path: Path) -> None:
+    path = Path(path)
+    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
+    fig.savefig(tmp, dpi=110, bbox_inches="tight")
+    os.replace(tmp, path)
+
+
+def scene_text_with(base: Path, end: dict | None = None, fill: dict | None = None, pairs_scale: dict | None = None,
+                    silo: dict | None = None, extra_tables: str = "") -> str:
+    """A paper scene's TOML text with [end], [fill] or [silo] keys replaced (whole tables
+    rewritten from the given dicts merged over the originals' simple key = value lines) and
+    pair constants scaled (pairs_scale: key -> factor, e.g. {"ks_rho_g": 2.0}). The paper's
+    scenes are generated files with one key per line (scripts/make_paper_scenes.py)."""
+    text = Path(base).read_text()
+
+    def table(name, new):
+        nonlocal text
+        m = re.search(r"^\[" + re.escape(name) + r"\][^\n]*\n(.*?)(?=^\[|\Z)", text, flags=re.S | re.M)
+        if not m:
+            raise ValueError(f"{base}: no [{name}] table")
+        old = {}
+        for line in m.group(1).splitlines():
+            kv = re.match(r"\s*([A-Za-z_]+)\s*=\s*(.*?)\s*(#.*)?$", line)
+            if kv:
+                old[kv.group(1)] = kv.group(2)
+        merged = dict(old)
+        for k, v in new.items():
+            if v is None:
+                merged.pop(k, None)
+            else:
+                merged[k] = toml_value(v)
+        body = "".join(f"{k} = {v}\n" for k, v in merged.items()) + "\n"
+        text = text[:m.start(1)] + body + text[m.end(1):]
+
+    if end:
+        table("end", end)
+    if fill:
+        table("fill", fill)
+    if silo:
+        table("silo", silo)
+    if pairs_scale:
+        def scale(mm):
+            k, v = mm.group(1), float(mm.group(2))
+            return f"{k} = {v * pairs_scale[k]!r}" if k in pairs_scale else mm.group(0)
+        text = re.sub(r"^(kn_rho_g|ks_rho_g|eta_n_rho_g|eta_s_rho_g|mu)\s*=\s*([-+0-9.eE]+)", scale, text, flags=re.M)
+    return text + extra_tables
+
+
+def toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    raise TypeError(type(v))
