@@ -80,40 +80,39 @@ void World::init() {
 void World::kick(double h) {
   Discs& d = discs;
   const long n = static_cast<long>(d.size());
-#pragma omp parallel for schedule(static) num_threads(threads_for(n)) if (threads_for(n) > 1)
-  for (long i = 0; i < n; ++i) {  // (16), (17)
+  parallel_for(n, threads_for(static_cast<int>(n)), [&](long i) {  // (16), (17)
     d.vx[i] += d.fx[i] * d.inv_mass[i] * h;
     d.vy[i] += d.fy[i] * d.inv_mass[i] * h;
     d.omega[i] += d.torque[i] * d.inv_inertia[i] * h;
-  }
+  });
 }
 
 void World::drift_eq18() {
   Discs& d = discs;
   const long n = static_cast<long>(d.size());
-#pragma omp parallel for schedule(static) num_threads(threads_for(n)) if (threads_for(n) > 1)
-  for (long i = 0; i < n; ++i) {  // (18)
-    d.dux[i] = d.vx[i] * dt;
-    d.duy[i] = d.vy[i] * dt;
-    d.dphi[i] = d.omega[i] * dt;
+  const double h = dt;
+  parallel_for(n, threads_for(static_cast<int>(n)), [&](long i) {  // (18)
+    d.dux[i] = d.vx[i] * h;
+    d.duy[i] = d.vy[i] * h;
+    d.dphi[i] = d.omega[i] * h;
     d.x[i] += d.dux[i];
     d.y[i] += d.duy[i];
     d.phi[i] += d.dphi[i];
-  }
+  });
 }
 
 void World::drift_eq19() {
   Discs& d = discs;
   const long n = static_cast<long>(d.size());
-#pragma omp parallel for schedule(static) num_threads(threads_for(n)) if (threads_for(n) > 1)
-  for (long i = 0; i < n; ++i) {  // (19): the mean of the last increment and v dt
-    d.dux[i] = 0.5 * (d.dux[i] + d.vx[i] * dt);
-    d.duy[i] = 0.5 * (d.duy[i] + d.vy[i] * dt);
-    d.dphi[i] = 0.5 * (d.dphi[i] + d.omega[i] * dt);
+  const double h = dt;
+  parallel_for(n, threads_for(static_cast<int>(n)), [&](long i) {  // (19): the mean of the last increment and v dt
+    d.dux[i] = 0.5 * (d.dux[i] + d.vx[i] * h);
+    d.duy[i] = 0.5 * (d.duy[i] + d.vy[i] * h);
+    d.dphi[i] = 0.5 * (d.dphi[i] + d.omega[i] * h);
     d.x[i] += d.dux[i];
     d.y[i] += d.duy[i];
     d.phi[i] += d.dphi[i];
-  }
+  });
 }
 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).

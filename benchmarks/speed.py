@@ -1,0 +1,318 @@
+"""Speed benchmark (issue 5, point 1): particle-steps per second and peak memory of the native
+engine, LIGGGHTS and YADE on the same silo scenes, settling then discharging, in one run.
+
+    /usr/bin/python3 benchmarks/speed.py --out out/speed            # all sizes (~30-40 min)
+    /usr/bin/python3 benchmarks/speed.py --out out/speed --quick    # 350 and 10k discs (~5 min)
+
+Method (benchmarks/README.md): every (scene, code, threads) run is a fresh process, repeated
+--repeats times in an interleaved order (so slow drift of the machine hits all codes alike);
+the table gives the median and the spread (min-max) of microseconds per particle-step, where a
+particle-step is one disc advanced by one step and the time is the code's own stepping time
+(native: summary.json wall_time_s, the step loop only; LIGGGHTS: "Loop time" minus its Output
+share; YADE: the time spent in O.run). Setup (reading the scene, building the lattice) and the
+writing of final outputs are excluded for every code. Peak memory is the peak resident set size
+of the run's process (for mpirun: the largest rank), measured by a worker process through
+getrusage(RUSAGE_CHILDREN), reported as bytes per disc.
+
+Scenes: the paper's 17/18 silo (350 discs, reference_inputs/scenes/discharge_17_18.toml) and the
+scaled lattice silos bench_silo_{10k,100k,1m}.toml; each settles for S steps from its lattice and
+then discharges through the opened slit for D steps (the same S and D for every code).
+
+Physics: LIGGGHTS and YADE run the law all three codes share (compare/common.py SHARED_VARIANT,
+velocity Verlet) at dt = 5e-5 s (Verlet is unstable at the paper's 1e-4 s); the native engine runs
+that same case (the comparison rows) and, as its own row, the paper's law with eq. (19) at 1e-4 s.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+SCENES = ROOT / "reference_inputs" / "scenes"
+DT_SHARED = 5e-5
+DT_PAPER = 1e-4
+# name: (scene file, settle steps, discharge steps at DT_SHARED, reference-code step scale)
+SIZES = {
+    "350": ("discharge_17_18.toml", 4000, 12000, 1.0),
+    "10k": ("bench_silo_10k.toml", 1000, 2000, 1.0),
+    "100k": ("bench_silo_100k.toml", 200, 400, 1.0),
+    "1m": ("bench_silo_1m.toml", 40, 80, 0.5),
+}
+
+
+def scene_with_phases(base: Path, settle_steps: int, discharge_steps: int, dt: float, out: Path) -> Path:
+    """The base scene with [end] = settle for S steps and [discharge] = D steps (no snapshots)."""
+    text = base.read_text()
+    text = re.sub(r"(?ms)^\[discharge\].*?(?=^\[|\Z)", "", text)
+    text = re.sub(r"(?ms)^\[end\].*?(?=^\[|\Z)", "", text)
+    settle, dis = settle_steps * dt, discharge_steps * dt
+    text += (f"\n[end]\ntime = {settle!r}\nstop_at_rest = false\n\n"
+             f"[discharge]\ntime = {dis!r}\ngate = \"gate\"\noutlet_depth = 4.0\njam_time = {dis + 1.0!r}\n"
+             f"series_interval = {dis!r}\npeak_window = {dis!r}\nsnapshots = []\n")
+    out.write_text(text)
+    return out
+
+
+# ------------------------------------------------------------------ workers (one run each)
+
+def _native(args) -> dict:
+    scene = args.scene
+    if args.scheme:  # the paper's law as the scene has it, at the paper's dt
+        extra = ["--scheme", args.scheme, "--dt", repr(args.dt), "--force-dt"]
+    else:  # the shared case, written exactly as the comparison layer writes it
+        from compare import native_backend
+        scene = str(native_backend.write_inputs(_case(args), Path(args.dir) / "case"))
+        extra = []
+    cmd = [args.dem, "run", scene, "--out", str(Path(args.dir) / "run"), "--quiet", "--no-plots",
+           "--threads", str(args.threads)] + extra
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        return {"error": f"dem exit {p.returncode}: {p.stderr.strip()[-300:]}"}
+    s = json.loads((Path(args.dir) / "run" / "summary.json").read_text())
+    return {"loop_s": s["wall_time_s"], "particle_steps": s["particle_steps"],
+            "steps": s.get("steps"), "status": s["status"]}
+
+
+def _case(args):
+    from compare import study
+    from compare.common import Case
+    c = study.discharge_case(Path(args.scene), DT_SHARED, args.settle * DT_SHARED, args.discharge * DT_SHARED, 0, 0.0)
+    c.series_interval = args.discharge * DT_SHARED
+    return c
+
+
+def _liggghts(args) -> dict:
+    from compare import liggghts_backend as lb
+    case = _case(args)
+    out = Path(args.dir)
+    script = lb.write_inputs(case, out, args.threads)
+    log = out / "liggghts.log"
+    with open(log, "w") as f:
+        p = subprocess.run(lb.command(script, args.threads), cwd=out, stdout=f, stderr=subprocess.STDOUT,
+                           env=dict(os.environ, OMP_NUM_THREADS="1"))
+    text = log.read_text(errors="replace")
+    m = re.search(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
+    if p.returncode != 0 or not m:
+        return {"error": f"liggghts exit {p.returncode}: " + " | ".join(text.strip().splitlines()[-3:])}
+    loop, steps, atoms_end = float(m.group(1)), int(m.group(3)), int(m.group(4))
+    o = re.search(r"^Output\s*\|\s*[\d.eE+-]+\s*\|\s*([\d.eE+-]+)\s*\|\s*([\d.eE+-]+)", text, re.M)
+    out_s = float(o.group(2)) if o else 0.0  # the average over ranks of the Output time
+    n0 = len(case.discs)
+    return {"loop_s": loop - out_s, "output_s": out_s, "particle_steps": steps * 0.5 * (n0 + atoms_end),
+            "steps": steps, "status": "ok"}
+
+
+def _yade(args) -> dict:
+    from compare import yade_backend as yb
+    case = _case(args)
+    res = yb.run(case, Path(args.dir), timeout=args.timeout, threads=args.threads)
+    if res.status != "ok":
+        return {"error": res.reason}
+    return {"loop_s": res.extra["loop_time_s"], "particle_steps": res.extra["particle_steps"],
+            "steps": res.steps, "status": "ok"}
+
+
+def worker(args) -> None:
+    t0 = time.monotonic()
+    fn = {"native": _native, "liggghts": _liggghts, "yade": _yade}[args.code]
+    try:
+        rec = fn(args)
+    except Exception as e:  # noqa: BLE001 - reported as a failed point, never a crash of the study
+        rec = {"error": repr(e)}
+    rec["process_s"] = time.monotonic() - t0
+    rec["peak_rss_bytes"] = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+    print(json.dumps(rec))
+
+
+# ------------------------------------------------------------------ the study
+
+def run_point(code, scene, size, threads, rep, out, dem, scheme=None, dt=None, timeout=3600) -> dict:
+    d = out / "runs" / f"{size}_{code}{'_' + scheme if scheme else ''}_t{threads}_r{rep}"
+    d.mkdir(parents=True, exist_ok=True)
+    file, settle, dis, scale = SIZES[size]
+    if code != "native":
+        settle, dis = max(1, int(settle * scale)), max(1, int(dis * scale))
+    cmd = [sys.executable, __file__, "--worker", code, "--scene", str(scene), "--dir", str(d),
+           "--threads", str(threads), "--dem", dem, "--settle", str(settle), "--discharge", str(dis),
+           "--timeout", str(timeout)]
+    if scheme:
+        cmd += ["--scheme", scheme, "--dt", repr(dt)]
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    try:
+        rec = json.loads(p.stdout.strip().splitlines()[-1])
+    except (IndexError, json.JSONDecodeError):
+        rec = {"error": f"worker failed: {p.stderr.strip()[-400:]}"}
+    rec.update(code=code, size=size, threads=threads, repeat=rep, scheme=scheme or "shared_verlet")
+    if "loop_s" in rec and rec.get("particle_steps"):
+        rec["us_per_ps"] = rec["loop_s"] / rec["particle_steps"] * 1e6
+    return rec
+
+
+def summarise(records, n_discs):
+    rows = {}
+    for r in records:
+        key = (r["size"], r["code"], r["scheme"], r["threads"])
+        rows.setdefault(key, []).append(r)
+    table = []
+    for (size, code, scheme, threads), rs in rows.items():
+        ok = [r for r in rs if "us_per_ps" in r]
+        us = [r["us_per_ps"] for r in ok]
+        rss = [r["peak_rss_bytes"] for r in rs if "peak_rss_bytes" in r]
+        table.append({"size": size, "code": code, "scheme": scheme, "threads": threads, "n": n_discs[size],
+                      "runs": len(rs), "ok": len(ok),
+                      "us_median": statistics.median(us) if us else None,
+                      "us_min": min(us) if us else None, "us_max": max(us) if us else None,
+                      "bytes_per_disc": max(rss) / n_discs[size] if rss else None,
+                      "errors": sorted({r["error"][:200] for r in rs if "error" in r})})
+    return table
+
+
+def write_report(out, table, meta):
+    def find(size, code, scheme, threads):
+        for t in table:
+            if (t["size"], t["code"], t["scheme"], t["threads"]) == (size, code, scheme, threads):
+                return t
+        return None
+
+    L = ["# Speed benchmark: native engine, LIGGGHTS, YADE", "",
+         f"Machine: {meta['machine']}; {meta['cpus']} CPUs; LIGGGHTS {meta['liggghts']}, YADE {meta['yade']}, "
+         f"dem {meta['dem_version']}. {meta['repeats']} repeats per point, interleaved; run "
+         f"{meta['started']} ({meta['elapsed_s']:.0f} s).", "",
+         "Microseconds per particle-step (median, [min-max] over repeats) of the stepping alone; memory is the",
+         "peak resident set of the process (the largest rank for mpirun) per disc. `shared` rows: the law all",
+         f"codes share with velocity Verlet at dt = {DT_SHARED:g} s; `paper` row: native, the paper's law and eq. (19) at",
+         f"dt = {DT_PAPER:g} s. Ratios are code / native (shared law, same thread count: 1 thread against serial",
+         "LIGGGHTS / YADE -j1, 2 threads against mpirun -np 2 / YADE -j2).", "",
+         "| discs | code | law | threads | us / particle-step | spread | ratio to native | bytes / disc | runs ok |",
+         "|---|---|---|---|---|---|---|---|---|"]
+    for size in meta["sizes"]:
+        for code, scheme in (("native", "paper_eq19"), ("native", "shared_verlet"), ("liggghts", "shared_verlet"),
+                             ("yade", "shared_verlet")):
+            for th in (1, 2):
+                t = find(size, code, scheme, th)
+                if not t:
+                    continue
+                nat = find(size, "native", "shared_verlet", th)
+                ratio = (t["us_median"] / nat["us_median"]) if (t["us_median"] and nat and nat["us_median"]) else None
+                fmt = lambda v, f="{:.4g}": f.format(v) if v is not None else "-"
+                L.append(f"| {t['n']} | {code} | {'paper' if scheme == 'paper_eq19' else 'shared'} | {th} | "
+                         f"{fmt(t['us_median'])} | {fmt(t['us_min'])}-{fmt(t['us_max'])} | {fmt(ratio, '{:.1f}x')} | "
+                         f"{fmt(t['bytes_per_disc'], '{:.0f}')} | {t['ok']}/{t['runs']} |")
+    L += ["", "## Targets (issue 5)", ""]
+    for size in meta["sizes"]:
+        n1, n2 = find(size, "native", "shared_verlet", 1), find(size, "native", "shared_verlet", 2)
+        lg = find(size, "liggghts", "shared_verlet", 1)
+        if n1 and lg and n1["us_median"] and lg["us_median"]:
+            L.append(f"- {n1['n']} discs: native is {lg['us_median'] / n1['us_median']:.1f}x faster than serial LIGGGHTS "
+                     f"per particle-step (target >= 10x).")
+        if n1 and n2 and n1["us_median"] and n2["us_median"]:
+            L.append(f"- {n1['n']} discs: 1 -> 2 threads speed-up {n1['us_median'] / n2['us_median']:.2f}x (target >= 1.8x).")
+    big = find("1m", "native", "paper_eq19", 1)
+    if big and big["bytes_per_disc"]:
+        L.append(f"- 1M discs: native peak memory {big['bytes_per_disc']:.0f} bytes per disc (target <= 200).")
+    errs = [(t["size"], t["code"], t["threads"], e) for t in table for e in t["errors"]]
+    if errs:
+        L += ["", "## Failed runs", ""] + [f"- {s} {c} {th} threads: {e}" for s, c, th, e in errs]
+    (out / "report.md").write_text("\n".join(L) + "\n")
+
+
+def version_of(cmd) -> str:
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        return (p.stdout + p.stderr).strip().splitlines()[0][:80]
+    except (OSError, IndexError, subprocess.TimeoutExpired):
+        return "unavailable"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default="out/speed")
+    ap.add_argument("--sizes", default="350,10k,100k,1m")
+    ap.add_argument("--codes", default="native,liggghts,yade")
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="350 and 10k discs only")
+    ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(ROOT / "build" / "dem")))
+    ap.add_argument("--timeout", type=float, default=3600)
+    # worker mode (internal)
+    ap.add_argument("--worker")
+    ap.add_argument("--scene")
+    ap.add_argument("--dir")
+    ap.add_argument("--scheme")
+    ap.add_argument("--dt", type=float)
+    ap.add_argument("--settle", type=int)
+    ap.add_argument("--discharge", type=int)
+    args = ap.parse_args()
+    if args.worker:
+        args.code = args.worker
+        args.threads = int(args.threads)
+        worker(args)
+        return 0
+
+    out = Path(args.out).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    sizes = ["350", "10k"] if args.quick else args.sizes.split(",")
+    codes = args.codes.split(",")
+    threads = [int(t) for t in args.threads.split(",")]
+    os.environ["DEM_BINARY"] = args.dem
+    t0 = time.monotonic()
+    scenes, n_discs = {}, {}
+    for size in sizes:
+        file, settle, dis, _ = SIZES[size]
+        scenes[size] = scene_with_phases(SCENES / file, settle, dis, DT_SHARED, out / f"bench_{size}.toml")
+        r = subprocess.run([args.dem, "resolve", str(scenes[size])], capture_output=True, text=True)
+        if r.returncode != 0:
+            print(r.stderr, file=sys.stderr)
+            return 2
+        n_discs[size] = len(json.loads(r.stdout)["discs"])
+    points = []
+    for size in sizes:
+        _, settle, dis, _ = SIZES[size]
+        for th in threads:
+            if "native" in codes:
+                points.append(("native", size, th, None, None))
+                # the paper's law at its own dt: half the steps cover the same simulated time
+                points.append(("native", size, th, "paper_eq19", DT_PAPER))
+            for code in ("liggghts", "yade"):
+                if code in codes:
+                    points.append((code, size, th, None, None))
+    records = []
+    for rep in range(args.repeats):
+        for code, size, th, scheme, dt in points:
+            scene = scenes[size]
+            if scheme == "paper_eq19":  # same simulated times at the paper's dt (contact law: the scene's, the paper's)
+                _, settle, dis, _ = SIZES[size]
+                scene = out / f"bench_{size}_paper.toml"
+                if not scene.exists():
+                    scene_with_phases(SCENES / SIZES[size][0], settle // 2, dis // 2, DT_PAPER, scene)
+            rec = run_point(code, scene, size, th, rep, out, args.dem, scheme, dt, args.timeout)
+            records.append(rec)
+            print(f"[{time.monotonic() - t0:7.0f} s] {size:>5} {code:9} {rec['scheme']:14} t{th} r{rep}: "
+                  f"{rec.get('us_per_ps', float('nan')):.4g} us/ps, {rec.get('peak_rss_bytes', 0) / 2**20:.0f} MiB"
+                  f"{'  ERROR ' + rec['error'][:160] if 'error' in rec else ''}", flush=True)
+            (out / "records.json").write_text(json.dumps(records, indent=1))
+    table = summarise(records, n_discs)
+    meta = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
+            "liggghts": version_of(["liggghts", "-h"]) if "liggghts" in codes else "-",
+            "yade": version_of(["yade", "--version"]) if "yade" in codes else "-",
+            "dem_version": "git " + version_of(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]), "repeats": args.repeats, "sizes": sizes,
+            "started": time.strftime("%Y-%m-%d %H:%M"), "elapsed_s": time.monotonic() - t0}
+    (out / "results.json").write_text(json.dumps({"meta": meta, "table": table, "records": records}, indent=1))
+    write_report(out, table, meta)
+    print((out / "report.md").read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
