@@ -132,6 +132,52 @@ def plot_discharge(series_json: Path, png: Path, name: str) -> None:
     _savefig(fig, png)
 
 
+def plot_flow_profiles(summary: dict, png: Path, name: str) -> None:
+    """Time-averaged wall profiles during flow, ensemble mean of each code with 1 s.e. bars: side
+    walls against depth, bottom walls (gate left out) along the floor."""
+    ref = next((v["flow_profile"] for v in summary.values() if v.get("flow_profile")), {})
+    walls = list(ref)
+    side = [w for w in walls if ref[w]["group"].startswith("side")]
+    bottom = [w for w in walls if not ref[w]["group"].startswith("side")]
+    ncol = max(len(side), len(bottom), 1)
+    fig, axes = plt.subplots(2, ncol, figsize=(4.2 * ncol, 8.4), squeeze=False)
+    for row, group in enumerate((side, bottom)):
+        for col in range(ncol):
+            ax = axes[row][col]
+            if col >= len(group):
+                ax.axis("off")
+                continue
+            w = group[col]
+            for k, (code, v) in enumerate(summary.items()):
+                p = (v.get("flow_profile") or {}).get(w)
+                if not p:
+                    continue
+                mid = 0.5 * (np.array(p["s_lo"], float) + np.array(p["s_hi"], float)) + (k - 1) * 0.15
+                f, e = np.array(p["normal"]) / 1e3, np.nan_to_num(np.array(p["normal_se"], float)) / 1e3
+                lab = f"{code} ({p['members']} members)"
+                if row == 0:
+                    ax.errorbar(f, mid, xerr=e, fmt=MARKERS[code] + "-", ms=3, lw=1, capsize=2, color=COLORS[code],
+                                label=lab, alpha=0.85)
+                else:
+                    ax.errorbar(mid, f, yerr=e, fmt=MARKERS[code] + "-", ms=3, lw=1, capsize=2, color=COLORS[code],
+                                label=lab, alpha=0.85)
+            ax.set_title(w, fontsize=9)
+            ax.grid(alpha=0.3)
+            if row == 0:
+                ax.invert_yaxis()
+                ax.set_xlabel("normal force per bin [10^3 dyn/cm]")
+                ax.set_ylabel("distance from the top of the wall [cm]")
+            else:
+                ax.set_xlabel("distance along the wall from its 'from' end [cm]")
+                ax.set_ylabel("normal force per bin [10^3 dyn/cm]")
+            ax.legend(fontsize=7)
+    win = next((v.get("flow_window") for v in summary.values() if v.get("flow_window")), None)
+    when = f"t = {win[0]:g} .. {win[1]:g} s after opening" if win else "during flow"
+    fig.suptitle(f"{name}: wall forces averaged over {when}; ensemble mean ± 1 s.e.", fontsize=10)
+    fig.tight_layout()
+    _savefig(fig, png)
+
+
 def write(report: dict, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     pngs = []
@@ -151,6 +197,9 @@ def write(report: dict, out: Path) -> None:
         if sj.exists():
             plot_discharge(sj, out / f"discharge_{name}.png", name)
             pngs.append((f"Discharge, {name}", f"discharge_{name}.png"))
+        if any(v.get("flow_profile") for v in report["discharge"][name].values()):
+            plot_flow_profiles(report["discharge"][name], out / f"flow_profiles_{name}.png", name)
+            pngs.append((f"Time-averaged wall profiles during flow, {name}", f"flow_profiles_{name}.png"))
 
     agreement = {"profile": report["profile"], "codes": report["codes"], "passed": report["passed"],
                  "metrics": report["metrics"]}
@@ -170,6 +219,13 @@ def write(report: dict, out: Path) -> None:
          "velocities zeroed, no contact history) and rest for the same time.",
          "- Discharge is compared over ensembles (members differ by a seeded 1e-3 cm perturbation of the lattice): "
          "means against 3 combined standard errors + 10 % of the mean; jams against the binomial spread.",
+         "- Wall forces during flow: each member's wall-force samples (every 5 ms) are averaged per bin over the "
+         "same window in every code, from 0.1 s after the opening (the discs over the slit have fallen and the "
+         "flow is steady) to the end of the run; the gate is left out and the engine's slit-end point forces are "
+         "counted in the end bin of the bottom wall there (where LIGGGHTS' mesh edge and YADE's facet vertex "
+         "count them). The totals per wall group (side normal, side friction, bottom normal) are judged like the "
+         "other means; each wall's cumulative normal profile (from its 'from' end) point by point against "
+         "3 combined standard errors + 10 % of that wall's total.",
          "- A run that crashed, timed out, blew up, lost discs or wrote no output fails every metric that needs it.",
          "", "## Agreement table", "",
          "| scene | metric | values | tolerance | pass | note |", "|---|---|---|---|---|---|"]
@@ -209,15 +265,17 @@ def write(report: dict, out: Path) -> None:
                 L.append("")
     if report.get("discharge"):
         L += ["", "## Discharge ensembles", "",
-              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jam fraction | peak side | peak bottom |",
-              "|---|---|---|---|---|---|---|---|"]
+              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jam fraction | peak side | peak bottom "
+              "| side normal during flow | side friction during flow | bottom normal during flow |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
         for name, s in report["discharge"].items():
             for c, v in s.items():
                 L.append(f"| {name} | {c} | {v['members']} ({v['failed']}) | {_fmt(v['discs_out'])} | "
                          f"{_fmt(v['flow_rate'])} | {_fmt(v['jam_fraction'])} | {_fmt(v['peak_ratio_side'])} | "
-                         f"{_fmt(v['peak_ratio_bottom'])} |")
+                         f"{_fmt(v['peak_ratio_bottom'])} | {_fmt(v.get('flow_side_normal', float('nan')))} | "
+                         f"{_fmt(v.get('flow_side_shear', float('nan')))} | {_fmt(v.get('flow_bottom_normal', float('nan')))} |")
                 for f in v["failures"]:
-                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | |")
+                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | | | | |")
     if report.get("mpi"):
         m = report["mpi"]
         L += ["", "## Scale-out: LIGGGHTS under MPI", "",

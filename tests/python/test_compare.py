@@ -319,3 +319,56 @@ def test_snapshots_of_a_static_run(code, tmp_path):
     assert last.t == pytest.approx(case.duration) and list(last.id) == [0, 1]
     np.testing.assert_allclose(last.rows()[:, :3], np.array(res.discs_end)[:, :3], rtol=0, atol=1e-5)
     assert last.y[0] == pytest.approx(1.0, abs=1e-3) and abs(last.vy[0]) < 1e-3     # at rest on the gate
+
+
+# ------------------------------------------------------------------ wall forces during flow
+
+def _flow_member(case, scale, seed, extra_side=0.0):
+    """A synthetic discharge Result: side walls carry scale x (1 + depth/20) per bin plus noise,
+    the bottom walls 2 x scale per bin, the gate nothing; a large transient before FLOW_START."""
+    rng = np.random.default_rng(seed)
+    t = np.round(np.arange(0, case.duration + 1e-9, case.series_interval), 9)
+    walls, profiles = {}, {}
+    for w in case.resolved["walls"]:
+        nb = len(np.arange(0, np.linalg.norm(np.subtract(w["to"], w["from"])) - 1e-9, case.profile_bin))
+        base = np.zeros(nb)
+        if w["group"].startswith("side"):
+            base = scale * (1 + np.arange(nb) / 20.0) * (1 + extra_side)
+        elif w["name"] != "gate":
+            base = 2 * scale * np.ones(nb)
+        rows = base[None, :] * (1 + 0.05 * rng.standard_normal((len(t), nb)))
+        rows[t < study.FLOW_START - 1e-9] *= 5.0           # the opening transient: left out
+        walls[w["name"]] = {"normal": rows.tolist(), "shear": (0.1 * rows).tolist()}
+        profiles[w["name"]] = {"s_lo": list(np.arange(nb) * 2.0), "s_hi": list(np.arange(1, nb + 1) * 2.0),
+                               "normal": rows[-1].tolist(), "shear": (0.1 * rows[-1]).tolist()}
+    return Result(code="x", case=case.name, series={"t": t.tolist(), "walls": walls}, profiles=profiles,
+                  removals=list(np.linspace(0.01, case.duration, 30)), n_final=100)
+
+
+def test_time_averaged_wall_profiles_during_flow_are_judged_statistically():
+    scene = ROOT / "reference_inputs" / "scenes" / "discharge_11_12.toml"
+    case = study.discharge_case(scene, 2.5e-5, 1.0, 0.6, 0, 0.0)
+    m = study.discharge_measures(_flow_member(case, 1e4, 1), case)
+    # the window mean leaves the transient out: side bins are 1e4 (1 + k/20) within the noise
+    left = np.array(m["flow_profile"]["left"]["normal"])
+    assert left == pytest.approx(1e4 * (1 + np.arange(len(left)) / 20), rel=0.03)
+    assert "gate" not in m["flow_profile"] and m["flow_window"] == [study.FLOW_START, 0.6]
+    assert m["flow_bottom_normal"] == pytest.approx(2e4 * 16, rel=0.02)
+    assert m["flow_samples"] == round((0.6 - study.FLOW_START) / case.series_interval) + 1
+
+    def ensemble(extra, seed0):
+        return [(r, study.discharge_measures(r, case))
+                for r in (_flow_member(case, 1e4, seed0 + k, extra) for k in range(4))]
+    same = {"native": ensemble(0.0, 10), "liggghts": ensemble(0.0, 20)}
+    metrics, summary = study.discharge_compare("d", same)
+    flow = [x for x in metrics if "flow" in x["metric"] and "rate" not in x["metric"]]
+    assert len(flow) == 5 and all(x["pass"] for x in flow), [(x["metric"], x["values"]) for x in flow]
+    assert summary["native"]["flow_profile"]["left"]["members"] == 4
+    # side walls 30 % stronger in one code: the totals and the cumulative side profile fail, the bottom passes
+    off = {"native": ensemble(0.0, 10), "liggghts": ensemble(0.3, 20)}
+    metrics, _ = study.discharge_compare("d", off)
+    res = {x["metric"].split(" (")[0]: x["pass"] for x in metrics}
+    assert not res["discharge flow_side_normal"] and not res["discharge flow_side_shear"]
+    assert res["discharge flow_bottom_normal"]
+    assert not res["discharge time-averaged side-wall normal profile during flow, cumulative"]
+    assert res["discharge time-averaged bottom-wall normal profile during flow, cumulative"]
