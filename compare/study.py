@@ -504,9 +504,12 @@ def discharge_compare(scene_name: str, per_code: dict) -> tuple[list, dict]:
                 continue
             comb = math.sqrt((sa if math.isfinite(sa) else 0) ** 2 + (sb if math.isfinite(sb) else 0) ** 2)
             tol = TOL_FLOW_SIGMA * comb + TOL_FLOW_REL * abs(ma)
+            note = ""
+            if key in FLOW_TOTALS and ref.get("flow_window"):
+                note = "time average over t = {:g} .. {:g} s after opening".format(*ref["flow_window"])
             metrics.append(metric(f"discharge {key} ({c} vs native)", scene_name,
                                   {"native": [ma, sa], c: [mb, sb], "allowed": tol},
-                                  f"{TOL_FLOW_SIGMA} x combined s.e. + {TOL_FLOW_REL:.0%}", abs(ma - mb) <= tol))
+                                  f"{TOL_FLOW_SIGMA} x combined s.e. + {TOL_FLOW_REL:.0%}", abs(ma - mb) <= tol, note))
         for group in ("side", "bottom"):
             metrics.append(flow_profile_metric(scene_name, c, group, ref["flow_profile"], s["flow_profile"]))
         ja, jb = ref["jam_fraction"], s["jam_fraction"]
