@@ -12,7 +12,10 @@ namespace dem {
 
 // du_n: approach increment (5a); du_s: shear increment (5b); overlap = r_i + r_j - R >= 0.
 // en, es: elastic forces carried from the last step (updated). fn, fs: total forces (out).
-template <NormalSpring NS, NoTension NT, FrictionCap FC>
+// SHEAR = false: every pair of the scene is shear-free (no shear spring and dashpot, or mu = 0
+// with a shear spring, so the cap holds e_s at 0): the shear part is not computed (same result).
+// DASH = false: no pair has a dashpot: the dashpot terms are not computed (same result).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR = true, bool DASH = true>
 inline void contact_law(const PairProps& p, double overlap, double du_n, double du_s,
                         double inv_dt, double& en, double& es, double& fn, double& fs) {
   // Normal: spring and dashpot in parallel.
@@ -20,7 +23,8 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
     en += p.kn * du_n;  // (6a), (7a)
   else
     en = p.kn * overlap;
-  const double dn = p.eta_n * du_n * inv_dt;  // (6b), (7b): the dashpot is not accumulated
+  double dn = 0;
+  if constexpr (DASH) dn = p.eta_n * du_n * inv_dt;  // (6b), (7b): the dashpot is not accumulated
 
   if constexpr (NT == NoTension::elastic) {
     if (en < 0) {  // (8), (12): no tension in the elastic part; the contact carries nothing
@@ -35,9 +39,14 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
     fn = en + dn;  // viscous pull allowed while the discs overlap
   }
 
+  if constexpr (!SHEAR) {
+    fs = 0;
+    return;
+  }
   // Shear: spring and dashpot in parallel, the spring capped by Coulomb friction.
   es += p.ks * du_s;                          // (10a), (11a)
-  double ds = p.eta_s * du_s * inv_dt;        // (10b), (11b)
+  double ds = 0;
+  if constexpr (DASH) ds = p.eta_s * du_s * inv_dt;  // (10b), (11b)
   const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
   if (std::abs(es) > cap) {                   // (13a): capped, not reset
     es = std::copysign(cap, es);

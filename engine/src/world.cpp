@@ -128,7 +128,7 @@ void World::start_resultants(int i0, int i1) {
 // Disc-disc contacts [p0, p1) of the sorted pair list. The i side of each pair is added at once;
 // the j side too when j < own_end, otherwise (j belongs to another thread's discs) it is kept in
 // `later` and added after the parallel part, in a fixed order. Returns the largest overlap.
-template <NormalSpring NS, NoTension NT, FrictionCap FC>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
 double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
@@ -147,20 +147,24 @@ double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vect
     const double nx = dx / R, ny = dy / R;  // (4): cos(alpha), sin(alpha), from i to j
     const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
     const double du_n = ddx * nx + ddy * ny;                                       // (5a)
-    const double du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i] + d.r[j] * d.dphi[j];  // (5b)
+    double du_s = 0;
+    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i] + d.r[j] * d.dphi[j];  // (5b)
     const double overlap = sum - R;
     worst = std::max(worst, overlap);
-    contact_law<NS, NT, FC>(pair(d.material[i], d.material[j]), overlap, du_n, du_s, inv_dt,
-                            c.en, c.es, c.fn, c.fs);
-    const double fx = -c.fn * nx + c.fs * ny;  // (15a) term on i
-    const double fy = -c.fn * ny - c.fs * nx;  // (15b) term on i
+    contact_law<NS, NT, FC, SHEAR, DASH>(pair(d.material[i], d.material[j]), overlap, du_n, du_s, inv_dt,
+                                         c.en, c.es, c.fn, c.fs);
+    double fx = -c.fn * nx, fy = -c.fn * ny;  // (15a), (15b) terms on i
+    if constexpr (SHEAR) {
+      fx += c.fs * ny;
+      fy -= c.fs * nx;
+    }
     d.fx[i] += fx; d.fy[i] += fy;
-    d.torque[i] -= d.r[i] * c.fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+    if constexpr (SHEAR) d.torque[i] -= d.r[i] * c.fs;  // (15c); f_s is the same seen from j (5b is symmetric)
     if (j < own_end) {
       d.fx[j] -= fx; d.fy[j] -= fy;
-      d.torque[j] -= d.r[j] * c.fs;
+      if constexpr (SHEAR) d.torque[j] -= d.r[j] * c.fs;
     } else {
-      later->push_back(Deferred{j, fx, fy, d.r[j] * c.fs});
+      later->push_back(Deferred{j, fx, fy, SHEAR ? d.r[j] * c.fs : 0.0});
     }
   }
   return worst;
@@ -168,7 +172,7 @@ double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vect
 
 // Disc-obstacle contacts [w0, w1) of the wall list (whole groups of one disc), with the
 // per-thread scratch `slot`. Returns the largest overlap.
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
 double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
@@ -227,8 +231,8 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
       worst = std::max(worst, overlap);
       const int km = c.k < n_walls ? geometry.walls[c.k].material
                                    : geometry.points[c.k - n_walls].material;
-      contact_law<NS, NT, FC>(props[d.material[i] * n_mat + km], overlap, du_n, du_s, inv_dt,
-                              c.en, c.es, c.fn, c.fs);
+      contact_law<NS, NT, FC, SHEAR, DASH>(props[d.material[i] * n_mat + km], overlap, du_n, du_s, inv_dt,
+                                           c.en, c.es, c.fn, c.fs);
       d.fx[i] += -c.fn * nx + c.fs * ny;  // (15a)
       d.fy[i] += -c.fn * ny - c.fs * nx;  // (15b)
       d.torque[i] -= d.r[i] * c.fs;       // (15c)
@@ -245,7 +249,7 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
   return worst;
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
 void World::compute_forces() {
   Discs& d = discs;
   const int n = static_cast<int>(d.size());
@@ -254,7 +258,7 @@ void World::compute_forces() {
   double worst = 0;
   if (nt == 1) {
     start_resultants(0, n);
-    worst = pair_forces<NS, NT, FC>(0, neighbors.pairs.size(), n, nullptr);
+    worst = pair_forces<NS, NT, FC, SHEAR, DASH>(0, neighbors.pairs.size(), n, nullptr);
   } else {
     // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
     // computed by the owner of its i. What a thread adds to another's discs is added afterwards in
@@ -273,8 +277,8 @@ void World::compute_forces() {
       const std::size_t w1 = std::lower_bound(wl.begin(), wl.end(), i1, by_i) - wl.begin();
       deferred_[t].clear();
       start_resultants(i0, i1);
-      part[t] = std::max(pair_forces<NS, NT, FC>(p0, p1, i1, &deferred_[t]),
-                         wall_forces<NS, NT, FC, false>(w0, w1, t));
+      part[t] = std::max(pair_forces<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t]),
+                         wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t));
     }
     for (int t = 0; t < nt; ++t) {
       worst = std::max(worst, part[t]);
@@ -316,24 +320,37 @@ void World::compute_forces() {
   }
   if constexpr (MOVING)
     for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
-  worst = std::max(worst, wall_forces<NS, NT, FC, MOVING>(0, neighbors.walls.size(), 0));
+  worst = std::max(worst, wall_forces<NS, NT, FC, MOVING, SHEAR, DASH>(0, neighbors.walls.size(), 0));
   max_overlap = worst;
 }
 
 void World::select_kernel() {
-  // Every option combination is its own compiled kernel (no branch per contact).
-  // Bonds and moving walls are compile-time flags too: a scene without them runs paper 1's loop.
+  // Every option combination is its own compiled kernel (no branch per contact). Bonds and
+  // moving walls are compile-time flags too, and so are a scene without shear (every pair
+  // shear-free) and without dashpots: a scene pays only for what it uses. Bonds and moving walls
+  // come with the full law (shear and dashpots), which their scenes use.
   const bool has_bonds = !bonds.empty(), has_moving = !moving.empty();
-#define DEM_KB(NS, NT, FC, B, M)                                                          \
-  if (has_bonds == B && has_moving == M) {                                                \
-    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC, B, M>; \
-    return;                                                                               \
+  bool shear = false, dash = false;
+  for (const PairProps& p : props) {
+    const bool shear_free = (p.ks == 0 && p.eta_s == 0) || (p.mu == 0 && p.ks > 0);  // cap 0 holds e_s = 0
+    shear = shear || !shear_free;
+    dash = dash || p.eta_n != 0 || p.eta_s != 0;
   }
-#define DEM_K(NS, NT, FC)                                                              \
-  if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT && \
-      options.friction_cap == FrictionCap::FC) {                                        \
-    DEM_KB(NS, NT, FC, false, false) DEM_KB(NS, NT, FC, true, false)                    \
-    DEM_KB(NS, NT, FC, false, true) DEM_KB(NS, NT, FC, true, true)                      \
+  if (has_bonds || has_moving) shear = dash = true;
+  kernel_shear = shear;
+  kernel_dashpots = dash;
+#define DEM_KB(NS, NT, FC, B, M, S, D)                                                              \
+  if (has_bonds == B && has_moving == M && shear == S && dash == D) {                               \
+    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC, B, M, S, D>; \
+    return;                                                                                         \
+  }
+#define DEM_K(NS, NT, FC)                                                                   \
+  if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT &&      \
+      options.friction_cap == FrictionCap::FC) {                                             \
+    DEM_KB(NS, NT, FC, false, false, true, true) DEM_KB(NS, NT, FC, true, false, true, true)   \
+    DEM_KB(NS, NT, FC, false, true, true, true) DEM_KB(NS, NT, FC, true, true, true, true)     \
+    DEM_KB(NS, NT, FC, false, false, false, true) DEM_KB(NS, NT, FC, false, false, true, false) \
+    DEM_KB(NS, NT, FC, false, false, false, false)                                           \
   }
 #define DEM_K2(NS, NT) DEM_K(NS, NT, elastic) DEM_K(NS, NT, total)
 #define DEM_K3(NS) DEM_K2(NS, elastic) DEM_K2(NS, total) DEM_K2(NS, overlap)

@@ -48,6 +48,10 @@ class World {
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
   void compute_forces_now() { (this->*force_kernel_)(); }
+  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp).
+  void kick(double h);        // v += a h  (eq. 17 with h = dt)
+  void drift_eq18();          // du = v dt, eq. (18); x += du
+  void drift_eq19();          // du = (du + v dt) / 2, eq. (19); x += du
 
   // Removes the discs with dead[i] != 0 from every array (order kept; lists remapped).
   void remove_discs(const std::vector<char>& dead);
@@ -62,15 +66,19 @@ class World {
  private:
   using ForceKernel = void (World::*)();
   ForceKernel force_kernel_ = nullptr;
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING>
+ public:
+  // What the selected kernel skips (for the header and the skip benchmark).
+  bool kernel_shear = true, kernel_dashpots = true;
+ private:
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
   void compute_forces();
   struct Deferred {  // a pair's reaction on a disc of another thread's block
     int j;
     double fx, fy, tq;
   };
-  template <NormalSpring NS, NoTension NT, FrictionCap FC>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
   double pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later);
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   void start_resultants(int i0, int i1);
   int threads_for(int n) const;  // the thread count used for n discs
@@ -85,9 +93,6 @@ class World {
   // Per thread: per wall entry of one disc, touching now and its centre distance.
   std::vector<std::vector<char>> touch_scratch_;
   std::vector<std::vector<double>> dist_scratch_;
-  void kick(double h);        // v += a h  (eq. 17 with h = dt)
-  void drift_eq18();          // du = v dt, eq. (18); x += du
-  void drift_eq19();          // du = (du + v dt) / 2, eq. (19); x += du
 };
 
 }  // namespace dem

@@ -1,0 +1,107 @@
+// Google Benchmark kernels (issue 5): the contact-force pass, the cell/list rebuild and the
+// integration pass on a settled 10k-disc lattice silo (reference_inputs/scenes/bench_silo_10k.toml,
+// the paper's law and eq. 19, 300 steps after the start so the lattice is in contact), at 1 and 2
+// threads; and the rows of the skip table: the same force pass with and without a feature
+// (shear, dashpots, walls, bonds), each variant its own compiled kernel.
+//
+//   cmake --build build --target dem_kernels && build/benchmarks/dem_kernels
+//
+// Counters: items = disc-disc candidate pairs (forces), discs (rebuild, integration).
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <string>
+
+#include "scene.hpp"
+#include "world.hpp"
+
+namespace {
+
+using dem::World;
+
+// The settled world, built once; each benchmark works on its own copy.
+const World& settled() {
+  static std::unique_ptr<World> w = [] {
+    auto p = std::make_unique<World>();
+    dem::SceneSpec spec = dem::load_scene(std::string(DEM_SOURCE_DIR) + "/reference_inputs/scenes/bench_silo_10k.toml");
+    dem::build_world(spec, *p);
+    for (int s = 0; s < 300; ++s) p->step();
+    return p;
+  }();
+  return *w;
+}
+
+enum Variant { full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond };
+
+World variant(Variant v, int threads) {
+  World w = settled();
+  w.threads = threads;
+  for (dem::PairProps& p : w.props) {
+    if (v == no_dashpots || v == no_shear_no_dashpots) p.eta_n = p.eta_s = 0;
+    if (v == no_shear || v == no_shear_no_dashpots) p.ks = p.eta_s = 0;
+  }
+  if (v == no_walls) {  // the walls' entries removed from the lists: no disc-wall work at all
+    w.geometry.walls.clear();
+    w.geometry.points.clear();
+  }
+  if (v == with_bond) {  // one bond between the two first discs: the bond loop is compiled in
+    dem::Bond b;
+    b.i = 0;
+    b.j = 1;
+    b.ai = w.discs.r[0];
+    b.aj = w.discs.r[1];
+    b.rest = w.discs.r[0] + w.discs.r[1];
+    w.bonds.push_back(b);
+  }
+  w.prepare();  // picks the kernel for the variant and rebuilds the lists
+  return w;
+}
+
+void BM_ContactForces(benchmark::State& st) {
+  World w = variant(static_cast<Variant>(st.range(0)), static_cast<int>(st.range(1)));
+  for (auto _ : st) {
+    w.compute_forces_now();
+    benchmark::DoNotOptimize(w.discs.fx.data());
+  }
+  st.SetItemsProcessed(st.iterations() * static_cast<long>(w.neighbors.pairs.size()));
+  st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
+  static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond"};
+  st.SetLabel(std::string(names[st.range(0)]) + (w.kernel_shear ? "" : " [shear compiled out]") +
+              (w.kernel_dashpots ? "" : " [dashpots compiled out]"));
+}
+BENCHMARK(BM_ContactForces)
+    ->ArgsProduct({{full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond}, {1}})
+    ->ArgsProduct({{full}, {2}})
+    ->Unit(benchmark::kMicrosecond);
+
+void BM_CellRebuild(benchmark::State& st) {
+  World w = variant(full, static_cast<int>(st.range(0)));
+  for (auto _ : st) {
+    w.neighbors.rebuild(w.discs, w.geometry, static_cast<int>(st.range(0)));
+    benchmark::DoNotOptimize(w.neighbors.pairs.data());
+  }
+  st.SetItemsProcessed(st.iterations() * static_cast<long>(w.discs.size()));
+}
+BENCHMARK(BM_CellRebuild)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+void BM_Integration(benchmark::State& st) {  // eq. (17) kick and eq. (19) drift of every disc
+  World w = variant(full, static_cast<int>(st.range(0)));
+  for (auto _ : st) {
+    w.kick(w.dt);
+    w.drift_eq19();
+    benchmark::DoNotOptimize(w.discs.x.data());
+  }
+  st.SetItemsProcessed(st.iterations() * static_cast<long>(w.discs.size()));
+}
+BENCHMARK(BM_Integration)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+void BM_Step(benchmark::State& st) {  // the whole step, for scale
+  World w = variant(full, static_cast<int>(st.range(0)));
+  for (auto _ : st) w.step();
+  st.SetItemsProcessed(st.iterations() * static_cast<long>(w.discs.size()));
+}
+BENCHMARK(BM_Step)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
