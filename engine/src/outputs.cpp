@@ -306,7 +306,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                      {"dt_rotation_z6", finite_or_null(stab.dt_rot_z6)},
                      {"note", "bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
                               "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
-                              "sticking contacts (4 disc-disc, or 3 disc-disc and a wall contact); dt_bound = min(single contact, "
+                              "sticking contacts (disc-disc or disc-wall constants); dt_bound = min(single contact, "
                               "rotation on 4) is enforced"}};
 
   // wall_profiles.csv

@@ -39,7 +39,7 @@ struct PairReport {
 struct StabilityReport {
   std::vector<PairReport> pairs;
   double dt_single = 0;      // min over pairs of the single-contact scheme bounds
-  double dt_rot_z4 = 0;      // rotation held by 4 sticking contacts: 4 disc-disc, or 3 and a wall
+  double dt_rot_z4 = 0;      // rotation held by 4 sticking contacts, disc-disc or disc-wall constants
   bool rot_z4_at_wall = false;  // ... the lowest with a wall among the four
   double dt_rot_z6 = 0;      // ... by 6 (hexagonal packing; printed as a warning only)
   double dt_bound = 0;       // enforced: min(dt_single, dt_rot_z4)
