@@ -86,7 +86,6 @@ def _native(args) -> dict:
 
 def _case(args):
     from compare import study
-    from compare.common import Case
     c = study.discharge_case(Path(args.scene), DT_SHARED, args.settle * DT_SHARED, args.discharge * DT_SHARED, 0, 0.0)
     c.series_interval = args.discharge * DT_SHARED
     return c

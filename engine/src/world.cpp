@@ -263,7 +263,8 @@ void World::compute_forces() {
     // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
     // computed by the owner of its i. What a thread adds to another's discs is added afterwards in
     // thread order, so a given thread count always sums in the same order (bit-identical runs).
-    std::vector<double> part(nt, 0.0);
+    std::vector<double>& part = thread_overlap_;
+    part.assign(nt, 0.0);
     const auto& pairs = neighbors.pairs;
     const auto& wl = neighbors.walls;
 #pragma omp parallel num_threads(nt)

@@ -83,6 +83,7 @@ class World {
   void start_resultants(int i0, int i1);
   int threads_for(int n) const;  // the thread count used for n discs
   std::vector<std::vector<Deferred>> deferred_;  // per thread
+  std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
   void select_kernel();
   void rebuild_lists();       // neighbour lists without the bonded pairs
   void kick_walls(double h);  // plates: v += F/M h (moving_walls.cpp)
