@@ -225,18 +225,26 @@ def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int)
 
 
 def write_outlet_stl(out_dir: Path, xlo: float, xhi: float, depth: float) -> None:
+    """The outlet plane y = -depth as strips at most 2 Z_HALF wide (2 triangles each, smallest
+    angle >= 45 deg). Two triangles spanning the whole box are rejected by LIGGGHTS once the box is
+    wider than ~900 cm ("Fix mesh: Bad mesh": smallest angle below the 0.256 deg curvature limit)."""
     y = -depth
-    pts = np.array([[xlo, y, -Z_HALF], [xhi, y, -Z_HALF], [xhi, y, Z_HALF], [xlo, y, Z_HALF]])
-    tris = np.array([[0, 1, 2], [0, 2, 3]])
+    n = max(1, int(math.ceil((xhi - xlo) / (2 * Z_HALF) - 1e-9)))
+    xs = np.linspace(xlo, xhi, n + 1)
+    pts = np.array([[x, y, z] for x in xs for z in (-Z_HALF, Z_HALF)])
+    # strip k: corners 2k (x_k, -Z), 2k+2 (x_k+1, -Z), 2k+3 (x_k+1, Z), 2k+1 (x_k, Z); normal -y as before
+    tris = np.array([t for k in range(n) for t in ([2 * k, 2 * k + 2, 2 * k + 3], [2 * k, 2 * k + 3, 2 * k + 1])])
     meshio.write(str(out_dir / "outlet.stl"), meshio.Mesh(pts, [("triangle", tris)]), file_format="stl",
                  binary=False)
 
 
 def command(script: Path, ranks: int = 1) -> list[str]:
+    # stdbuf -o0: LIGGGHTS prints its ERROR lines to the screen without flushing before MPI_Abort;
+    # with stdout buffered into a file they are lost and the log ends in a bare MPI_ABORT.
     base = ["liggghts", "-echo", "none", "-in", script.name]
     if ranks > 1:
-        return ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + base
-    return base
+        base = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + base
+    return ["stdbuf", "-o0"] + base
 
 
 def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
@@ -253,7 +261,7 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
     t0 = time.monotonic()
     env = dict(os.environ, OMP_NUM_THREADS="1")
     with open(log, "w") as f:
-        p = subprocess.Popen(["stdbuf", "-o0"] + command(script, threads), cwd=out_dir, stdout=f,
+        p = subprocess.Popen(command(script, threads), cwd=out_dir, stdout=f,
                              stderr=subprocess.STDOUT, start_new_session=True, env=env)
         try:
             rc = p.wait(timeout=timeout)
