@@ -4,15 +4,16 @@
 #include <cmath>
 #include <sstream>
 
+#include "parallel.hpp"
 #include "world.hpp"
 
 namespace dem {
 
 double potential_energy(const World& w) {
   const Discs& d = w.discs;
-  double e = 0;
-  for (std::size_t i = 0; i < d.size(); ++i) e -= d.mass[i] * (w.gx * d.x[i] + w.gy * d.y[i]);
-  return e;
+  const long n = static_cast<long>(d.size());
+  return -parallel_sum(n, w.threads_for(static_cast<int>(n)),
+                       [&](long i) { return d.mass[i] * (w.gx * d.x[i] + w.gy * d.y[i]); });
 }
 
 double elastic_energy(const World& w) {

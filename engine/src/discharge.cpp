@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "outputs.hpp"
+#include "parallel.hpp"
 #include "state.hpp"
 
 namespace dem {
@@ -320,8 +321,11 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
       }
       // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
       // One read of y per step; the removal mask is built only on the steps that remove.
+      const long n_now = static_cast<long>(w.discs.size());
+      const bool some_out = parallel_any(n_now, w.threads_for(static_cast<int>(n_now)),
+                                         [&](long i) { return w.discs.y[i] < y_out; });
       bool any = false;
-      for (std::size_t i = 0; i < w.discs.size(); ++i)
+      for (std::size_t i = 0; some_out && i < w.discs.size(); ++i)
         if (w.discs.y[i] < y_out) {
           if (!any) dead.assign(w.discs.size(), 0);
           dead[i] = 1;

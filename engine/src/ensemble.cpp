@@ -104,7 +104,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
         if (dr.status == "unstable") {
           res.status = RunStatus::unstable;
           res.reason = dr.reason;
-          res.last_good = w.discs;
+          res.last_good.take(w.discs);
         }
       }
       write_outputs(dir, specs[k], w, res, stab, &extra);

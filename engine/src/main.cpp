@@ -256,14 +256,14 @@ int cmd_run(int argc, char** argv) {
     res.status = RunStatus::end_time;  // the fill is over; the discharge goes on below
   } else if (spec.start_from.empty() || resume) {
     if (!resume) {
-      res.last_good = world.discs;
+      res.last_good.take(world.discs);
       res.last_good_time = world.time;
     }
     continue_scene(spec, world, spec.progress && !quiet, res, &ctl);  // the fill, to rest
     if (res.status == RunStatus::interrupted) write_checkpoint(ckpt, key, world, res, nullptr);
   } else {
     res.status = RunStatus::end_time;
-    res.last_good = world.discs;
+    res.last_good.take(world.discs);
     if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
   }
   nlohmann::ordered_json extra;
@@ -286,7 +286,7 @@ int cmd_run(int argc, char** argv) {
     if (dr.status == "unstable") {
       res.status = RunStatus::unstable;
       res.reason = dr.reason;
-      res.last_good = world.discs;
+      res.last_good.take(world.discs);
       extra["reason"] = dr.reason;
     }
     extra["discharge"] = dr.metrics;
@@ -305,7 +305,7 @@ int cmd_run(int argc, char** argv) {
     if (sr.status == "unstable") {
       res.status = RunStatus::unstable;
       res.reason = sr.reason;
-      res.last_good = world.discs;
+      res.last_good.take(world.discs);
       extra["reason"] = sr.reason;
     }
     extra["shear"] = sr.metrics;

@@ -42,34 +42,63 @@ void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key
   }
 }
 
+// Lists are sized from the last build plus a margin, never by doubling: a list costs about its
+// length, not up to twice that (what counts at a million discs).
+template <class T>
+void make_room(std::vector<T>& v, std::size_t expected) {
+  v.clear();
+  if (expected > 0) v.reserve(expected + expected / 16 + 64);
+}
+template <class T>
+void fit(std::vector<T>& v) {
+  if (v.capacity() > v.size() + v.size() / 8 + 1024) v.shrink_to_fit();
+}
+template <class T>
+void resize_exact(std::vector<T>& v, std::size_t n) {  // contents not kept
+  if (n > v.capacity()) {
+    v.clear();
+    v.reserve(n + n / 16 + 64);
+  }
+  v.resize(n);
+}
+
 }  // namespace
 
 void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const int n = static_cast<int>(d.size());
   ++rebuilds;
-  x0_ = d.x;
-  y0_ = d.y;
+  x0_.resize(n);
+  y0_.resize(n);
+  parallel_for(n, nt, [&](long i) {
+    x0_[i] = d.x[i];
+    y0_[i] = d.y[i];
+  });
 
   // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block. Extents and
   // cell indices in long double, where no difference of finite coordinates overflows; discs at
   // non-finite positions (a run blowing up, stopped after this step) are in no cell and get no
   // pairs. Sparse scenes (discs flung far apart, tiny discs in a huge box) would need huge grids:
   // the cells are coarsened until there are at most 4 n + 64 of them.
-  double rmax = 0;
-  long double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
-  bool any = false;
-  for (int i = 0; i < n; ++i) {
-    if (std::isfinite(d.r[i])) rmax = std::max(rmax, d.r[i]);
-    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i])) continue;
-    const long double x = d.x[i], y = d.y[i];
-    if (!any) {
-      xmin = xmax = x;
-      ymin = ymax = y;
-      any = true;
-    }
-    xmin = std::min(xmin, x); xmax = std::max(xmax, x);
-    ymin = std::min(ymin, y); ymax = std::max(ymax, y);
+  // The extremes in double (exact, in any order: per thread, then combined), their differences
+  // below in long double.
+  const double inf = std::numeric_limits<double>::infinity();
+  double rmax = 0, dxmin = inf, dxmax = -inf, dymin = inf, dymax = -inf;
+  const auto extend = [&](int i, double& rm, double& x0, double& x1, double& y0, double& y1) {
+    if (std::isfinite(d.r[i])) rm = std::max(rm, d.r[i]);
+    const double x = d.x[i], y = d.y[i];
+    if (!std::isfinite(x) || !std::isfinite(y)) return;
+    x0 = std::min(x0, x); x1 = std::max(x1, x);
+    y0 = std::min(y0, y); y1 = std::max(y1, y);
+  };
+  if (nt <= 1) {
+    for (int i = 0; i < n; ++i) extend(i, rmax, dxmin, dxmax, dymin, dymax);
+  } else {
+#pragma omp parallel for schedule(static) num_threads(nt) reduction(max : rmax, dxmax, dymax) \
+    reduction(min : dxmin, dymin)
+    for (int i = 0; i < n; ++i) extend(i, rmax, dxmin, dxmax, dymin, dymax);
   }
+  if (!(dxmin <= dxmax)) dxmin = dxmax = dymin = dymax = 0;  // no finite disc
+  const long double xmin = dxmin, xmax = dxmax, ymin = dymin, ymax = dymax;
   long double cell = std::max(min_cell, 2 * rmax + skin);
   if (!std::isfinite(cell)) cell = std::numeric_limits<long double>::max();  // one cell for all
   if (!(cell > 0)) cell = 1;  // zero radii and skin (or NaN): nothing can pair, any size will do
@@ -82,16 +111,17 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const long ncell = nx * ny;
   cell_of_.resize(n);
   cell_start_.assign(ncell + 1, 0);
-  for (int i = 0; i < n; ++i) {
+  parallel_for(n, nt, [&](long i) {  // each disc's cell on its own; the count below is serial
     if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i])) {
       cell_of_[i] = -1;
-      continue;
+      return;
     }
     const long cx = std::min(nx - 1, static_cast<long>((d.x[i] - xmin) / cell));
     const long cy = std::min(ny - 1, static_cast<long>((d.y[i] - ymin) / cell));
     cell_of_[i] = static_cast<int>(cy * nx + cx);
-    ++cell_start_[cell_of_[i] + 1];
-  }
+  });
+  for (int i = 0; i < n; ++i)
+    if (cell_of_[i] >= 0) ++cell_start_[cell_of_[i] + 1];
   for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
   order_.resize(n);
   {
@@ -101,12 +131,31 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   }
 
   grid_ = Grid{static_cast<double>(xmin), static_cast<double>(ymin), nx, ny};
+  // Each obstacle's box grown by the largest reach: a disc outside it cannot be a candidate, so
+  // most discs skip the distance to most walls (the same lists, far fewer square roots).
+  const double reach = rmax + skin;
+  const int nk = g.obstacle_count(), nw = static_cast<int>(g.walls.size());
+  boxes_.resize(nk);
+  for (int k = 0; k < nk; ++k) {
+    Box& b = boxes_[k];
+    if (k < nw) {
+      const Wall& w = g.walls[k];
+      b = Box{std::min(w.ax, w.bx) - reach, std::max(w.ax, w.bx) + reach,
+              std::min(w.ay, w.by) - reach, std::max(w.ay, w.by) + reach, w.active};
+    } else {
+      const Point& q = g.points[k - nw];
+      b = Box{q.x - reach, q.x + reach, q.y - reach, q.y + reach, true};
+    }
+    if (!std::isfinite(reach)) b = Box{-HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, b.live};
+  }
   const auto pair_key = [](const PairContact& p) { return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j); };
   const auto wall_key = [](const WallContact& w) { return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k); };
   if (nt <= 1) {
-    new_pairs_.clear();
-    new_walls_.clear();
+    make_room(new_pairs_, pairs.size());
+    make_room(new_walls_, walls.size());
     search(d, g, 0, n, new_pairs_, new_walls_);
+    fit(new_pairs_);
+    fit(new_walls_);
     merge_history(pairs, new_pairs_, pair_key);
     merge_history(walls, new_walls_, wall_key);
     pairs.swap(new_pairs_);
@@ -125,9 +174,11 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
     auto& bp = block_pairs_[t];
     auto& bw = block_walls_[t];
-    bp.clear();
-    bw.clear();
+    make_room(bp, pairs.size() / nt);
+    make_room(bw, walls.size() / nt);
     search(d, g, i0, i1, bp, bw);
+    fit(bp);
+    fit(bw);
     merge_history(pairs, bp, pair_key);
     merge_history(walls, bw, wall_key);
     pair_at[t + 1] = bp.size();
@@ -139,8 +190,8 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
         pair_at[u + 1] += pair_at[u];
         wall_at[u + 1] += wall_at[u];
       }
-      pairs.resize(pair_at[nt]);
-      walls.resize(wall_at[nt]);
+      resize_exact(pairs, pair_at[nt]);  // the old entries are all in the blocks now
+      resize_exact(walls, wall_at[nt]);
     }
     std::copy(bp.begin(), bp.end(), pairs.begin() + static_cast<std::ptrdiff_t>(pair_at[t]));
     std::copy(bw.begin(), bw.end(), walls.begin() + static_cast<std::ptrdiff_t>(wall_at[t]));
@@ -154,25 +205,34 @@ void Neighbors::search(const Discs& d, const Geometry& g, int i0, int i1, std::v
   for (int i = i0; i < i1; ++i) {
     if (cell_of_[i] < 0) continue;
     const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
+    const long a0 = std::max(0L, ci - 1), a1 = std::min(nx - 1, ci + 1);
+    const double xi = d.x[i], yi = d.y[i], ri = d.r[i];
     found.clear();
-    for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b)
-      for (long a = std::max(0L, ci - 1); a <= std::min(nx - 1, ci + 1); ++a) {
-        const long c = b * nx + a;
-        for (int s = cell_start_[c]; s < cell_start_[c + 1]; ++s) {
-          const int j = order_[s];
-          if (j <= i) continue;
-          const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
-          const double reach = d.r[i] + d.r[j] + skin;
-          if (dx * dx + dy * dy < reach * reach) found.push_back(j);
-        }
+    // The 3 cells of a row are consecutive in the sorted order: one run of discs per row.
+    for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b) {
+      const int s1 = cell_start_[b * nx + a1 + 1];
+      for (int s = cell_start_[b * nx + a0]; s < s1; ++s) {
+        const int j = order_[s];
+        if (j <= i) continue;
+        const double dx = d.x[j] - xi, dy = d.y[j] - yi;
+        const double reach = ri + d.r[j] + skin;
+        if (dx * dx + dy * dy < reach * reach) found.push_back(j);
       }
-    std::sort(found.begin(), found.end());
+    }
+    // A handful of candidates: insertion sort.
+    for (std::size_t a = 1; a < found.size(); ++a)
+      for (std::size_t b = a; b > 0 && found[b - 1] > found[b]; --b) std::swap(found[b - 1], found[b]);
     for (int j : found) out_pairs.push_back(PairContact{i, j});
   }
   const int nk = g.obstacle_count();
-  for (int i = i0; i < i1; ++i)
-    for (int k = 0; k < nk; ++k)
-      if (obstacle_distance(g, k, d.x[i], d.y[i]) < d.r[i] + skin) out_walls.push_back(WallContact{i, k});
+  for (int i = i0; i < i1; ++i) {
+    const double xi = d.x[i], yi = d.y[i];
+    for (int k = 0; k < nk; ++k) {
+      const Box& b = boxes_[k];
+      if (!b.live || !(xi >= b.xlo && xi <= b.xhi && yi >= b.ylo && yi <= b.yhi)) continue;
+      if (obstacle_distance(g, k, xi, yi) < d.r[i] + skin) out_walls.push_back(WallContact{i, k});
+    }
+  }
 }
 
 }  // namespace dem

@@ -67,6 +67,11 @@ class Neighbors {
   std::vector<WallContact> new_walls_;
   std::vector<std::vector<PairContact>> block_pairs_;  // per thread
   std::vector<std::vector<WallContact>> block_walls_;
+  struct Box {  // an obstacle's bounding box grown by the largest disc reach
+    double xlo, xhi, ylo, yhi;
+    bool live;  // false: an inactive wall, never a candidate
+  };
+  std::vector<Box> boxes_;
   struct Grid {
     double xmin = 0, ymin = 0;
     long nx = 0, ny = 0;

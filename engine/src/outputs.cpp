@@ -221,7 +221,13 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
                    const StabilityReport& stab, const json* extra) {
   const bool unstable = res.status == RunStatus::unstable;
-  const Discs& d = unstable ? res.last_good : w.discs;
+  // An unstable run writes its last good positions and velocities (of the same discs).
+  Discs good;
+  if (unstable && res.last_good.size() == w.discs.size()) {
+    good = w.discs;
+    res.last_good.put_into(good);
+  }
+  const Discs& d = unstable && res.last_good.size() == w.discs.size() ? good : w.discs;
   std::vector<WallLoad> walls;
   std::vector<PointLoad> points;
   measure_loads(w, spec.profile_bin, walls, points);

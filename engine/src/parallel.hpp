@@ -1,6 +1,8 @@
 // OpenMP glue: the engine builds and runs serial without OpenMP (every pragma is then ignored).
 #pragma once
 
+#include <vector>
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -30,6 +32,43 @@ inline void parallel_for(long n, int nt, F&& f) {
   }
 #pragma omp parallel for schedule(static) num_threads(nt)
   for (long i = 0; i < n; ++i) f(i);
+}
+
+// The sum of f(i) over [0, n): the plain loop for one thread; otherwise each thread sums its
+// block and the block sums are added in block order, so a thread count always gives the same bits.
+template <class F>
+inline double parallel_sum(long n, int nt, F&& f) {
+  if (nt <= 1) {
+    double s = 0;
+    for (long i = 0; i < n; ++i) s += f(i);
+    return s;
+  }
+  std::vector<double> part(static_cast<std::size_t>(nt), 0.0);
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_thread_index();
+    const long i0 = n * t / nt, i1 = n * (t + 1) / nt;
+    double s = 0;
+    for (long i = i0; i < i1; ++i) s += f(i);
+    part[t] = s;
+  }
+  double s = 0;
+  for (int t = 0; t < nt; ++t) s += part[t];
+  return s;
+}
+
+// Whether pred(i) holds for some i in [0, n).
+template <class F>
+inline bool parallel_any(long n, int nt, F&& pred) {
+  if (nt <= 1) {
+    for (long i = 0; i < n; ++i)
+      if (pred(i)) return true;
+    return false;
+  }
+  bool any = false;
+#pragma omp parallel for schedule(static) num_threads(nt) reduction(|| : any)
+  for (long i = 0; i < n; ++i) any = any || pred(i);
+  return any;
 }
 
 }  // namespace dem

@@ -33,7 +33,7 @@ std::string diagnose(const World& w, double overlap_limit) {
 
 RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
   RunResult res;
-  res.last_good = w.discs;
+  res.last_good.take(w.discs);
   res.last_good_time = w.time;
   continue_scene(spec, w, progress, res, nullptr);
   return res;
@@ -88,7 +88,7 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
         }
       }
       if (w.steps % keep_every == 0) {
-        res.last_good = w.discs;
+        res.last_good.take(w.discs);
         res.last_good_time = w.time;
       }
     }

@@ -21,7 +21,7 @@ struct RunResult {
   double rest_threshold = 0;   // rest_factor * g dt^2 [cm]
   double mean_abs_du = 0, mean_abs_dv = 0;  // last measured (x and y increments per step)
   double wall_seconds = 0;
-  Discs last_good;             // state at the last check that passed (written when unstable)
+  Kinematics last_good;        // state at the last check that passed (written when unstable)
   double last_good_time = 0;
   bool energy_started = false; // the energy budget of blowup.hpp, set at the first step
   EnergyWatch energy;

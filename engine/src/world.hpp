@@ -32,6 +32,7 @@ class World {
   // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
   int threads = 1;
   static constexpr int kMinDiscsPerThread = 2048;
+  int threads_for(int n) const;  // the thread count used for n discs
   double gx = 0, gy = -980; // gravity [cm/s^2]
 
   double time = 0;
@@ -49,9 +50,9 @@ class World {
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
   void compute_forces_now() { (this->*force_kernel_)(); }
   // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp).
-  void kick(double h);        // v += a h  (eq. 17 with h = dt)
-  void drift_eq18();          // du = v dt, eq. (18); x += du
-  void drift_eq19();          // du = (du + v dt) / 2, eq. (19); x += du
+  void kick(double h);             // v += a h  (eq. 17 with h = dt)
+  void kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
+  void kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
 
   // Removes the discs with dead[i] != 0 from every array (order kept; lists remapped).
   void remove_discs(const std::vector<char>& dead);
@@ -80,8 +81,9 @@ class World {
   double pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later);
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
+  template <bool EQ19>
+  void kick_drift(double h);
   void start_resultants(int i0, int i1);
-  int threads_for(int n) const;  // the thread count used for n discs
   std::vector<std::vector<Deferred>> deferred_;  // per thread
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
   void select_kernel();
