@@ -150,8 +150,11 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   }
   const auto pair_key = [](const PairContact& p) { return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j); };
   const auto wall_key = [](const WallContact& w) { return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k); };
+  // The first build has no old list to size from: it counts first, so that even then the list is
+  // allocated once at its length (a million discs: no 2x list and copy at the start).
+  const bool first = pairs.empty();
   if (nt <= 1) {
-    make_room(new_pairs_, pairs.size());
+    make_room(new_pairs_, first ? count_pairs(d, 0, n) : pairs.size());
     make_room(new_walls_, walls.size());
     search(d, g, 0, n, new_pairs_, new_walls_);
     fit(new_pairs_);
@@ -174,7 +177,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
     auto& bp = block_pairs_[t];
     auto& bw = block_walls_[t];
-    make_room(bp, pairs.size() / nt);
+    make_room(bp, first ? count_pairs(d, i0, i1) : pairs.size() / nt);
     make_room(bw, walls.size() / nt);
     search(d, g, i0, i1, bp, bw);
     fit(bp);
@@ -198,27 +201,38 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   }
 }
 
+template <class F>
+void Neighbors::candidates(const Discs& d, int i, F&& f) const {
+  if (cell_of_[i] < 0) return;
+  const long nx = grid_.nx, ny = grid_.ny;
+  const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
+  const long a0 = std::max(0L, ci - 1), a1 = std::min(nx - 1, ci + 1);
+  const double xi = d.x[i], yi = d.y[i], ri = d.r[i];
+  // The 3 cells of a row are consecutive in the sorted order: one run of discs per row.
+  for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b) {
+    const int s1 = cell_start_[b * nx + a1 + 1];
+    for (int s = cell_start_[b * nx + a0]; s < s1; ++s) {
+      const int j = order_[s];
+      if (j <= i) continue;
+      const double dx = d.x[j] - xi, dy = d.y[j] - yi;
+      const double reach = ri + d.r[j] + skin;
+      if (dx * dx + dy * dy < reach * reach) f(j);
+    }
+  }
+}
+
+std::size_t Neighbors::count_pairs(const Discs& d, int i0, int i1) const {
+  std::size_t c = 0;
+  for (int i = i0; i < i1; ++i) candidates(d, i, [&](int) { ++c; });
+  return c;
+}
+
 void Neighbors::search(const Discs& d, const Geometry& g, int i0, int i1, std::vector<PairContact>& out_pairs,
                        std::vector<WallContact>& out_walls) const {
-  const long nx = grid_.nx, ny = grid_.ny;
   std::vector<int> found;
   for (int i = i0; i < i1; ++i) {
-    if (cell_of_[i] < 0) continue;
-    const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
-    const long a0 = std::max(0L, ci - 1), a1 = std::min(nx - 1, ci + 1);
-    const double xi = d.x[i], yi = d.y[i], ri = d.r[i];
     found.clear();
-    // The 3 cells of a row are consecutive in the sorted order: one run of discs per row.
-    for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b) {
-      const int s1 = cell_start_[b * nx + a1 + 1];
-      for (int s = cell_start_[b * nx + a0]; s < s1; ++s) {
-        const int j = order_[s];
-        if (j <= i) continue;
-        const double dx = d.x[j] - xi, dy = d.y[j] - yi;
-        const double reach = ri + d.r[j] + skin;
-        if (dx * dx + dy * dy < reach * reach) found.push_back(j);
-      }
-    }
+    candidates(d, i, [&](int j) { found.push_back(j); });
     // A handful of candidates: insertion sort.
     for (std::size_t a = 1; a < found.size(); ++a)
       for (std::size_t b = a; b > 0 && found[b - 1] > found[b]; --b) std::swap(found[b - 1], found[b]);

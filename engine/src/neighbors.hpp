@@ -79,6 +79,9 @@ class Neighbors {
   // Candidates of discs [i0, i1) from the sorted cells, sorted by (i, j) and (i, k).
   void search(const Discs& d, const Geometry& g, int i0, int i1, std::vector<PairContact>& out_pairs,
               std::vector<WallContact>& out_walls) const;
+  template <class F>
+  void candidates(const Discs& d, int i, F&& f) const;  // f(j) for each candidate j > i, unsorted
+  std::size_t count_pairs(const Discs& d, int i0, int i1) const;  // candidates of discs [i0, i1)
 };
 
 }  // namespace dem

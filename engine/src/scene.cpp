@@ -477,6 +477,7 @@ void read_fill(SceneSpec& s, Tab& root) {
   }
   t.finish();
   if (s.discs.empty()) throw SceneError(s.file + ": fill: no discs");
+  s.discs.shrink_to_fit();  // read by push_back: up to 2x its length, alive until the world is built
   check_disc_budget(s, t, "type", '"' + type + '"', static_cast<double>(s.discs.size()));
   for (std::size_t k = 0; k < s.discs.size(); ++k) {
     const DiscInit& d = s.discs[k];

@@ -5,6 +5,7 @@
 // loose start, so contacts form and break and the lists are rebuilt many times.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -32,6 +33,7 @@ struct Outcome {
   std::uint64_t hash;
   long rebuilds;
   std::size_t pairs;
+  std::size_t capacity;  // of the pair list
 };
 
 Outcome run(int threads, bool paper_law, long steps) {
@@ -44,7 +46,7 @@ Outcome run(int threads, bool paper_law, long steps) {
   World w;
   build_world(spec, w);
   for (long s = 0; s < steps; ++s) w.step();
-  return {state_hash(w.discs), w.neighbors.rebuilds, w.neighbors.pairs.size()};
+  return {state_hash(w.discs), w.neighbors.rebuilds, w.neighbors.pairs.size(), w.neighbors.pairs.capacity()};
 }
 
 constexpr long kSteps = 1500;
@@ -71,6 +73,37 @@ TEST(Determinism, StoredHashes) {
   // The lists do not depend on the thread count (blocks concatenate in order).
   EXPECT_EQ(s1.pairs, s2.pairs);
   EXPECT_EQ(s1.rebuilds, s2.rebuilds);
+}
+
+TEST(Memory, PairListCostsAboutItsLengthNotDouble) {
+  // Lists are sized from the last build plus a margin, and the first build counts first
+  // (neighbors.cpp), never by push_back doubling, which leaves up to 2x the list's bytes in the
+  // list and in the scratch of the next build (at 1M discs, ~120 MB each).
+  // Lattices of 5000, 7000 and 10000 discs: one list at least lies far enough past a power of two
+  // (7000 discs, about 21k pairs) that doubling would exceed the bound.
+  const SceneSpec full = load_scene(std::string(DEM_SOURCE_DIR) + "/reference_inputs/scenes/bench_silo_10k.toml");
+  bool past_power = false;
+  for (std::size_t count : {5000u, 7000u, 10000u})
+  for (int threads : {1, 2}) {
+    SceneSpec spec = full;
+    spec.discs.resize(std::min(count, spec.discs.size()));
+    spec.threads = threads;
+    World w;
+    build_world(spec, w);
+    const std::size_t n0 = w.neighbors.pairs.size();
+    EXPECT_LE(w.neighbors.pairs.capacity(), n0 + n0 / 8 + 1024) << threads << " threads, first build";
+    for (int s = 0; s < 20; ++s) {
+      if (s % 5 == 0) w.neighbors.invalidate();  // rebuilds from the old lists
+      w.step();
+    }
+    const std::size_t n = w.neighbors.pairs.size();
+    std::size_t pow2 = 1;
+    while (pow2 < n) pow2 *= 2;
+    past_power = past_power || pow2 > n + n / 8 + 1024;
+    ASSERT_GE(w.neighbors.rebuilds, 5);
+    EXPECT_LE(w.neighbors.pairs.capacity(), n + n / 8 + 1024) << count << " discs, " << threads << " threads";
+  }
+  EXPECT_TRUE(past_power) << "no list size where doubling would show: the test cannot fail";
 }
 
 }  // namespace

@@ -87,6 +87,14 @@ def test_blow_up_stops_with_exit_3(tmp_path, run_dem):
     assert summary["status"] == "unstable" and "energy" in summary["reason"]
     step = int(re.search(r"\(step (\d+)\)", summary["reason"]).group(1))
     assert step <= 200, summary["reason"]  # 0.02 s of a fill that takes 0.4 s to rest
+    # The state written is the last good one: kept every 1000 steps, so here the start (the
+    # lattice at rest), not the blown-up discs.
+    assert "last good state at t = 0 s" in proc.stderr, proc.stderr
+    import numpy as np
+    discs = np.genfromtxt(tmp_path / "out" / "discs.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    assert len(discs) == 350
+    assert np.all(discs["vx"] == 0) and np.all(discs["vy"] == 0) and np.all(discs["omega"] == 0)
+    assert np.all(np.isfinite(discs["x"])) and discs["y"].min() > 0
 
 
 def test_blow_up_by_overlap_when_energy_check_is_loose(tmp_path, run_dem):
