@@ -109,6 +109,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const long nx = static_cast<long>(cells_along(xmax - xmin));
   const long ny = static_cast<long>(cells_along(ymax - ymin));
   const long ncell = nx * ny;
+  const double cell_d = cell_;
   cell_of_.resize(n);
   cell_start_.assign(ncell + 1, 0);
   parallel_for(n, nt, [&](long i) {  // each disc's cell on its own; the count below is serial
@@ -116,8 +117,12 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
       cell_of_[i] = -1;
       return;
     }
-    const long cx = std::min(nx - 1, static_cast<long>((d.x[i] - xmin) / cell));
-    const long cy = std::min(ny - 1, static_cast<long>((d.y[i] - ymin) / cell));
+    // In double (x87 long double here costs a control-word switch per conversion: 4x the
+    // rebuild); x >= xmin, and a quotient past the grid (or inf / NaN from extreme extents) is
+    // clamped before it is converted.
+    const double fx = (d.x[i] - dxmin) / cell_d, fy = (d.y[i] - dymin) / cell_d;
+    const long cx = fx < static_cast<double>(nx - 1) ? static_cast<long>(fx) : nx - 1;
+    const long cy = fy < static_cast<double>(ny - 1) ? static_cast<long>(fy) : ny - 1;
     cell_of_[i] = static_cast<int>(cy * nx + cx);
   });
   for (int i = 0; i < n; ++i)
