@@ -74,8 +74,8 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     y0_[i] = d.y[i];
   });
 
-  // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block. Extents and
-  // cell indices in long double, where no difference of finite coordinates overflows; discs at
+  // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block. Extents in long
+  // double, where no difference of finite coordinates overflows (cell indices clamped); discs at
   // non-finite positions (a run blowing up, stopped after this step) are in no cell and get no
   // pairs. Sparse scenes (discs flung far apart, tiny discs in a huge box) would need huge grids:
   // the cells are coarsened until there are at most 4 n + 64 of them.

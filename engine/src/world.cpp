@@ -79,10 +79,14 @@ void World::init() {
 void World::kick(double h) {
   Discs& d = discs;
   const long n = static_cast<long>(d.size());
-  parallel_for(n, threads_for(static_cast<int>(n)), [&](long i) {  // (16), (17)
-    d.vx[i] += d.fx[i] * d.inv_mass[i] * h;
-    d.vy[i] += d.fy[i] * d.inv_mass[i] * h;
-    d.omega[i] += d.torque[i] * d.inv_inertia[i] * h;
+  const double* __restrict fx = d.fx.data(); const double* __restrict fy = d.fy.data();
+  const double* __restrict tq = d.torque.data();
+  const double* __restrict im = d.inv_mass.data(); const double* __restrict ii = d.inv_inertia.data();
+  double* __restrict vx = d.vx.data(); double* __restrict vy = d.vy.data(); double* __restrict om = d.omega.data();
+  parallel_for(n, threads_for(static_cast<int>(n)), [=](long i) {  // (16), (17)
+    vx[i] += fx[i] * im[i] * h;
+    vy[i] += fy[i] * im[i] * h;
+    om[i] += tq[i] * ii[i] * h;
   });
 }
 
