@@ -109,31 +109,27 @@ def make_cases(cfg, out: Path, T: float) -> list[dict]:
     d.mkdir(parents=True, exist_ok=True)
     end = {"time": T, "stop_at_rest": False}
     cases = []
+
+    def add(name, group, what, text):
+        p = d / f"{name}.toml"
+        cs.write_text(p, text)
+        cases.append({"name": name, "group": group, "scene": p, "what": what})
+
     for s in cfg["silos"]:
         name = f"silo_{s - 1}_{s}"
-        p = d / f"{name}.toml"
-        cs.write_text(p, cs.scene_text_with(cs.SCENES / f"{name}.toml", end=end))
-        cases.append({"name": name, "group": "paper silo", "scene": p,
-                      "what": f"paper's silo, ({s - 1})/{s} lattice, paper's constants (K_s/K_n = 0.25, zeta = 1.0)"})
+        add(name, "paper silo", f"paper's silo, ({s - 1})/{s} lattice, paper's constants (K_s/K_n = 0.25, zeta = 1.0)",
+            cs.scene_text_with(cs.SCENES / f"{name}.toml", end=end))
     for ratio in cfg["ks"]:
         k = ratio / PAPER_S
-        name = f"ks_ratio_{ratio:g}"
-        p = d / f"{name}.toml"
-        cs.write_text(p, cs.scene_text_with(base_scene(), end=end,
-                                            pairs_scale={"ks_rho_g": k, "eta_s_rho_g": math.sqrt(k)}))
-        cases.append({"name": name, "group": "stiffness ratio", "scene": p,
-                      "what": f"17/18 with K_s/K_n = {ratio:g} (eta_s = eta_n sqrt(K_s/K_n), eq. 25; walls likewise)"})
+        add(f"ks_ratio_{ratio:g}", "stiffness ratio",
+            f"17/18 with K_s/K_n = {ratio:g} (eta_s = eta_n sqrt(K_s/K_n), eq. 25; walls likewise)",
+            cs.scene_text_with(base_scene(), end=end, pairs_scale={"ks_rho_g": k, "eta_s_rho_g": math.sqrt(k)}))
     for z in cfg["zeta"]:
         f = z / PAPER_ZETA
-        name = f"zeta_{z:g}"
-        p = d / f"{name}.toml"
-        cs.write_text(p, cs.scene_text_with(base_scene(), end=end,
-                                            pairs_scale={"eta_n_rho_g": f, "eta_s_rho_g": f}))
-        cases.append({"name": name, "group": "damping ratio", "scene": p,
-                      "what": f"17/18 with both dashpots scaled to a disc-disc normal damping ratio {z:g} (paper: 1.0)"})
+        add(f"zeta_{z:g}", "damping ratio",
+            f"17/18 with both dashpots scaled to a disc-disc normal damping ratio {z:g} (paper: 1.0)",
+            cs.scene_text_with(base_scene(), end=end, pairs_scale={"eta_n_rho_g": f, "eta_s_rho_g": f}))
     for kind in cfg["coordination"]:
-        name = f"{kind}"
-        p = d / f"{name}.toml"
         if kind == "hexagonal":
             text = cs.scene_text_with(base_scene(), end=end, fill={"s": 20, "gap": 0.0, "max_initial_overlap": 1e-6})
             what = "19/20 lattice with gap 0: every disc touches its 6 neighbours (hexagonal, 351 discs)"
@@ -152,8 +148,7 @@ def make_cases(cfg, out: Path, T: float) -> list[dict]:
                 "s": None, "radius": None, "gap": None, "count": None})
             what = (f"loose random packing: {len(discs)} discs placed at random (gaps >= 0.05 cm, seed 5) "
                     "falling and settling")
-        cs.write_text(p, text)
-        cases.append({"name": name, "group": "coordination", "scene": p, "what": what})
+        add(kind, "coordination", what, text)
     return cases
 
 

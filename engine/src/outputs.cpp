@@ -222,12 +222,13 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                    const StabilityReport& stab, const json* extra) {
   const bool unstable = res.status == RunStatus::unstable;
   // An unstable run writes its last good positions and velocities (of the same discs).
+  const bool rewind = unstable && res.last_good.size() == w.discs.size();
   Discs good;
-  if (unstable && res.last_good.size() == w.discs.size()) {
+  if (rewind) {
     good = w.discs;
     res.last_good.put_into(good);
   }
-  const Discs& d = unstable && res.last_good.size() == w.discs.size() ? good : w.discs;
+  const Discs& d = rewind ? good : w.discs;
   std::vector<WallLoad> walls;
   std::vector<PointLoad> points;
   measure_loads(w, spec.profile_bin, walls, points);

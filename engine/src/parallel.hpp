@@ -47,7 +47,7 @@ inline double parallel_sum(long n, int nt, F&& f) {
 #pragma omp parallel num_threads(nt)
   {
     const int t = omp_thread_index();
-    const long i0 = n * t / nt, i1 = n * (t + 1) / nt;
+    const long i0 = block_start(static_cast<int>(n), nt, t), i1 = block_start(static_cast<int>(n), nt, t + 1);
     double s = 0;
     for (long i = i0; i < i1; ++i) s += f(i);
     part[t] = s;

@@ -75,24 +75,10 @@ void World::init() {
   (this->*force_kernel_)();  // forces at the start (Verlet's first half kick uses them)
 }
 
-// Integration loops: each disc on its own, so any thread count gives the same bits.
-void World::kick(double h) {
-  Discs& d = discs;
-  const long n = static_cast<long>(d.size());
-  const double* __restrict fx = d.fx.data(); const double* __restrict fy = d.fy.data();
-  const double* __restrict tq = d.torque.data();
-  const double* __restrict im = d.inv_mass.data(); const double* __restrict ii = d.inv_inertia.data();
-  double* __restrict vx = d.vx.data(); double* __restrict vy = d.vy.data(); double* __restrict om = d.omega.data();
-  parallel_for(n, threads_for(static_cast<int>(n)), [=](long i) {  // (16), (17)
-    vx[i] += fx[i] * im[i] * h;
-    vy[i] += fy[i] * im[i] * h;
-    om[i] += tq[i] * ii[i] * h;
-  });
-}
-
-// The kick and the drift of a disc in one pass over the arrays (the same operations, in the
-// same order, as a kick pass followed by a drift pass: one sweep of memory instead of two).
-template <bool EQ19>
+// Integration loops: each disc on its own, so any thread count gives the same bits. The kick
+// and the drift of a disc go in one pass over the arrays (the same operations, in the same order,
+// as a kick pass followed by a drift pass: one sweep of memory instead of two).
+template <World::Drift D>
 void World::kick_drift(double h) {
   Discs& d = discs;
   const long n = static_cast<long>(d.size());
@@ -109,8 +95,9 @@ void World::kick_drift(double h) {
     const double w = vy[i] + fy[i] * im[i] * h;
     const double o = om[i] + tq[i] * ii[i] * h;
     vx[i] = v; vy[i] = w; om[i] = o;
+    if constexpr (D == Drift::none) return;
     double a, b, c;
-    if constexpr (EQ19) {  // (19): the mean of the last increment and v dt
+    if constexpr (D == Drift::eq19) {  // (19): the mean of the last increment and v dt
       a = 0.5 * (ux[i] + v * step);
       b = 0.5 * (uy[i] + w * step);
       c = 0.5 * (up[i] + o * step);
@@ -126,8 +113,9 @@ void World::kick_drift(double h) {
   });
 }
 
-void World::kick_drift_eq18(double h) { kick_drift<false>(h); }
-void World::kick_drift_eq19(double h) { kick_drift<true>(h); }
+void World::kick(double h) { kick_drift<Drift::none>(h); }
+void World::kick_drift_eq18(double h) { kick_drift<Drift::eq18>(h); }
+void World::kick_drift_eq19(double h) { kick_drift<Drift::eq19>(h); }
 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
 void World::start_resultants(int i0, int i1) {

@@ -81,8 +81,9 @@ class World {
   double pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later);
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
-  template <bool EQ19>
-  void kick_drift(double h);
+  enum class Drift { none, eq18, eq19 };
+  template <Drift D>
+  void kick_drift(double h);  // kick, then the drift D (none: the kick alone)
   void start_resultants(int i0, int i1);
   std::vector<std::vector<Deferred>> deferred_;  // per thread
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
