@@ -29,17 +29,22 @@ bool Neighbors::needs_rebuild(const Discs& d, int nt) const {
 }
 
 namespace {
-// Keep the history of entries present in both sorted lists (same key).
+// Keep the history of entries present in both sorted lists (same key): the old entries are
+// [old_begin, old_end).
 template <class T, class Key>
-void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key key) {
+void merge_history(const T* old_begin, const T* old_end, std::vector<T>& new_list, Key key) {
   if (new_list.empty()) return;
   // A block's new entries start somewhere in the old list: skip there at once.
-  std::size_t a = std::lower_bound(old_list.begin(), old_list.end(), key(new_list.front()),
-                                   [&](const T& o, long long k) { return key(o) < k; }) - old_list.begin();
+  const T* a = std::lower_bound(old_begin, old_end, key(new_list.front()),
+                                [&](const T& o, long long k) { return key(o) < k; });
   for (auto& e : new_list) {
-    while (a < old_list.size() && key(old_list[a]) < key(e)) ++a;
-    if (a < old_list.size() && key(old_list[a]) == key(e)) e = old_list[a];
+    while (a < old_end && key(*a) < key(e)) ++a;
+    if (a < old_end && key(*a) == key(e)) e = *a;
   }
+}
+template <class T, class Key>
+void merge_history(const std::vector<T>& old_list, std::vector<T>& new_list, Key key) {
+  merge_history(old_list.data(), old_list.data() + old_list.size(), new_list, key);
 }
 
 // Lists are sized from the last build plus a margin, never by doubling: a list costs about its
@@ -61,6 +66,9 @@ void resize_exact(std::vector<T>& v, std::size_t n) {  // contents not kept
   }
   v.resize(n);
 }
+
+long long pair_key(const PairContact& p) { return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j); }
+long long wall_key(const WallContact& w) { return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k); }
 
 }  // namespace
 
@@ -153,57 +161,149 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     }
     if (!std::isfinite(reach)) b = Box{-HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, b.live};
   }
-  const auto pair_key = [](const PairContact& p) { return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j); };
-  const auto wall_key = [](const WallContact& w) { return (static_cast<long long>(w.i) << 32) | static_cast<unsigned>(w.k); };
-  // The first build has no old list to size from: it counts first, so that even then the list is
-  // allocated once at its length (a million discs: no 2x list and copy at the start).
-  const bool first = pairs.empty();
+  build_pairs(d, nt);
+  // Obstacle entries: a few per disc at a wall, a small list; built beside the old one.
   if (nt <= 1) {
-    make_room(new_pairs_, first ? count_pairs(d, 0, n) : pairs.size());
     make_room(new_walls_, walls.size());
-    search(d, g, 0, n, new_pairs_, new_walls_);
-    fit(new_pairs_);
+    search_walls(d, g, 0, n, new_walls_);
     fit(new_walls_);
-    merge_history(pairs, new_pairs_, pair_key);
     merge_history(walls, new_walls_, wall_key);
-    pairs.swap(new_pairs_);
     walls.swap(new_walls_);
     return;
   }
-  // Threads search contiguous blocks of discs; the lists are sorted by i, so the blocks'
-  // lists, each merged with the old entries of its discs, concatenate in order: the same lists as
-  // the serial search, whatever the thread count.
-  block_pairs_.resize(nt);
+  // Threads search contiguous blocks of discs; the list is sorted by i, so the blocks' lists,
+  // each merged with the old entries of its discs, concatenate in order: the same list as the
+  // serial search, whatever the thread count.
   block_walls_.resize(nt);
-  std::vector<std::size_t> pair_at(nt + 1, 0), wall_at(nt + 1, 0);
+  std::vector<std::size_t> wall_at(nt + 1, 0);
 #pragma omp parallel num_threads(nt)
   {
     const int t = omp_thread_index();
     const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
-    auto& bp = block_pairs_[t];
     auto& bw = block_walls_[t];
-    make_room(bp, first ? count_pairs(d, i0, i1) : pairs.size() / nt);
     make_room(bw, walls.size() / nt);
-    search(d, g, i0, i1, bp, bw);
-    fit(bp);
+    search_walls(d, g, i0, i1, bw);
     fit(bw);
-    merge_history(pairs, bp, pair_key);
     merge_history(walls, bw, wall_key);
-    pair_at[t + 1] = bp.size();
     wall_at[t + 1] = bw.size();
 #pragma omp barrier
 #pragma omp single
     {
-      for (int u = 0; u < nt; ++u) {
-        pair_at[u + 1] += pair_at[u];
-        wall_at[u + 1] += wall_at[u];
-      }
-      resize_exact(pairs, pair_at[nt]);  // the old entries are all in the blocks now
-      resize_exact(walls, wall_at[nt]);
+      for (int u = 0; u < nt; ++u) wall_at[u + 1] += wall_at[u];
+      resize_exact(walls, wall_at[nt]);  // the old entries are all in the blocks now
     }
-    std::copy(bp.begin(), bp.end(), pairs.begin() + static_cast<std::ptrdiff_t>(pair_at[t]));
     std::copy(bw.begin(), bw.end(), walls.begin() + static_cast<std::ptrdiff_t>(wall_at[t]));
   }
+}
+
+// The pair list is the engine's largest array (about 3 pairs a disc, 40 bytes each). A new list
+// built beside the old one would need both at once: twice the largest array, the peak memory of
+// a million-disc run. Instead the old list is moved to the tail of its own buffer (sized with a
+// 1/16 margin at the last build) and the new one written from the front, in rounds of
+// kRoundDiscs discs a thread: each thread searches its part of the round into a small scratch
+// list and takes the history from the old entries of the same discs, then the round is copied
+// into place. The new entries of discs up to b overwrite only old entries of discs below b, which
+// have been read, as long as the list has not grown by more than the margin up to b; if it has,
+// the buffer is enlarged then (rare: the list changes little between builds). The list is the
+// same as a build beside the old one, for any thread count.
+void Neighbors::build_pairs(const Discs& d, int nt) {
+  const int n = static_cast<int>(d.size());
+  const std::size_t old_n = pairs.size();
+  // The first build has no old list to size from: it counts first, so that even then the list
+  // is allocated once at its length.
+  std::size_t want = old_n + old_n / 16 + 64;
+  if (old_n == 0) {
+    std::size_t c = 0;
+    if (nt <= 1) {
+      c = count_pairs(d, 0, n);
+    } else {
+#pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : c)
+      for (int t = 0; t < nt; ++t) c += count_pairs(d, block_start(n, nt, t), block_start(n, nt, t + 1));
+    }
+    want = c + c / 16 + 64;
+  }
+  std::size_t cap = std::max(want, pairs.capacity());
+  if (pairs.capacity() < cap) {  // a larger buffer (first build, or the list grew): old at its tail
+    std::vector<PairContact> v;
+    v.reserve(cap);
+    v.resize(cap);
+    std::copy(pairs.begin(), pairs.end(), v.end() - static_cast<std::ptrdiff_t>(old_n));
+    pairs.swap(v);
+  } else {
+    pairs.resize(cap);
+    std::move_backward(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(old_n), pairs.end());
+  }
+  std::size_t w = 0;             // next new entry
+  std::size_t r = cap - old_n;   // first old entry not yet read: the old ones are [r, cap)
+  const auto old_from = [&](std::size_t from, int i) {  // first old entry at or after from with disc >= i
+    return static_cast<std::size_t>(
+        std::lower_bound(pairs.begin() + static_cast<std::ptrdiff_t>(from), pairs.begin() + static_cast<std::ptrdiff_t>(cap), i,
+                         [](const PairContact& c, int k) { return c.i < k; }) - pairs.begin());
+  };
+  const int threads = std::max(1, nt);
+  round_pairs_.resize(threads);
+  std::vector<std::size_t> at(threads + 1, 0);
+  const int round = kRoundDiscs * threads;
+  // One round: thread t's part of the discs [a, b), searched and merged, then copied into place.
+  const auto search_part = [&](int t, int a, int b) {
+    const int i0 = a + block_start(b - a, threads, t), i1 = a + block_start(b - a, threads, t + 1);
+    auto& bp = round_pairs_[t];
+    bp.clear();
+    search_pairs(d, i0, i1, bp);
+    const std::size_t from = old_from(r, i0);
+    merge_history(pairs.data() + from, pairs.data() + cap, bp, pair_key);
+    at[t + 1] = bp.size();
+  };
+  const auto place_round = [&](int b) {  // serial: where the round goes, the buffer enlarged if needed
+    at[0] = 0;
+    for (int u = 0; u < threads; ++u) at[u + 1] += at[u];
+    const std::size_t next = old_from(r, b);  // the old entries of discs >= b start here
+    const std::size_t need = w + at[threads];
+    if (need > next) {  // the list grew past the margin: a larger buffer, old entries at its tail
+      const std::size_t rest = cap - next, cap2 = need + rest + (need + rest) / 16 + 64;
+      std::vector<PairContact> v;
+      v.reserve(cap2);
+      v.resize(cap2);
+      std::copy(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(w), v.begin());
+      std::copy(pairs.begin() + static_cast<std::ptrdiff_t>(next), pairs.end(), v.end() - static_cast<std::ptrdiff_t>(rest));
+      pairs.swap(v);
+      cap = cap2;
+      r = cap2 - rest;
+    } else {
+      r = next;
+    }
+    for (int u = 0; u < threads; ++u) at[u] += w;
+  };
+  const auto copy_part = [&](int t) {
+    std::copy(round_pairs_[t].begin(), round_pairs_[t].end(), pairs.begin() + static_cast<std::ptrdiff_t>(at[t]));
+  };
+  if (threads == 1) {
+    for (int a = 0; a < n; a += round) {
+      const int b = std::min(n, a + round);
+      search_part(0, a, b);
+      place_round(b);
+      copy_part(0);
+      w += round_pairs_[0].size();
+    }
+  } else {
+#pragma omp parallel num_threads(threads)
+    {
+      const int t = omp_thread_index();
+      for (int a = 0; a < n; a += round) {
+        const int b = std::min(n, a + round);
+        search_part(t, a, b);
+#pragma omp barrier
+#pragma omp single
+        place_round(b);  // implied barrier: every thread sees the new places
+        copy_part(t);
+#pragma omp barrier
+#pragma omp single
+        w = at[threads - 1] + round_pairs_[threads - 1].size();
+      }
+    }
+  }
+  pairs.resize(w);
+  if (pairs.capacity() > w + w / 8 + 1024) pairs.shrink_to_fit();  // the list shrank (discs removed)
 }
 
 template <class F>
@@ -232,8 +332,14 @@ std::size_t Neighbors::count_pairs(const Discs& d, int i0, int i1) const {
   return c;
 }
 
-void Neighbors::search(const Discs& d, const Geometry& g, int i0, int i1, std::vector<PairContact>& out_pairs,
-                       std::vector<WallContact>& out_walls) const {
+std::size_t Neighbors::scratch_bytes() const {
+  std::size_t b = new_walls_.capacity() * sizeof(WallContact);
+  for (const auto& v : round_pairs_) b += v.capacity() * sizeof(PairContact);
+  for (const auto& v : block_walls_) b += v.capacity() * sizeof(WallContact);
+  return b;
+}
+
+void Neighbors::search_pairs(const Discs& d, int i0, int i1, std::vector<PairContact>& out) const {
   std::vector<int> found;
   for (int i = i0; i < i1; ++i) {
     found.clear();
@@ -241,15 +347,18 @@ void Neighbors::search(const Discs& d, const Geometry& g, int i0, int i1, std::v
     // A handful of candidates: insertion sort.
     for (std::size_t a = 1; a < found.size(); ++a)
       for (std::size_t b = a; b > 0 && found[b - 1] > found[b]; --b) std::swap(found[b - 1], found[b]);
-    for (int j : found) out_pairs.push_back(PairContact{i, j});
+    for (int j : found) out.push_back(PairContact{i, j});
   }
+}
+
+void Neighbors::search_walls(const Discs& d, const Geometry& g, int i0, int i1, std::vector<WallContact>& out) const {
   const int nk = g.obstacle_count();
   for (int i = i0; i < i1; ++i) {
     const double xi = d.x[i], yi = d.y[i];
     for (int k = 0; k < nk; ++k) {
       const Box& b = boxes_[k];
       if (!b.live || !(xi >= b.xlo && xi <= b.xhi && yi >= b.ylo && yi <= b.yhi)) continue;
-      if (obstacle_distance(g, k, xi, yi) < d.r[i] + skin) out_walls.push_back(WallContact{i, k});
+      if (obstacle_distance(g, k, xi, yi) < d.r[i] + skin) out.push_back(WallContact{i, k});
     }
   }
 }

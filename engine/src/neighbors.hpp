@@ -43,6 +43,9 @@ class Neighbors {
   // New lists with the history of the old ones carried over; nt threads give the same lists.
   void rebuild(const Discs& d, const Geometry& g, int nt = 1);
   double cell_size() const { return cell_; }
+  // Bytes of the scratch kept between builds (round lists, obstacle blocks, cells): about
+  // kRoundDiscs discs' worth a thread, whatever the number of discs.
+  std::size_t scratch_bytes() const;
   // Discs were removed: new_index[old] is the new index or -1. Order is kept, so the lists stay
   // sorted and the history stays attached.
   void compact(const std::vector<int>& new_index);
@@ -63,10 +66,10 @@ class Neighbors {
   double cell_ = 0;
   // Scratch kept between rebuilds to avoid reallocation.
   std::vector<int> cell_start_, order_, cell_of_;
-  std::vector<PairContact> new_pairs_;
   std::vector<WallContact> new_walls_;
-  std::vector<std::vector<PairContact>> block_pairs_;  // per thread
+  std::vector<std::vector<PairContact>> round_pairs_;  // per thread: one round's new pairs
   std::vector<std::vector<WallContact>> block_walls_;
+  static constexpr int kRoundDiscs = 4096;  // discs a thread searches per round of build_pairs
   struct Box {  // an obstacle's bounding box grown by the largest disc reach
     double xlo, xhi, ylo, yhi;
     bool live;  // false: an inactive wall, never a candidate
@@ -76,9 +79,12 @@ class Neighbors {
     double xmin = 0, ymin = 0;
     long nx = 0, ny = 0;
   } grid_;
-  // Candidates of discs [i0, i1) from the sorted cells, sorted by (i, j) and (i, k).
-  void search(const Discs& d, const Geometry& g, int i0, int i1, std::vector<PairContact>& out_pairs,
-              std::vector<WallContact>& out_walls) const;
+  // The new pair list, written over the old one (see neighbors.cpp).
+  void build_pairs(const Discs& d, int nt);
+  // Candidate pairs of discs [i0, i1) from the sorted cells, sorted by (i, j).
+  void search_pairs(const Discs& d, int i0, int i1, std::vector<PairContact>& out) const;
+  // Candidate obstacles of discs [i0, i1), sorted by (i, k).
+  void search_walls(const Discs& d, const Geometry& g, int i0, int i1, std::vector<WallContact>& out) const;
   template <class F>
   void candidates(const Discs& d, int i, F&& f) const;  // f(j) for each candidate j > i, unsorted
   std::size_t count_pairs(const Discs& d, int i0, int i1) const;  // candidates of discs [i0, i1)

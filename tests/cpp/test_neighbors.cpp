@@ -1,0 +1,99 @@
+// The pair list is rebuilt in place, over the old one (neighbors.cpp build_pairs): whatever
+// the old list, the new one must be exactly the fresh list of the new positions, with the
+// history of the pairs the two lists share, for 1 and 2 threads, when the list grows past its
+// margin (the buffer is enlarged mid-build) and when it shrinks; and the scratch kept between
+// builds must not grow with the number of discs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "neighbors.hpp"
+
+namespace dem {
+namespace {
+
+// A square lattice of discs of radius 1, spacing `gap` (centre to centre), rows of `row`.
+Discs lattice(int n, int row, double gap) {
+  Discs d;
+  for (int k = 0; k < n; ++k) d.add((k % row) * gap, (k / row) * gap, 1.0, 1.0, 0);
+  return d;
+}
+
+// Distinct, recognisable history for every pair of a list.
+double tag(const PairContact& c) { return c.i * 1e5 + c.j; }
+
+void check_rebuild(const Discs& before, const Discs& after, int threads) {
+  const Geometry g;
+  Neighbors nb;
+  nb.rebuild(before, g, threads);
+  for (PairContact& c : nb.pairs) {
+    c.en = tag(c);
+    c.es = -tag(c);
+    c.fn = 1;
+    c.fs = 2;
+  }
+  std::vector<PairContact> old = nb.pairs;
+  nb.rebuild(after, g, threads);
+
+  Neighbors fresh;
+  fresh.rebuild(after, g, 1);
+  ASSERT_EQ(nb.pairs.size(), fresh.pairs.size()) << threads << " threads";
+  std::size_t a = 0, kept = 0;
+  for (std::size_t p = 0; p < fresh.pairs.size(); ++p) {
+    const PairContact& c = nb.pairs[p];
+    ASSERT_EQ(c.i, fresh.pairs[p].i) << p;
+    ASSERT_EQ(c.j, fresh.pairs[p].j) << p;
+    while (a < old.size() && (old[a].i < c.i || (old[a].i == c.i && old[a].j < c.j))) ++a;
+    const bool shared = a < old.size() && old[a].i == c.i && old[a].j == c.j;
+    EXPECT_EQ(c.en, shared ? tag(c) : 0.0) << c.i << "-" << c.j;
+    EXPECT_EQ(c.es, shared ? -tag(c) : 0.0) << c.i << "-" << c.j;
+    EXPECT_EQ(c.fs, shared ? 2.0 : 0.0) << c.i << "-" << c.j;
+    kept += shared;
+  }
+  EXPECT_GT(kept, 0u) << "no shared pair: the history part of the test cannot fail";
+}
+
+TEST(Neighbors, InPlaceBuildGrowingPastItsMarginIsTheFreshList) {
+  // 20000 discs 3 apart (no candidates), then the first 12000 packed at spacing 2 (about 2 pairs
+  // a disc): the list grows from nothing to ~24k pairs within the first rounds, far past the
+  // 1/16 margin, so the buffer is enlarged in the middle of the build.
+  const int n = 20000, row = 100;
+  Discs before = lattice(n, row, 2.1);  // 2.1 apart with skin 0.2: every lattice neighbour a candidate
+  for (int k = 0; k < 8000; ++k) before.x[k] += 3 * row;  // the first 8000 spread out: fewer pairs
+  for (int k = 0; k < 8000; ++k) before.x[k] = (k % row) * 3.0, before.y[k] = (k / row) * 3.0 + 1000;
+  Discs after = lattice(n, row, 2.1);
+  for (int threads : {1, 2}) check_rebuild(before, after, threads);
+}
+
+TEST(Neighbors, InPlaceBuildShrinkingIsTheFreshList) {
+  const int n = 20000, row = 100;
+  Discs before = lattice(n, row, 2.1);
+  Discs after = before;
+  for (int k = 5000; k < 15000; ++k) after.y[k] += 0.05 * ((k * 7919) % 13);  // some pairs end
+  for (int k = 15000; k < n; ++k) after.x[k] = 1000 + (k % row) * 3.0;     // the last ones part
+  for (int threads : {1, 2}) check_rebuild(before, after, threads);
+}
+
+TEST(Neighbors, ScratchDoesNotGrowWithTheDiscs) {
+  // The old build kept a second list the size of the first as scratch; the in-place build keeps
+  // one round's worth a thread. From 20k to 80k discs the list grows 4x, the scratch not at all.
+  const Geometry g;
+  std::size_t scratch[2] = {0, 0}, list[2] = {0, 0};
+  int s = 0;
+  for (int n : {20000, 80000}) {
+    Discs d = lattice(n, 200, 2.1);
+    Neighbors nb;
+    nb.rebuild(d, g, 2);
+    nb.rebuild(d, g, 2);
+    scratch[s] = nb.scratch_bytes();
+    list[s] = nb.pairs.capacity() * sizeof(PairContact);
+    ++s;
+  }
+  EXPECT_GT(list[1], 3 * list[0]);
+  EXPECT_LE(scratch[1], scratch[0] + scratch[0] / 8) << "scratch grows with the discs";
+  EXPECT_LT(scratch[1], list[1] / 4);
+}
+
+}  // namespace
+}  // namespace dem
