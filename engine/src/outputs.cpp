@@ -1,6 +1,7 @@
 #include "outputs.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -86,16 +87,35 @@ namespace {
 
 std::string fmt(double v) { return fmt17(v); }
 
-// Streamed to the file: a 1M-disc VTU never sits in memory as text.
-void vtu(std::ostream& o, const std::vector<double>& px, const std::vector<double>& py, int points_per_cell, int vtk_type,
-                const std::vector<std::pair<std::string, std::vector<double>>>& scalars,
-                const std::vector<std::pair<std::string, std::vector<double>>>& vectors3,
-                const std::vector<std::pair<std::string, std::vector<int>>>& ints, bool cell_data) {
-  const std::size_t np = px.size(), nc = np / points_per_cell;
+// Streamed to the file: a 1M-disc VTU never sits in memory, as text or as copies of its
+// columns: every column is read through an accessor from the arrays it comes from.
+struct Column {
+  std::string name;
+  std::function<double(std::size_t)> at;
+};
+struct Column2 {  // a vector in the plane, written with z = 0
+  std::string name;
+  std::function<void(std::size_t, double&, double&)> at;
+};
+struct IntColumn {
+  std::string name;
+  std::function<long long(std::size_t)> at;
+};
+
+// np points (point(k, x, y)) in cells of points_per_cell consecutive points; the columns have
+// one value a cell (cell_data) or a point.
+void vtu(std::ostream& o, std::size_t np, const std::function<void(std::size_t, double&, double&)>& point,
+         int points_per_cell, int vtk_type, const std::vector<Column>& scalars, const std::vector<Column2>& vectors,
+         const std::vector<IntColumn>& ints, bool cell_data) {
+  const std::size_t nc = np / points_per_cell, nv = cell_data ? nc : np;
   o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
     << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nc << "\">\n";
   o << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (std::size_t i = 0; i < np; ++i) o << fmt(px[i]) << ' ' << fmt(py[i]) << " 0\n";
+  for (std::size_t i = 0; i < np; ++i) {
+    double x, y;
+    point(i, x, y);
+    o << fmt(x) << ' ' << fmt(y) << " 0\n";
+  }
   o << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   for (std::size_t i = 0; i < np; ++i) o << i << '\n';
   o << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
@@ -104,19 +124,23 @@ void vtu(std::ostream& o, const std::vector<double>& px, const std::vector<doubl
   for (std::size_t c = 0; c < nc; ++c) o << vtk_type << '\n';
   o << "</DataArray>\n</Cells>\n";
   o << (cell_data ? "<CellData>\n" : "<PointData>\n");
-  for (const auto& [name, v] : scalars) {
-    o << "<DataArray type=\"Float64\" Name=\"" << name << "\" format=\"ascii\">\n";
-    for (double x : v) o << fmt(x) << '\n';
+  for (const Column& c : scalars) {
+    o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < nv; ++i) o << fmt(c.at(i)) << '\n';
     o << "</DataArray>\n";
   }
-  for (const auto& [name, v] : vectors3) {
-    o << "<DataArray type=\"Float64\" Name=\"" << name << "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i + 2 < v.size(); i += 3) o << fmt(v[i]) << ' ' << fmt(v[i + 1]) << ' ' << fmt(v[i + 2]) << '\n';
+  for (const Column2& c : vectors) {
+    o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < nv; ++i) {
+      double x, y;
+      c.at(i, x, y);
+      o << fmt(x) << ' ' << fmt(y) << " 0\n";
+    }
     o << "</DataArray>\n";
   }
-  for (const auto& [name, v] : ints) {
-    o << "<DataArray type=\"Int32\" Name=\"" << name << "\" format=\"ascii\">\n";
-    for (int x : v) o << x << '\n';
+  for (const IntColumn& c : ints) {
+    o << "<DataArray type=\"Int32\" Name=\"" << c.name << "\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < nv; ++i) o << c.at(i) << '\n';
     o << "</DataArray>\n";
   }
   o << (cell_data ? "</CellData>\n" : "</PointData>\n") << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
@@ -140,81 +164,132 @@ json pair_json(const PairReport& r) {
 
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
   const Discs& d = w.discs;
+  // Which entries are written, by index (4 bytes a contact; the columns are read from the lists).
+  std::vector<std::uint32_t> pairs, bonds, walls;
+  const auto apart = [&](int i, int j, bool touching_only) {
+    const double R = std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]);
+    return (touching_only && R > d.r[i] + d.r[j]) || R == 0;
+  };
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p)
+    if (!apart(w.neighbors.pairs[p].i, w.neighbors.pairs[p].j, true)) pairs.push_back(static_cast<std::uint32_t>(p));
+  for (std::size_t p = 0; p < w.bonds.size(); ++p)
+    if (!apart(w.bonds[p].i, w.bonds[p].j, false)) bonds.push_back(static_cast<std::uint32_t>(p));
+  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p)
+    if (w.neighbors.walls[p].touching) walls.push_back(static_cast<std::uint32_t>(p));
+  const std::size_t np = pairs.size(), nb = bonds.size(), n = np + nb + walls.size();
+  // Contact c: the force record and its two points (the discs, or the disc and the obstacle point).
+  struct Rec {
+    double en, es, fn, fs;
+    int kind;  // 0 disc-disc, 1 disc-wall, 2 disc-point, 3 bond
+  };
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  const auto rec = [&](std::size_t c) -> Rec {
+    if (c < np) {
+      const PairContact& q = w.neighbors.pairs[pairs[c]];
+      return {q.en, q.es, q.fn, q.fs, 0};
+    }
+    if (c < np + nb) {
+      const Bond& q = w.bonds[bonds[c - np]];
+      return {q.en, q.es, q.fn, q.fs, 3};
+    }
+    const WallContact& q = w.neighbors.walls[walls[c - np - nb]];
+    return {q.en, q.es, q.fn, q.fs, q.k < nw ? 1 : 2};
+  };
+  const auto point = [&](std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
+    const std::size_t c = k / 2;
+    const bool second = k % 2;
+    int i;
+    if (c < np) {
+      const PairContact& q = w.neighbors.pairs[pairs[c]];
+      i = second ? q.j : q.i;
+    } else if (c < np + nb) {
+      const Bond& q = w.bonds[bonds[c - np]];
+      i = second ? q.j : q.i;
+    } else {
+      const WallContact& q = w.neighbors.walls[walls[c - np - nb]];
+      if (second) {
+        x = q.px;
+        y = q.py;
+        return;
+      }
+      i = q.i;
+    }
+    x = d.x[i];
+    y = d.y[i];
+  };
+
   std::ofstream o;  // NAME.csv.tmp, renamed when complete
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
   o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
-  std::vector<double> lx, ly, fn, fs, en, es;
-  std::vector<int> kind;
-  for (const PairContact& c : w.neighbors.pairs) {
+  for (std::uint32_t p : pairs) {
+    const PairContact& c = w.neighbors.pairs[p];
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
-    if (R > d.r[c.i] + d.r[c.j] || R == 0) continue;
     const double nx = dx / R, ny = dy / R, ov = d.r[c.i] + d.r[c.j] - R;
     const double cx = d.x[c.i] + nx * (d.r[c.i] - 0.5 * ov), cy = d.y[c.i] + ny * (d.r[c.i] - 0.5 * ov);
     o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
       << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ',' << fmt(c.fs) << '\n';
-    lx.insert(lx.end(), {d.x[c.i], d.x[c.j]});
-    ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
-    fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(0);
   }
-  for (const Bond& c : w.bonds) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+  for (std::uint32_t p : bonds) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+    const Bond& c = w.bonds[p];
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
-    if (R == 0) continue;
     const double nx = dx / R, ny = dy / R, at = c.ai / (c.ai + c.aj) * R;
     o << "db," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(d.x[c.i] + nx * at) << ',' << fmt(d.y[c.i] + ny * at)
       << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
-    lx.insert(lx.end(), {d.x[c.i], d.x[c.j]});
-    ly.insert(ly.end(), {d.y[c.i], d.y[c.j]});
-    fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(3);
   }
-  const int nw = static_cast<int>(w.geometry.walls.size());
-  for (const WallContact& c : w.neighbors.walls) {
-    if (!c.touching) continue;
+  for (std::uint32_t p : walls) {
+    const WallContact& c = w.neighbors.walls[p];
     const bool is_wall = c.k < nw;
-    const std::string name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
+    const std::string& name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
     o << (is_wall ? "dw," : "dp,") << d.id[c.i] << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
       << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
-    lx.insert(lx.end(), {d.x[c.i], c.px});
-    ly.insert(ly.end(), {d.y[c.i], c.py});
-    fn.push_back(c.fn); fs.push_back(c.fs); en.push_back(c.en); es.push_back(c.es); kind.push_back(is_wall ? 1 : 2);
   }
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
-    vtu(out, lx, ly, 2, 3, {{"f_n", fn}, {"f_s", fs}, {"e_n", en}, {"e_s", es}}, {}, {{"kind", kind}}, true);
+    vtu(out, 2 * n, point, 2, 3,
+        {{"f_n", [&](std::size_t c) { return rec(c).fn; }}, {"f_s", [&](std::size_t c) { return rec(c).fs; }},
+         {"e_n", [&](std::size_t c) { return rec(c).en; }}, {"e_s", [&](std::size_t c) { return rec(c).es; }}},
+        {}, {{"kind", [&](std::size_t c) { return static_cast<long long>(rec(c).kind); }}}, true);
   });
 }
 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
-                      const std::vector<double>* disp_x, const std::vector<double>* disp_y) {
+                      const std::vector<double>* x0, const std::vector<double>* y0) {
+  const bool disp = x0 && y0;
+  const auto displacement = [&](std::size_t i, double& dx, double& dy) {
+    dx = d.x[i] - (*x0)[d.id[i]];
+    dy = d.y[i] - (*y0)[d.id[i]];
+  };
   std::ofstream o;  // NAME.csv.tmp, renamed when complete
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
-  o << "id,x,y,r,vx,vy,omega,material" << (disp_x ? ",dx,dy" : "") << "\n";
-  std::vector<double> vel, disp;
+  o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << "\n";
   for (std::size_t i = 0; i < d.size(); ++i) {
     o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r[i]) << ',' << fmt(d.vx[i]) << ','
       << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material[i]];
-    if (disp_x) {
-      o << ',' << fmt((*disp_x)[i]) << ',' << fmt((*disp_y)[i]);
-      disp.insert(disp.end(), {(*disp_x)[i], (*disp_y)[i], 0.0});
+    if (disp) {
+      double dx, dy;
+      displacement(i, dx, dy);
+      o << ',' << fmt(dx) << ',' << fmt(dy);
     }
     o << '\n';
-    vel.insert(vel.end(), {d.vx[i], d.vy[i], 0.0});
   }
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
-  std::vector<std::pair<std::string, std::vector<double>>> vec3;
-  vec3.emplace_back("velocity", std::move(vel));
-  if (disp_x) vec3.emplace_back("displacement", std::move(disp));
+  std::vector<Column2> vec;
+  vec.push_back({"velocity", [&](std::size_t i, double& vx, double& vy) { vx = d.vx[i]; vy = d.vy[i]; }});
+  if (disp) vec.push_back({"displacement", displacement});
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
-    vtu(out, d.x, d.y, 1, 1, {{"radius", d.r}, {"omega", d.omega}}, vec3, {{"id", d.id}}, false);
+    vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1,
+        {{"radius", [&](std::size_t i) { return d.r[i]; }}, {"omega", [&](std::size_t i) { return d.omega[i]; }}}, vec,
+        {{"id", [&](std::size_t i) { return static_cast<long long>(d.id[i]); }}}, false);
   });
 }
 

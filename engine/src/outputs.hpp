@@ -39,9 +39,10 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
 
 // STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w);
-// STEM.csv and STEM.vtu of the discs, with displacement columns when given.
+// STEM.csv and STEM.vtu of the discs; with displacement columns from the reference positions
+// x0, y0 (indexed by disc id) when given.
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
-                      const std::vector<double>* disp_x, const std::vector<double>* disp_y);
+                      const std::vector<double>* x0, const std::vector<double>* y0);
 
 // A double at full precision (%.17g), and a JSON number or null when not finite.
 std::string fmt17(double v);
