@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "outputs.hpp"
 #include "state.hpp"
@@ -65,9 +66,7 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
   o.put<std::int32_t>(static_cast<std::int32_t>(fill.status));
   o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
   o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds); o.put(fill.last_good_time);
-  for (const auto* v : {&fill.last_good.x, &fill.last_good.y, &fill.last_good.phi, &fill.last_good.vx,
-                        &fill.last_good.vy, &fill.last_good.omega})
-    o.vec(*v);
+  for (const auto* v : std::as_const(fill.last_good).arrays()) o.vec(*v);
   o.put(fill.energy_started); o.put(fill.energy.active);
   o.put(fill.energy.budget); o.put(fill.energy.scale); o.put(fill.energy.gain);
   // The world, its counters and its lists exactly as they are (no rebuild on resume).
@@ -122,9 +121,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   fill.rest_reached = r.get<bool>(); fill.rest_time = r.get<double>(); fill.rest_threshold = r.get<double>();
   fill.mean_abs_du = r.get<double>(); fill.mean_abs_dv = r.get<double>(); fill.wall_seconds = r.get<double>();
   fill.last_good_time = r.get<double>();
-  for (auto* v : {&fill.last_good.x, &fill.last_good.y, &fill.last_good.phi, &fill.last_good.vx,
-                  &fill.last_good.vy, &fill.last_good.omega})
-    r.vec(*v);
+  for (auto* v : fill.last_good.arrays()) r.vec(*v);
   fill.energy_started = r.get<bool>(); fill.energy.active = r.get<bool>();
   fill.energy.budget = r.get<double>(); fill.energy.scale = r.get<double>(); fill.energy.gain = r.get<double>();
   read_world(r, w);

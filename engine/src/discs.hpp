@@ -1,6 +1,7 @@
 // Disc state as flat arrays (structure of arrays): the step streams through these.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -41,6 +42,9 @@ struct Kinematics {
   std::vector<double> x, y, phi, vx, vy, omega;
 
   std::size_t size() const { return x.size(); }
+  // The six arrays in one order (what a checkpoint writes and reads).
+  std::array<std::vector<double>*, 6> arrays() { return {&x, &y, &phi, &vx, &vy, &omega}; }
+  std::array<const std::vector<double>*, 6> arrays() const { return {&x, &y, &phi, &vx, &vy, &omega}; }
   void take(const Discs& d) {
     x = d.x; y = d.y; phi = d.phi;
     vx = d.vx; vy = d.vy; omega = d.omega;

@@ -11,21 +11,10 @@ namespace dem {
 bool Neighbors::needs_rebuild(const Discs& d, int nt) const {
   if (x0_.size() != d.size()) return true;
   const double lim2 = 0.25 * skin * skin;
-  const long n = static_cast<long>(d.size());
-  if (nt <= 1) {
-    for (long i = 0; i < n; ++i) {
-      const double dx = d.x[i] - x0_[i], dy = d.y[i] - y0_[i];
-      if (dx * dx + dy * dy > lim2) return true;
-    }
-    return false;
-  }
-  bool far = false;
-#pragma omp parallel for schedule(static) num_threads(nt) reduction(|| : far)
-  for (long i = 0; i < n; ++i) {
+  return parallel_any(static_cast<long>(d.size()), nt, [&](long i) {
     const double dx = d.x[i] - x0_[i], dy = d.y[i] - y0_[i];
-    far = far || dx * dx + dy * dy > lim2;
-  }
-  return far;
+    return dx * dx + dy * dy > lim2;
+  });
 }
 
 namespace {

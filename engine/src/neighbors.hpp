@@ -43,7 +43,7 @@ class Neighbors {
   // New lists with the history of the old ones carried over; nt threads give the same lists.
   void rebuild(const Discs& d, const Geometry& g, int nt = 1);
   double cell_size() const { return cell_; }
-  // Bytes of the scratch kept between builds (round lists, obstacle blocks, cells): about
+  // Bytes of the list scratch kept between builds (round pair lists, obstacle lists): about
   // kRoundDiscs discs' worth a thread, whatever the number of discs.
   std::size_t scratch_bytes() const;
   // Discs were removed: new_index[old] is the new index or -1. Order is kept, so the lists stay

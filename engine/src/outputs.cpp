@@ -166,56 +166,42 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const Discs& d = w.discs;
   // Which entries are written, by index (4 bytes a contact; the columns are read from the lists).
   std::vector<std::uint32_t> pairs, bonds, walls;
-  const auto apart = [&](int i, int j, bool touching_only) {
-    const double R = std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]);
-    return (touching_only && R > d.r[i] + d.r[j]) || R == 0;
-  };
-  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p)
-    if (!apart(w.neighbors.pairs[p].i, w.neighbors.pairs[p].j, true)) pairs.push_back(static_cast<std::uint32_t>(p));
+  const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
+    const PairContact& c = w.neighbors.pairs[p];
+    const double R = dist(c.i, c.j);
+    if (R <= d.r[c.i] + d.r[c.j] && R != 0) pairs.push_back(static_cast<std::uint32_t>(p));
+  }
   for (std::size_t p = 0; p < w.bonds.size(); ++p)
-    if (!apart(w.bonds[p].i, w.bonds[p].j, false)) bonds.push_back(static_cast<std::uint32_t>(p));
+    if (dist(w.bonds[p].i, w.bonds[p].j) != 0) bonds.push_back(static_cast<std::uint32_t>(p));
   for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p)
     if (w.neighbors.walls[p].touching) walls.push_back(static_cast<std::uint32_t>(p));
   const std::size_t np = pairs.size(), nb = bonds.size(), n = np + nb + walls.size();
-  // Contact c: the force record and its two points (the discs, or the disc and the obstacle point).
-  struct Rec {
+  // Contact c of the VTU: its forces, its disc i and its other end (disc j, or the obstacle point).
+  struct Entry {
     double en, es, fn, fs;
     int kind;  // 0 disc-disc, 1 disc-wall, 2 disc-point, 3 bond
+    int i, j;  // j < 0: the other end is (px, py)
+    double px, py;
   };
   const int nw = static_cast<int>(w.geometry.walls.size());
-  const auto rec = [&](std::size_t c) -> Rec {
+  const auto entry = [&](std::size_t c) -> Entry {
     if (c < np) {
       const PairContact& q = w.neighbors.pairs[pairs[c]];
-      return {q.en, q.es, q.fn, q.fs, 0};
+      return {q.en, q.es, q.fn, q.fs, 0, q.i, q.j, 0, 0};
     }
     if (c < np + nb) {
       const Bond& q = w.bonds[bonds[c - np]];
-      return {q.en, q.es, q.fn, q.fs, 3};
+      return {q.en, q.es, q.fn, q.fs, 3, q.i, q.j, 0, 0};
     }
     const WallContact& q = w.neighbors.walls[walls[c - np - nb]];
-    return {q.en, q.es, q.fn, q.fs, q.k < nw ? 1 : 2};
+    return {q.en, q.es, q.fn, q.fs, q.k < nw ? 1 : 2, q.i, -1, q.px, q.py};
   };
   const auto point = [&](std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
-    const std::size_t c = k / 2;
-    const bool second = k % 2;
-    int i;
-    if (c < np) {
-      const PairContact& q = w.neighbors.pairs[pairs[c]];
-      i = second ? q.j : q.i;
-    } else if (c < np + nb) {
-      const Bond& q = w.bonds[bonds[c - np]];
-      i = second ? q.j : q.i;
-    } else {
-      const WallContact& q = w.neighbors.walls[walls[c - np - nb]];
-      if (second) {
-        x = q.px;
-        y = q.py;
-        return;
-      }
-      i = q.i;
-    }
-    x = d.x[i];
-    y = d.y[i];
+    const Entry e = entry(k / 2);
+    const int i = k % 2 ? e.j : e.i;
+    x = i >= 0 ? d.x[i] : e.px;
+    y = i >= 0 ? d.y[i] : e.py;
   };
 
   std::ofstream o;  // NAME.csv.tmp, renamed when complete
@@ -253,9 +239,9 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   std::filesystem::rename(csv + ".tmp", csv);
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
     vtu(out, 2 * n, point, 2, 3,
-        {{"f_n", [&](std::size_t c) { return rec(c).fn; }}, {"f_s", [&](std::size_t c) { return rec(c).fs; }},
-         {"e_n", [&](std::size_t c) { return rec(c).en; }}, {"e_s", [&](std::size_t c) { return rec(c).es; }}},
-        {}, {{"kind", [&](std::size_t c) { return static_cast<long long>(rec(c).kind); }}}, true);
+        {{"f_n", [&](std::size_t c) { return entry(c).fn; }}, {"f_s", [&](std::size_t c) { return entry(c).fs; }},
+         {"e_n", [&](std::size_t c) { return entry(c).en; }}, {"e_s", [&](std::size_t c) { return entry(c).es; }}},
+        {}, {{"kind", [&](std::size_t c) { return static_cast<long long>(entry(c).kind); }}}, true);
   });
 }
 
