@@ -169,7 +169,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   {
     const int t = omp_thread_index();
     const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
-    auto& bw = block_walls_[t];
+    auto& bw = block_walls_[t].value;
     make_room(bw, walls.size() / nt);
     search_walls(d, g, i0, i1, bw);
     fit(bw);
@@ -236,7 +236,7 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
   // One round: thread t's part of the discs [a, b), searched and merged, then copied into place.
   const auto search_part = [&](int t, int a, int b) {
     const int i0 = a + block_start(b - a, threads, t), i1 = a + block_start(b - a, threads, t + 1);
-    auto& bp = round_pairs_[t];
+    auto& bp = round_pairs_[t].value;
     bp.clear();
     search_pairs(d, i0, i1, bp);
     const std::size_t from = old_from(r, i0);
@@ -264,7 +264,7 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
     for (int u = 0; u < threads; ++u) at[u] += w;
   };
   const auto copy_part = [&](int t) {
-    std::copy(round_pairs_[t].begin(), round_pairs_[t].end(), pairs.begin() + static_cast<std::ptrdiff_t>(at[t]));
+    std::copy(round_pairs_[t].value.begin(), round_pairs_[t].value.end(), pairs.begin() + static_cast<std::ptrdiff_t>(at[t]));
   };
   if (threads == 1) {
     for (int a = 0; a < n; a += round) {
@@ -272,7 +272,7 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
       search_part(0, a, b);
       place_round(b);
       copy_part(0);
-      w += round_pairs_[0].size();
+      w += round_pairs_[0].value.size();
     }
   } else {
 #pragma omp parallel num_threads(threads)
@@ -287,7 +287,7 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
         copy_part(t);
 #pragma omp barrier
 #pragma omp single
-        w = at[threads - 1] + round_pairs_[threads - 1].size();
+        w = at[threads - 1] + round_pairs_[threads - 1].value.size();
       }
     }
   }
@@ -323,8 +323,8 @@ std::size_t Neighbors::count_pairs(const Discs& d, int i0, int i1) const {
 
 std::size_t Neighbors::scratch_bytes() const {
   std::size_t b = new_walls_.capacity() * sizeof(WallContact);
-  for (const auto& v : round_pairs_) b += v.capacity() * sizeof(PairContact);
-  for (const auto& v : block_walls_) b += v.capacity() * sizeof(WallContact);
+  for (const auto& v : round_pairs_) b += v.value.capacity() * sizeof(PairContact);
+  for (const auto& v : block_walls_) b += v.value.capacity() * sizeof(WallContact);
   return b;
 }
 

@@ -9,6 +9,7 @@
 
 #include "discs.hpp"
 #include "geometry.hpp"
+#include "parallel.hpp"
 
 namespace dem {
 
@@ -67,8 +68,8 @@ class Neighbors {
   // Scratch kept between rebuilds to avoid reallocation.
   std::vector<int> cell_start_, order_, cell_of_;
   std::vector<WallContact> new_walls_;
-  std::vector<std::vector<PairContact>> round_pairs_;  // per thread: one round's new pairs
-  std::vector<std::vector<WallContact>> block_walls_;
+  std::vector<Padded<std::vector<PairContact>>> round_pairs_;  // per thread: one round's new pairs
+  std::vector<Padded<std::vector<WallContact>>> block_walls_;
   static constexpr int kRoundDiscs = 4096;  // discs a thread searches per round of build_pairs
   struct Box {  // an obstacle's bounding box grown by the largest disc reach
     double xlo, xhi, ylo, yhi;

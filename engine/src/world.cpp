@@ -278,14 +278,14 @@ void World::compute_forces() {
       const std::size_t p1 = std::lower_bound(pairs.begin(), pairs.end(), i1, by_i) - pairs.begin();
       const std::size_t w0 = std::lower_bound(wl.begin(), wl.end(), i0, by_i) - wl.begin();
       const std::size_t w1 = std::lower_bound(wl.begin(), wl.end(), i1, by_i) - wl.begin();
-      deferred_[t].clear();
+      deferred_[t].value.clear();
       start_resultants(i0, i1);
-      part[t] = std::max(pair_forces<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t]),
+      part[t] = std::max(pair_forces<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value),
                          wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t));
     }
     for (int t = 0; t < nt; ++t) {
       worst = std::max(worst, part[t]);
-      for (const Deferred& q : deferred_[t]) {
+      for (const Deferred& q : deferred_[t].value) {
         d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
         d.torque[q.j] -= q.tq;
       }

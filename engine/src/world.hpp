@@ -85,7 +85,7 @@ class World {
   template <Drift D>
   void kick_drift(double h);  // kick, then the drift D (none: the kick alone)
   void start_resultants(int i0, int i1);
-  std::vector<std::vector<Deferred>> deferred_;  // per thread
+  std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
   void select_kernel();
   void rebuild_lists();       // neighbour lists without the bonded pairs
