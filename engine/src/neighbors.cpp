@@ -8,15 +8,6 @@
 
 namespace dem {
 
-bool Neighbors::needs_rebuild(const Discs& d, int nt) const {
-  if (x0_.size() != d.size()) return true;
-  const double lim2 = 0.25 * skin * skin;
-  return parallel_any(static_cast<long>(d.size()), nt, [&](long i) {
-    const double dx = d.x[i] - x0_[i], dy = d.y[i] - y0_[i];
-    return dx * dx + dy * dy > lim2;
-  });
-}
-
 namespace {
 // Keep the history of entries present in both sorted lists (same key): the old entries are
 // [old_begin, old_end).

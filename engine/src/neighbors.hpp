@@ -39,8 +39,12 @@ class Neighbors {
   std::vector<WallContact> walls;  // sorted by (i, k)
   long rebuilds = 0;
 
-  // Some disc moved more than skin/2 since the last rebuild; nt threads.
-  bool needs_rebuild(const Discs& d, int nt = 1) const;
+  // The lists are not for these discs (never built, invalidated, or another count): rebuild.
+  bool stale(const Discs& d) const { return x0_.size() != d.size(); }
+  // Past this squared distance from its position at the last rebuild a disc may have a partner
+  // the lists miss (skin/2: two discs approaching each other use up the skin). The drifts ask
+  // it of the discs they have just moved (World::moved_far).
+  double moved_far_limit2() const { return 0.25 * skin * skin; }
   // New lists with the history of the old ones carried over; nt threads give the same lists.
   void rebuild(const Discs& d, const Geometry& g, int nt = 1);
   double cell_size() const { return cell_; }

@@ -12,24 +12,30 @@ int World::threads_for(int n) const {
   return std::max(1, std::min(threads, n / kMinDiscsPerThread));
 }
 
+// With threads, a step is two parallel regions (Verlet) or one (eqs. 18, 19): every fork and
+// join costs microseconds, as much as a small world's pass. A drift also tells whether the lists
+// must be rebuilt (a disc more than skin/2 from its list position); they are rebuilt right after
+// it, or at the start of a step when stale (walls moved far, a wall removed, a restart).
 void World::step() {
   const bool walls_move = !moving.empty();  // one test per step, none per contact
+  bool far = false;
   if (scheme == Scheme::velocity_verlet) {
-    kick_drift_eq18(0.5 * dt);  // v(t + dt/2); du = v(t + dt/2) dt; x += du
+    far = kick_drift_eq18(0.5 * dt);  // v(t + dt/2); du = v(t + dt/2) dt; x += du
     if (walls_move) { kick_walls(0.5 * dt); drift_walls(false); }
   }
   if (walls_move && walls_moved_far()) neighbors.invalidate();
-  if (neighbors.needs_rebuild(discs, threads_for(static_cast<int>(discs.size())))) rebuild_lists();
-  (this->*force_kernel_)();  // eqs. (3)-(15) from the increments of the last move
+  if (far || neighbors.stale(discs)) rebuild_lists();
+  // Eqs. (3)-(15) from the increments of the last move; then, for each thread's discs:
   switch (scheme) {
-    case Scheme::paper_eq18: kick_drift_eq18(dt); break;   // (17), (18)
-    case Scheme::paper_eq19: kick_drift_eq19(dt); break;   // (17), (19)
-    case Scheme::velocity_verlet: kick(0.5 * dt); break;      // v(t + dt)
+    case Scheme::paper_eq18: far = (this->*force_kernel_)(Then::kick_drift_eq18, dt); break;  // (17), (18)
+    case Scheme::paper_eq19: far = (this->*force_kernel_)(Then::kick_drift_eq19, dt); break;  // (17), (19)
+    case Scheme::velocity_verlet: far = (this->*force_kernel_)(Then::kick, 0.5 * dt); break;  // v(t + dt)
   }
   if (walls_move) {
     if (scheme == Scheme::velocity_verlet) kick_walls(0.5 * dt);
     else { kick_walls(dt); drift_walls(scheme == Scheme::paper_eq19); }
   }
+  if (far) rebuild_lists();  // eqs. (18), (19): for the next step's forces
   time += dt;
   ++steps;
   particle_steps += static_cast<double>(discs.size());
@@ -72,30 +78,29 @@ void World::rebuild_lists() {
 
 void World::init() {
   prepare();
-  (this->*force_kernel_)();  // forces at the start (Verlet's first half kick uses them)
+  (this->*force_kernel_)(Then::nothing, 0.0);  // forces at the start (Verlet's first half kick uses them)
 }
 
 // Integration loops: each disc on its own, so any thread count gives the same bits. The kick
 // and the drift of a disc go in one pass over the arrays (the same operations, in the same order,
 // as a kick pass followed by a drift pass: one sweep of memory instead of two).
 template <World::Drift D>
-void World::kick_drift(double h) {
+void World::kick_drift_block(double h, int i0, int i1) {
   Discs& d = discs;
-  const long n = static_cast<long>(d.size());
   const double step = dt;
-  // Distinct arrays: restrict lets the compiler keep values in registers and vectorise.
+  // Distinct arrays: restrict lets the compiler keep values in registers.
   const double* __restrict fx = d.fx.data(); const double* __restrict fy = d.fy.data();
   const double* __restrict tq = d.torque.data();
   const double* __restrict im = d.inv_mass.data(); const double* __restrict ii = d.inv_inertia.data();
   double* __restrict vx = d.vx.data(); double* __restrict vy = d.vy.data(); double* __restrict om = d.omega.data();
   double* __restrict ux = d.dux.data(); double* __restrict uy = d.duy.data(); double* __restrict up = d.dphi.data();
   double* __restrict x = d.x.data(); double* __restrict y = d.y.data(); double* __restrict phi = d.phi.data();
-  parallel_for(n, threads_for(static_cast<int>(n)), [=](long i) {
+  for (int i = i0; i < i1; ++i) {
     const double v = vx[i] + fx[i] * im[i] * h;  // (16), (17)
     const double w = vy[i] + fy[i] * im[i] * h;
     const double o = om[i] + tq[i] * ii[i] * h;
     vx[i] = v; vy[i] = w; om[i] = o;
-    if constexpr (D == Drift::none) return;
+    if constexpr (D == Drift::none) continue;
     double a, b, c;
     if constexpr (D == Drift::eq19) {  // (19): the mean of the last increment and v dt
       a = 0.5 * (ux[i] + v * step);
@@ -110,12 +115,53 @@ void World::kick_drift(double h) {
     x[i] += a;
     y[i] += b;
     phi[i] += c;
-  });
+  }
+}
+
+// Its own loop, after the drift of the same discs (a test inside the drift loop costs more than
+// this pass over four arrays the drift has just brought into the cache).
+bool World::moved_far(int i0, int i1) const {
+  if (neighbors.stale(discs)) return true;
+  const double* x = discs.x.data(); const double* y = discs.y.data();
+  const double* x0 = neighbors.reference_x().data(); const double* y0 = neighbors.reference_y().data();
+  const double lim2 = neighbors.moved_far_limit2();
+  unsigned far = 0;
+  for (int i = i0; i < i1; ++i) {
+    const double dx = x[i] - x0[i], dy = y[i] - y0[i];
+    far |= dx * dx + dy * dy > lim2;
+  }
+  return far != 0;
+}
+
+bool World::then_block(Then then, double h, int i0, int i1) {
+  switch (then) {
+    case Then::nothing: return false;
+    case Then::kick: kick_drift_block<Drift::none>(h, i0, i1); return false;
+    case Then::kick_drift_eq18: kick_drift_block<Drift::eq18>(h, i0, i1); return moved_far(i0, i1);
+    case Then::kick_drift_eq19: kick_drift_block<Drift::eq19>(h, i0, i1); return moved_far(i0, i1);
+  }
+  return false;
+}
+
+// One parallel region: each thread its block of discs (block_start, as the force pass).
+template <World::Drift D>
+bool World::kick_drift(double h) {
+  const int n = static_cast<int>(discs.size());
+  const int nt = threads_for(n);
+  const Then then = D == Drift::none ? Then::kick : D == Drift::eq18 ? Then::kick_drift_eq18 : Then::kick_drift_eq19;
+  if (nt <= 1) return then_block(then, h, 0, n);
+  unsigned far = 0;
+#pragma omp parallel num_threads(nt) reduction(| : far)
+  {
+    const int t = omp_thread_index();
+    far |= then_block(then, h, block_start(n, nt, t), block_start(n, nt, t + 1)) ? 1u : 0u;
+  }
+  return far != 0;
 }
 
 void World::kick(double h) { kick_drift<Drift::none>(h); }
-void World::kick_drift_eq18(double h) { kick_drift<Drift::eq18>(h); }
-void World::kick_drift_eq19(double h) { kick_drift<Drift::eq19>(h); }
+bool World::kick_drift_eq18(double h) { return kick_drift<Drift::eq18>(h); }
+bool World::kick_drift_eq19(double h) { return kick_drift<Drift::eq19>(h); }
 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
 void World::start_resultants(int i0, int i1) {
@@ -252,7 +298,7 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
 }
 
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
-void World::compute_forces() {
+bool World::compute_forces(Then then, double h) {
   Discs& d = discs;
   const int n = static_cast<int>(d.size());
   const double inv_dt = 1.0 / dt;
@@ -263,13 +309,15 @@ void World::compute_forces() {
     worst = pair_forces<NS, NT, FC, SHEAR, DASH>(0, neighbors.pairs.size(), n, nullptr);
   } else {
     // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
-    // computed by the owner of its i. What a thread adds to another's discs is added afterwards in
-    // thread order, so a given thread count always sums in the same order (bit-identical runs).
+    // computed by the owner of its i. What a thread adds to a later block's discs is added by
+    // that block's owner once all are done, in thread order: a given thread count always sums in
+    // the same order (bit-identical runs). Then each thread integrates its own discs.
     std::vector<double>& part = thread_overlap_;
     part.assign(nt, 0.0);
+    unsigned far = 0;
     const auto& pairs = neighbors.pairs;
     const auto& wl = neighbors.walls;
-#pragma omp parallel num_threads(nt)
+#pragma omp parallel num_threads(nt) reduction(| : far)
     {
       const int t = omp_thread_index();
       const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
@@ -282,16 +330,18 @@ void World::compute_forces() {
       start_resultants(i0, i1);
       part[t] = std::max(pair_forces<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value),
                          wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t));
+#pragma omp barrier
+      for (int u = 0; u < t; ++u)  // earlier threads' reactions on this block, in their order
+        for (const Deferred& q : deferred_[u].value) {
+          if (q.j < i0 || q.j >= i1) continue;
+          d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
+          d.torque[q.j] -= q.tq;
+        }
+      far |= then_block(then, h, i0, i1) ? 1u : 0u;
     }
-    for (int t = 0; t < nt; ++t) {
-      worst = std::max(worst, part[t]);
-      for (const Deferred& q : deferred_[t].value) {
-        d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
-        d.torque[q.j] -= q.tq;
-      }
-    }
+    for (int t = 0; t < nt; ++t) worst = std::max(worst, part[t]);
     max_overlap = worst;
-    return;
+    return far != 0;
   }
 
   if constexpr (BONDS) {
@@ -325,6 +375,7 @@ void World::compute_forces() {
     for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
   worst = std::max(worst, wall_forces<NS, NT, FC, MOVING, SHEAR, DASH>(0, neighbors.walls.size(), 0));
   max_overlap = worst;
+  return then_block(then, h, 0, n);
 }
 
 void World::select_kernel() {

@@ -48,11 +48,13 @@ class World {
   // One time step; the whole algorithm is here.
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
-  void compute_forces_now() { (this->*force_kernel_)(); }
-  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp).
+  void compute_forces_now() { (this->*force_kernel_)(Then::nothing, 0.0); }
+  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp). The drifts
+  // return whether some disc is now more than skin/2 from where the lists were built (the lists
+  // must be rebuilt before the next force pass).
   void kick(double h);             // v += a h  (eq. 17 with h = dt)
-  void kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
-  void kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
+  bool kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
+  bool kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
 
   // Removes the discs with dead[i] != 0 from every array (order kept; lists remapped).
   void remove_discs(const std::vector<char>& dead);
@@ -65,14 +67,16 @@ class World {
   bool all_finite() const;
 
  private:
-  using ForceKernel = void (World::*)();
+  // What a force pass does next to each thread's discs, in the same parallel region.
+  enum class Then { nothing, kick, kick_drift_eq18, kick_drift_eq19 };
+  using ForceKernel = bool (World::*)(Then, double);
   ForceKernel force_kernel_ = nullptr;
  public:
   // What the selected kernel skips (for the header and the skip benchmark).
   bool kernel_shear = true, kernel_dashpots = true;
  private:
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
-  void compute_forces();
+  bool compute_forces(Then then, double h);  // then's drift result
   struct Deferred {  // a pair's reaction on a disc of another thread's block
     int j;
     double fx, fy, tq;
@@ -83,7 +87,11 @@ class World {
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
   template <Drift D>
-  void kick_drift(double h);  // kick, then the drift D (none: the kick alone)
+  bool kick_drift(double h);  // kick, then the drift D (none: the kick alone); see kick_drift_eq18
+  template <Drift D>
+  void kick_drift_block(double h, int i0, int i1);  // the same for discs [i0, i1)
+  bool moved_far(int i0, int i1) const;  // some disc of [i0, i1) is more than skin/2 from its list position
+  bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
   void start_resultants(int i0, int i1);
   std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
