@@ -208,6 +208,20 @@ def write_report(out, table, meta):
                 L.append(f"| {t['n']} | {code} | {'paper' if scheme == 'paper_eq19' else 'shared'} | {th} | "
                          f"{fmt(t['us_median'])} | {fmt(t['us_min'])}-{fmt(t['us_max'])} | {fmt(ratio, '{:.1f}x')} | "
                          f"{fmt(t['bytes_per_disc'], '{:.0f}')} | {t['ok']}/{t['runs']} |")
+    ceil = meta.get("ceiling")
+    if ceil:
+        L += ["", "## What 2 threads give on this machine", "",
+              "The engine's 1 -> 2 thread speed-ups are to be read against what this machine gives for loops with no",
+              "engine in them (benchmarks/ceiling.cpp, run before the study: 1 and 2 threads, each its own half,",
+              f"{ceil['rounds']} interleaved rounds, ratio of the medians):", ""]
+        for key, what in (("compute", "dependent square roots, no memory traffic"),
+                          ("stream_10k", "the kick-drift loop on 10k discs' arrays (1.2 MB, in the caches)"),
+                          ("stream_30k", "the same on 30k discs' arrays (3.6 MB)"),
+                          ("stream_100k", "the same on 100k discs' arrays (12 MB)"),
+                          ("stream_1m", "the same on 1M discs' arrays (120 MB, from memory)")):
+            if key in ceil:
+                c = ceil[key]
+                L.append(f"- {what}: {c['speedup']:.2f}x (1 thread {c['t1_s'] * 1e6:.4g} us, 2 threads {c['t2_s'] * 1e6:.4g} us)")
     L += ["", "## Targets (issue 5)", ""]
     for size in meta["sizes"]:
         n1, n2 = find(size, "native", "shared_verlet", 1), find(size, "native", "shared_verlet", 2)
@@ -224,6 +238,17 @@ def write_report(out, table, meta):
     if errs:
         L += ["", "## Failed runs", ""] + [f"- {s} {c} {th} threads: {e}" for s, c, th, e in errs]
     (out / "report.md").write_text("\n".join(L) + "\n")
+
+
+def machine_ceiling(program: str) -> dict | None:
+    """What 2 threads give on this machine with no engine in the loop (benchmarks/ceiling.cpp)."""
+    try:
+        p = subprocess.run([program], capture_output=True, text=True, timeout=600)
+        return json.loads(p.stdout) if p.returncode == 0 else None
+    except (OSError, json.JSONDecodeError, subprocess.TimeoutExpired):
+        print(f"no ceiling measurement ({program}: build it with cmake --build build --target dem_ceiling)",
+              file=sys.stderr)
+        return None
 
 
 def version_of(cmd) -> str:
@@ -244,6 +269,8 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="350 and 10k discs only")
     ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(ROOT / "build" / "dem")))
     ap.add_argument("--timeout", type=float, default=3600)
+    ap.add_argument("--ceiling", default=str(ROOT / "build" / "benchmarks" / "dem_ceiling"),
+                    help="the machine's 1 -> 2 thread ceiling program (benchmarks/ceiling.cpp)")
     # worker mode (internal)
     ap.add_argument("--worker")
     ap.add_argument("--scene")
@@ -266,6 +293,7 @@ def main() -> int:
     threads = [int(t) for t in args.threads.split(",")]
     os.environ["DEM_BINARY"] = args.dem
     t0 = time.monotonic()
+    ceiling = machine_ceiling(args.ceiling)
     scenes, n_discs = {}, {}
     for size in sizes:
         file, settle, dis, _ = SIZES[size]
@@ -306,7 +334,7 @@ def main() -> int:
             "liggghts": version_of(["liggghts", "-h"]) if "liggghts" in codes else "-",
             "yade": version_of(["yade", "--version"]) if "yade" in codes else "-",
             "dem_version": "git " + version_of(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]), "repeats": args.repeats, "sizes": sizes,
-            "started": time.strftime("%Y-%m-%d %H:%M"), "elapsed_s": time.monotonic() - t0}
+            "started": time.strftime("%Y-%m-%d %H:%M"), "elapsed_s": time.monotonic() - t0, "ceiling": ceiling}
     (out / "results.json").write_text(json.dumps({"meta": meta, "table": table, "records": records}, indent=1))
     write_report(out, table, meta)
     print((out / "report.md").read_text())
