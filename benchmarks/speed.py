@@ -11,8 +11,8 @@ particle-step is one disc advanced by one step and the time is the code's own st
 (native: summary.json wall_time_s, the step loop only; LIGGGHTS: "Loop time" minus its Output
 share; YADE: the time spent in O.run). Setup (reading the scene, building the lattice) and the
 writing of final outputs are excluded for every code. Peak memory is the peak resident set size
-of the run's process (for mpirun: the largest rank), measured by a worker process through
-getrusage(RUSAGE_CHILDREN), reported as bytes per disc.
+of the run's process (for mpirun: the largest rank), measured by GNU time (/usr/bin/time, Debian
+package `time`) around the run, reported as bytes per disc.
 
 Scenes: the paper's 17/18 silo (350 discs, reference_inputs/scenes/discharge_17_18.toml) and the
 scaled lattice silos bench_silo_{10k,100k,1m}.toml; each settles for S steps from its lattice and
@@ -76,7 +76,7 @@ def _native(args) -> dict:
         extra = []
     cmd = [args.dem, "run", scene, "--out", str(Path(args.dir) / "run"), "--quiet", "--no-plots",
            "--threads", str(args.threads)] + extra
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    p = subprocess.run(measured(args) + cmd, capture_output=True, text=True)
     if p.returncode != 0:
         return {"error": f"dem exit {p.returncode}: {p.stderr.strip()[-300:]}"}
     s = json.loads((Path(args.dir) / "run" / "summary.json").read_text())
@@ -98,7 +98,7 @@ def _liggghts(args) -> dict:
     script = lb.write_inputs(case, out, args.threads)
     log = out / "liggghts.log"
     with open(log, "w") as f:
-        p = subprocess.run(lb.command(script, args.threads), cwd=out, stdout=f, stderr=subprocess.STDOUT,
+        p = subprocess.run(measured(args) + lb.command(script, args.threads), cwd=out, stdout=f, stderr=subprocess.STDOUT,
                            env=dict(os.environ, OMP_NUM_THREADS="1"))
     text = log.read_text(errors="replace")
     m = re.search(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
@@ -115,11 +115,22 @@ def _liggghts(args) -> dict:
 def _yade(args) -> dict:
     from compare import yade_backend as yb
     case = _case(args)
-    res = yb.run(case, Path(args.dir), timeout=args.timeout, threads=args.threads)
+    res = yb.run(case, Path(args.dir), timeout=args.timeout, threads=args.threads, wrap=measured(args))
     if res.status != "ok":
         return {"error": res.reason}
     return {"loop_s": res.extra["loop_time_s"], "particle_steps": res.extra["particle_steps"],
             "steps": res.steps, "status": "ok"}
+
+
+TIME = Path("/usr/bin/time")  # GNU time (Debian package `time`)
+
+
+def measured(args) -> list[str]:
+    """The prefix that measures the run's peak memory: GNU time, which waits for the run with
+    wait4 and so reports the run's own peak (for mpirun, its largest rank). getrusage of this
+    worker's children would not do: a child forked from this Python process counts the worker's
+    own resident set (the case's discs, numpy) as its own until it execs the code."""
+    return [str(TIME), "-f", "%M", "-o", str(Path(args.dir) / "peak_rss_kb")] if TIME.exists() else []
 
 
 def worker(args) -> None:
@@ -130,7 +141,13 @@ def worker(args) -> None:
     except Exception as e:  # noqa: BLE001 - reported as a failed point, never a crash of the study
         rec = {"error": repr(e)}
     rec["process_s"] = time.monotonic() - t0
-    rec["peak_rss_bytes"] = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+    peak = Path(args.dir) / "peak_rss_kb"
+    if peak.exists():  # time's last line (a failed command adds a line before it)
+        rec["peak_rss_bytes"] = int(peak.read_text().split()[-1]) * 1024
+        rec["peak_rss_source"] = "GNU time of the run"
+    else:
+        rec["peak_rss_bytes"] = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+        rec["peak_rss_source"] = "getrusage of the worker's children (includes the worker's own size)"
     print(json.dumps(rec))
 
 

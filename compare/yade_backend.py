@@ -291,10 +291,11 @@ def _log_tail(out_dir: Path, lines: int = 8) -> str:
     return " | ".join(text[-lines:])
 
 
-def execute(out_dir: Path, timeout: float = 600, threads: int = 1) -> dict:
-    """Runs the written script with the real yade; returns {rc, wall_time_s, timed_out}."""
+def execute(out_dir: Path, timeout: float = 600, threads: int = 1, wrap: list[str] | None = None) -> dict:
+    """Runs the written script with the real yade; returns {rc, wall_time_s, timed_out}. wrap: a
+    command to run yade under (benchmarks/speed.py measures its memory with /usr/bin/time)."""
     out_dir = Path(out_dir)
-    cmd = ["yade", "-n", f"-j{int(threads)}", "-x", SCRIPT]
+    cmd = list(wrap or []) + ["yade", "-n", f"-j{int(threads)}", "-x", SCRIPT]
     t0 = time.perf_counter()
     timed_out = False
     with open(out_dir / LOG_FILE, "w") as log:
@@ -320,7 +321,7 @@ def execute(out_dir: Path, timeout: float = 600, threads: int = 1) -> dict:
     return info
 
 
-def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
+def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1, wrap: list[str] | None = None) -> Result:
     """write_inputs, run yade, read. Never raises: a case YADE cannot express (write_inputs'
     CaseError) and a run that fails in any way are failed Results with the reason."""
     out_dir = Path(out_dir)
@@ -330,14 +331,15 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
         return failed(NAME, case.name, f"translation: {e}", version=version(), out_dir=str(out_dir))
     except Exception as e:          # noqa: BLE001 - a run never raises
         return failed(NAME, case.name, f"could not write the YADE inputs: {e!r}", out_dir=str(out_dir))
-    return run_written(case, out_dir, timeout, threads)
+    return run_written(case, out_dir, timeout, threads, wrap)
 
 
-def run_written(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
+def run_written(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1,
+                wrap: list[str] | None = None) -> Result:
     """Runs the script already written in out_dir and reads it (never raises)."""
     out_dir = Path(out_dir)
     try:
-        info = execute(out_dir, timeout, threads)
+        info = execute(out_dir, timeout, threads, wrap)
     except Exception as e:          # noqa: BLE001 - a run never raises
         return failed(NAME, case.name, f"could not run yade: {e!r}", out_dir=str(out_dir))
     return read(case, out_dir)
