@@ -239,6 +239,10 @@ def write_report(out, table, meta):
             if key in ceil:
                 c = ceil[key]
                 L.append(f"- {what}: {c['speedup']:.2f}x (1 thread {c['t1_s'] * 1e6:.4g} us, 2 threads {c['t2_s'] * 1e6:.4g} us)")
+    sources = sorted({r.get("peak_rss_source") for r in meta.get("records", []) if r.get("peak_rss_source")})
+    if any("getrusage" in x for x in sources):
+        L += ["", "Memory: /usr/bin/time was missing, so some rows come from getrusage of the worker's children,",
+              "which includes the Python worker's own size (apt-get install time)."]
     L += ["", "## Targets (issue 5)", ""]
     for size in meta["sizes"]:
         n1, n2 = find(size, "native", "shared_verlet", 1), find(size, "native", "shared_verlet", 2)
@@ -353,7 +357,7 @@ def main() -> int:
             "dem_version": "git " + version_of(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]), "repeats": args.repeats, "sizes": sizes,
             "started": time.strftime("%Y-%m-%d %H:%M"), "elapsed_s": time.monotonic() - t0, "ceiling": ceiling}
     (out / "results.json").write_text(json.dumps({"meta": meta, "table": table, "records": records}, indent=1))
-    write_report(out, table, meta)
+    write_report(out, table, dict(meta, records=records))
     print((out / "report.md").read_text())
     return 0
 
