@@ -144,11 +144,9 @@ bool World::then_block(Then then, double h, int i0, int i1) {
 }
 
 // One parallel region: each thread its block of discs (block_start, as the force pass).
-template <World::Drift D>
-bool World::kick_drift(double h) {
+bool World::integrate(Then then, double h) {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
-  const Then then = D == Drift::none ? Then::kick : D == Drift::eq18 ? Then::kick_drift_eq18 : Then::kick_drift_eq19;
   if (nt <= 1) return then_block(then, h, 0, n);
   unsigned far = 0;
 #pragma omp parallel num_threads(nt) reduction(| : far)
@@ -159,9 +157,8 @@ bool World::kick_drift(double h) {
   return far != 0;
 }
 
-void World::kick(double h) { kick_drift<Drift::none>(h); }
-bool World::kick_drift_eq18(double h) { return kick_drift<Drift::eq18>(h); }
-bool World::kick_drift_eq19(double h) { return kick_drift<Drift::eq19>(h); }
+bool World::kick_drift_eq18(double h) { return integrate(Then::kick_drift_eq18, h); }
+bool World::kick_drift_eq19(double h) { return integrate(Then::kick_drift_eq19, h); }
 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
 void World::start_resultants(int i0, int i1) {

@@ -49,10 +49,9 @@ class World {
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
   void compute_forces_now() { (this->*force_kernel_)(Then::nothing, 0.0); }
-  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp). The drifts
-  // return whether some disc is now more than skin/2 from where the lists were built (the lists
-  // must be rebuilt before the next force pass).
-  void kick(double h);             // v += a h  (eq. 17 with h = dt)
+  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp): the kick
+  // v += a h of eq. 17 and a drift. They return whether some disc is now more than skin/2 from
+  // where the lists were built (the lists must be rebuilt before the next force pass).
   bool kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
   bool kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
 
@@ -86,10 +85,9 @@ class World {
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
+  bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region
   template <Drift D>
-  bool kick_drift(double h);  // kick, then the drift D (none: the kick alone); see kick_drift_eq18
-  template <Drift D>
-  void kick_drift_block(double h, int i0, int i1);  // the same for discs [i0, i1)
+  void kick_drift_block(double h, int i0, int i1);  // eq. 17 kick, then the drift D, for discs [i0, i1)
   bool moved_far(int i0, int i1) const;  // some disc of [i0, i1) is more than skin/2 from its list position
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
   void start_resultants(int i0, int i1);
