@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "outputs.hpp"
 #include "parallel.hpp"
@@ -69,8 +70,10 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   // Breadth-first search over touching pairs from the left feet to the right feet. The touching
   // pairs of each disc in one flat array (offsets by disc), in the pair list's order: one
   // allocation, not a small vector a disc (at 1M discs that was ~100 bytes a disc every sample).
+  // The pairs with a compressive total force in the last force pass (recorded for this step).
+  if (!w.pair_forces_current()) throw std::logic_error("find_arch: the pair forces of this step were not recorded");
   std::vector<int> start(n + 1, 0);
-  for (const PairContact& p : w.neighbors.pairs)
+  for (const PairForce& p : w.pair_forces)
     if (p.fn > 0) {
       ++start[p.i + 1];
       ++start[p.j + 1];
@@ -79,7 +82,7 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   std::vector<int> adj(static_cast<std::size_t>(start[n]));
   {
     std::vector<int> fill(start.begin(), start.end() - 1);
-    for (const PairContact& p : w.neighbors.pairs)
+    for (const PairForce& p : w.pair_forces)
       if (p.fn > 0) {
         adj[fill[p.i]++] = p.j;
         adj[fill[p.j]++] = p.i;
@@ -311,7 +314,15 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   std::string reason;
 
   for (long s = st.next_s; s <= steps_total; ++s) {
-    if (s > 0) w.step();
+    if (s > 0) {
+      // Record the pair forces of the steps that read them: a sample's (the arch), the last, a
+      // snapshot's, and a jam check's (the arch). A step that ends the run early (jam, empty) is a
+      // jam check's or has no pairs.
+      const double t_next = w.time + w.dt - st.t_open;
+      w.record_pair_forces = s % sample_every == 0 || s == steps_total || t_next - st.last_removal > ds.jam_time ||
+                             (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t_next + 0.5 * w.dt);
+      w.step();
+    }
     const double t = w.time - st.t_open;
     if (s > 0) {
       // The finiteness scan (five arrays) every 10 steps, with the energy check: a NaN stops the

@@ -176,7 +176,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   }
 }
 
-// The pair list is the engine's largest array (about 3 pairs a disc, 40 bytes each). A new list
+// The pair list is the engine's largest array (about 3 pairs a disc, 24 bytes each). A new list
 // built beside the old one would need both at once: twice the largest array, the peak memory of
 // a million-disc run. Instead the old list is moved to the tail of its own buffer (sized with a
 // 1/16 margin at the last build) and the new one written from the front, in rounds of

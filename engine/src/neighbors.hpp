@@ -14,10 +14,11 @@
 namespace dem {
 
 // One candidate disc-disc pair (i < j) and its history.
+// The history the next step needs, and nothing else: 24 bytes a pair. The total forces f_n, f_s
+// are outputs, recorded only for the force passes whose results are written (World::pair_forces).
 struct PairContact {
   int i, j;
   double en = 0, es = 0;  // elastic normal and shear forces, eqs. (7a), (11a)
-  double fn = 0, fs = 0;  // last total forces (with dashpots), eqs. (9), (14)
 };
 
 // One candidate disc-obstacle contact (obstacle k: walls first, then points).

@@ -166,12 +166,27 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const Discs& d = w.discs;
   // Which entries are written, by index (4 bytes a contact; the columns are read from the lists).
   std::vector<std::uint32_t> pairs, bonds, walls;
+  // A pair's totals: its entry in the recorded forces of this step, -1 for a pair that pass found
+  // apart (0, 0), -2 when this step's forces were not recorded (NaN; the run loops record them).
+  std::vector<std::int32_t> totals;
   const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
+  const std::vector<PairForce>& rec = w.pair_forces;
+  const bool recorded = w.pair_forces_current();
+  std::size_t r = 0;
   for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
     const PairContact& c = w.neighbors.pairs[p];
     const double R = dist(c.i, c.j);
-    if (R <= d.r[c.i] + d.r[c.j] && R != 0) pairs.push_back(static_cast<std::uint32_t>(p));
+    if (!(R <= d.r[c.i] + d.r[c.j] && R != 0)) continue;
+    pairs.push_back(static_cast<std::uint32_t>(p));
+    while (r < rec.size() && (rec[r].i < c.i || (rec[r].i == c.i && rec[r].j < c.j))) ++r;  // both sorted by (i, j)
+    const bool has = r < rec.size() && rec[r].i == c.i && rec[r].j == c.j;
+    totals.push_back(!recorded ? -2 : has ? static_cast<std::int32_t>(r) : -1);
   }
+  const auto total = [&](std::size_t c, double& fn, double& fs) {  // c: index into pairs
+    const std::int32_t k = totals[c];
+    fn = k >= 0 ? rec[k].fn : k == -1 ? 0.0 : NAN;
+    fs = k >= 0 ? rec[k].fs : k == -1 ? 0.0 : NAN;
+  };
   for (std::size_t p = 0; p < w.bonds.size(); ++p)
     if (dist(w.bonds[p].i, w.bonds[p].j) != 0) bonds.push_back(static_cast<std::uint32_t>(p));
   for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p)
@@ -188,7 +203,9 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const auto entry = [&](std::size_t c) -> Entry {
     if (c < np) {
       const PairContact& q = w.neighbors.pairs[pairs[c]];
-      return {q.en, q.es, q.fn, q.fs, 0, q.i, q.j, 0, 0};
+      double fn, fs;
+      total(c, fn, fs);
+      return {q.en, q.es, fn, fs, 0, q.i, q.j, 0, 0};
     }
     if (c < np + nb) {
       const Bond& q = w.bonds[bonds[c - np]];
@@ -208,14 +225,16 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
   o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
-  for (std::uint32_t p : pairs) {
-    const PairContact& c = w.neighbors.pairs[p];
+  for (std::size_t e = 0; e < np; ++e) {
+    const PairContact& c = w.neighbors.pairs[pairs[e]];
+    double fn, fs;
+    total(e, fn, fs);
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, ov = d.r[c.i] + d.r[c.j] - R;
     const double cx = d.x[c.i] + nx * (d.r[c.i] - 0.5 * ov), cy = d.y[c.i] + ny * (d.r[c.i] - 0.5 * ov);
     o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
-      << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ',' << fmt(c.fs) << '\n';
+      << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
   }
   for (std::uint32_t p : bonds) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
     const Bond& c = w.bonds[p];

@@ -58,7 +58,14 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
 
   const auto t0 = std::chrono::steady_clock::now();
   auto last_print = t0;
+  // A run ends on a step that recorded its pair forces (the contacts output): the last step, a
+  // check step when the run stops at rest (where rest is found), or, on a stop request, the step
+  // after the request.
+  bool stop_after = false;
+  RunStatus stop_status = RunStatus::end_time;
   while (w.steps < max_steps) {
+    w.record_pair_forces = stop_after || w.steps + 1 == max_steps ||
+                           (spec.stop_at_rest && !res.rest_reached && (w.steps + 1) % check_every == 0);
     w.step();
     // A run that cannot be trusted stops here: overlap blow-up or non-finite values.
     if (!(w.max_overlap <= overlap_limit)) {
@@ -83,8 +90,8 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
         res.rest_reached = true;
         res.rest_time = w.time;
         if (spec.stop_at_rest) {
-          res.status = RunStatus::rest;
-          break;
+          stop_after = true;
+          stop_status = RunStatus::rest;
         }
       }
       if (w.steps % keep_every == 0) {
@@ -92,8 +99,12 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
         res.last_good_time = w.time;
       }
     }
-    if (stop_signal()) {
-      res.status = RunStatus::interrupted;
+    if (stop_signal() && !stop_after) {
+      stop_after = true;
+      stop_status = RunStatus::interrupted;
+    }
+    if (stop_after && w.pair_forces_current()) {
+      res.status = stop_status;
       break;
     }
     if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->fill_checkpoint) {

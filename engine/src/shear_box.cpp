@@ -140,12 +140,12 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
     s.ratio = s.sigma != 0 ? s.tau / s.sigma : 0;
     samples.push_back(s);
     int contacts = 0, sliding = 0;
-    for (const PairContact& c : w.neighbors.pairs) {
-      if (c.fn == 0 && c.en == 0) continue;
+    w.each_pair_with_forces([&](const PairContact& c, double fn, double) {
+      if (fn == 0 && c.en == 0) return;
       ++contacts;
       const PairProps& pp = w.pair(d.material[c.i], d.material[c.j]);
       if (c.es != 0 && std::abs(c.es) >= pp.mu * std::max(c.en, 0.0) * (1 - 1e-12)) ++sliding;
-    }
+    });
     const ObstacleMotion& mp = w.moving.motion[plate];
     const ObstacleMotion& ml = w.moving.motion[left];
     const ObstacleMotion& mr = w.moving.motion[right];
@@ -178,6 +178,8 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   auto last_print = c0;
   res.status = "sheared";
   const long max_steps = static_cast<long>(std::ceil(std::abs(theta_end) / (b.rate * w.dt))) + 2;
+  // Samples and snapshots read the pair forces: every step of this small scene records them.
+  w.record_pair_forces = true;
   for (long step = 0;; ++step) {
     const double strain = std::tan(-w.moving.rotating[0].theta);
     if (strain >= next_sample * b.sample_strain - 1e-12) {

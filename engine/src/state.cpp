@@ -11,7 +11,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '1'};
+constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '2'};  // 2: pair totals out of the pair list
 
 // The wall contacts in their memory layout with the padding after `touching` zeroed, so that
 // equal states give equal files.
@@ -58,6 +58,8 @@ void write_world(BinaryOut& o, const World& w) {
   o.vec(active);
   o.vec(w.neighbors.pairs);
   o.vec(zero_padded(w.neighbors.walls));
+  o.put(w.pair_forces_step);  // the recorded totals (outputs), so a state saved at its end writes them again
+  o.vec(w.pair_forces);
 }
 
 void read_world(BinaryIn& r, World& w) {
@@ -83,6 +85,10 @@ void read_world(BinaryIn& r, World& w) {
   for (const auto& c : w.neighbors.walls)
     if (c.i < 0 || static_cast<std::size_t>(c.i) >= n || c.k < 0 || c.k >= w.geometry.obstacle_count())
       r.fail("corrupt wall-contact list");
+  w.pair_forces_step = r.get<long>();
+  r.vec(w.pair_forces);
+  for (const auto& p : w.pair_forces)
+    if (p.i < 0 || p.j < 0 || static_cast<std::size_t>(p.j) >= n || p.i >= p.j) r.fail("corrupt pair-force record");
 }
 
 void save_state(const World& w, const std::string& path) {

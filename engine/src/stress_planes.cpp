@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 namespace dem {
 
@@ -43,10 +44,11 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
       ++p.contacts;
     }
   };
-  for (const PairContact& c : w.neighbors.pairs) {
+  if (!w.pair_forces_current()) throw std::logic_error("plane stresses: the pair forces of this step were not recorded");
+  for (const PairForce& c : w.pair_forces) {  // the pairs that touched in the last force pass
     const double dx = px[c.j] - px[c.i], dy = py[c.j] - py[c.i];
     const double sum = d.r[c.i] + d.r[c.j];
-    if (dx * dx + dy * dy > sum * sum) continue;
+    if (dx * dx + dy * dy > sum * sum) continue;  // (as they must, at the positions of that pass)
     if (c.fn == 0 && c.fs == 0) continue;
     add_cut(c.i, c.j, c.fn, c.fs);
   }

@@ -27,9 +27,9 @@ void World::step() {
   if (far || neighbors.stale(discs)) rebuild_lists();
   // Eqs. (3)-(15) from the increments of the last move; then, for each thread's discs:
   switch (scheme) {
-    case Scheme::paper_eq18: far = (this->*force_kernel_)(Then::kick_drift_eq18, dt); break;  // (17), (18)
-    case Scheme::paper_eq19: far = (this->*force_kernel_)(Then::kick_drift_eq19, dt); break;  // (17), (19)
-    case Scheme::velocity_verlet: far = (this->*force_kernel_)(Then::kick, 0.5 * dt); break;  // v(t + dt)
+    case Scheme::paper_eq18: far = force_pass(Then::kick_drift_eq18, dt); break;  // (17), (18)
+    case Scheme::paper_eq19: far = force_pass(Then::kick_drift_eq19, dt); break;  // (17), (19)
+    case Scheme::velocity_verlet: far = force_pass(Then::kick, 0.5 * dt); break;  // v(t + dt)
   }
   if (walls_move) {
     if (scheme == Scheme::velocity_verlet) kick_walls(0.5 * dt);
@@ -57,6 +57,7 @@ void World::prepare() {
   touch_scratch_.assign(slots, std::vector<char>(geometry.obstacle_count() + 1, 0));
   dist_scratch_.assign(slots, std::vector<double>(geometry.obstacle_count() + 1, 0.0));
   deferred_.assign(slots, {});
+  record_parts_.assign(slots, {});
   if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
   rebuild_lists();  // keeps the history already in the lists
 }
@@ -78,7 +79,14 @@ void World::rebuild_lists() {
 
 void World::init() {
   prepare();
-  (this->*force_kernel_)(Then::nothing, 0.0);  // forces at the start (Verlet's first half kick uses them)
+  force_pass(Then::nothing, 0.0);  // forces at the start (Verlet's first half kick uses them)
+}
+
+bool World::force_pass(Then then, double h) {
+  const bool record = record_pair_forces;
+  const bool far = (this->*force_kernel_)(then, h);
+  if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
+  return far;
 }
 
 // Integration loops: each disc on its own, so any thread count gives the same bits. The kick
@@ -172,9 +180,11 @@ void World::start_resultants(int i0, int i1) {
 
 // Disc-disc contacts [p0, p1) of the sorted pair list. The i side of each pair is added at once;
 // the j side too when j < own_end, otherwise (j belongs to another thread's discs) it is kept in
-// `later` and added after the parallel part, in a fixed order. Returns the largest overlap.
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
-double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later) {
+// `later` and added after the parallel part, in a fixed order. RECORD: the totals of the touching
+// pairs are appended to `record`. Returns the largest overlap.
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD>
+double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                        std::vector<PairForce>* record) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
   PairContact* pc = neighbors.pairs.data();
@@ -185,7 +195,7 @@ double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vect
     const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
     const double R2 = dx * dx + dy * dy, sum = d.r[i] + d.r[j];
     if (R2 > sum * sum) {  // (3): apart; the contact and its history end
-      c.en = c.es = c.fn = c.fs = 0;
+      c.en = c.es = 0;
       continue;
     }
     const double R = std::sqrt(R2);
@@ -196,20 +206,22 @@ double World::pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vect
     if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i] + d.r[j] * d.dphi[j];  // (5b)
     const double overlap = sum - R;
     worst = std::max(worst, overlap);
+    double fn, fs;
     contact_law<NS, NT, FC, SHEAR, DASH>(pair(d.material[i], d.material[j]), overlap, du_n, du_s, inv_dt,
-                                         c.en, c.es, c.fn, c.fs);
-    double fx = -c.fn * nx, fy = -c.fn * ny;  // (15a), (15b) terms on i
+                                         c.en, c.es, fn, fs);
+    if constexpr (RECORD) record->push_back(PairForce{i, j, fn, fs});
+    double fx = -fn * nx, fy = -fn * ny;  // (15a), (15b) terms on i
     if constexpr (SHEAR) {
-      fx += c.fs * ny;
-      fy -= c.fs * nx;
+      fx += fs * ny;
+      fy -= fs * nx;
     }
     d.fx[i] += fx; d.fy[i] += fy;
-    if constexpr (SHEAR) d.torque[i] -= d.r[i] * c.fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+    if constexpr (SHEAR) d.torque[i] -= d.r[i] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
     if (j < own_end) {
       d.fx[j] -= fx; d.fy[j] -= fy;
-      if constexpr (SHEAR) d.torque[j] -= d.r[j] * c.fs;
+      if constexpr (SHEAR) d.torque[j] -= d.r[j] * fs;
     } else {
-      later->push_back(Deferred{j, fx, fy, SHEAR ? d.r[j] * c.fs : 0.0});
+      later->push_back(Deferred{j, fx, fy, SHEAR ? d.r[j] * fs : 0.0});
     }
   }
   return worst;
@@ -301,9 +313,13 @@ bool World::compute_forces(Then then, double h) {
   const double inv_dt = 1.0 / dt;
   const int nt = (BONDS || MOVING) ? 1 : threads_for(n);
   double worst = 0;
+  const bool record = record_pair_forces;
+  if (record) pair_forces.clear();
   if (nt == 1) {
     start_resultants(0, n);
-    worst = pair_forces<NS, NT, FC, SHEAR, DASH>(0, neighbors.pairs.size(), n, nullptr);
+    const std::size_t np = neighbors.pairs.size();
+    worst = record ? pair_pass<NS, NT, FC, SHEAR, DASH, true>(0, np, n, nullptr, &pair_forces)
+                   : pair_pass<NS, NT, FC, SHEAR, DASH, false>(0, np, n, nullptr, nullptr);
   } else {
     // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
     // computed by the owner of its i. What a thread adds to a later block's discs is added by
@@ -325,8 +341,16 @@ bool World::compute_forces(Then then, double h) {
       const std::size_t w1 = std::lower_bound(wl.begin(), wl.end(), i1, by_i) - wl.begin();
       deferred_[t].value.clear();
       start_resultants(i0, i1);
-      part[t] = std::max(pair_forces<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value),
-                         wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t));
+      // A recorded pass: the first thread's totals go straight to pair_forces, the others' are
+      // appended in thread order below (the list's order).
+      // Walls before pairs: the order (and the bits) that gcc gave the former
+      // std::max(pairs(), walls()), whose arguments it evaluates right to left; now explicit.
+      std::vector<PairForce>* mine = t == 0 ? &pair_forces : &record_parts_[t].value;
+      const double ww = wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t);
+      const double pw =
+          record ? pair_pass<NS, NT, FC, SHEAR, DASH, true>(p0, p1, i1, &deferred_[t].value, mine)
+                 : pair_pass<NS, NT, FC, SHEAR, DASH, false>(p0, p1, i1, &deferred_[t].value, nullptr);
+      part[t] = std::max(pw, ww);
 #pragma omp barrier
       for (int u = 0; u < t; ++u)  // earlier threads' reactions on this block, in their order
         for (const Deferred& q : deferred_[u].value) {
@@ -337,6 +361,12 @@ bool World::compute_forces(Then then, double h) {
       far |= then_block(then, h, i0, i1) ? 1u : 0u;
     }
     for (int t = 0; t < nt; ++t) worst = std::max(worst, part[t]);
+    if (record)
+      for (int t = 1; t < nt; ++t) {  // rare (output steps): the scratch is freed again
+        auto& v = record_parts_[t].value;
+        pair_forces.insert(pair_forces.end(), v.begin(), v.end());
+        std::vector<PairForce>().swap(v);
+      }
     max_overlap = worst;
     return far != 0;
   }
@@ -431,6 +461,12 @@ void World::remove_discs(const std::vector<char>& dead) {
   keep(d.x); keep(d.y); keep(d.phi); keep(d.vx); keep(d.vy); keep(d.omega);
   keep(d.dux); keep(d.duy); keep(d.dphi); keep(d.fx); keep(d.fy); keep(d.torque);
   neighbors.compact(new_index);
+  std::size_t r = 0;  // the recorded totals follow their discs
+  for (const PairForce& f : pair_forces) {
+    const int i = new_index[f.i], j = new_index[f.j];
+    if (i >= 0 && j >= 0) pair_forces[r++] = PairForce{i, j, f.fn, f.fs};
+  }
+  pair_forces.resize(r);
   if (!bonds.empty()) {  // a bond goes with either of its discs; order (i, j) is kept
     std::size_t k = 0;
     for (const Bond& b : bonds) {

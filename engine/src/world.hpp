@@ -13,6 +13,12 @@
 
 namespace dem {
 
+// The total forces f_n, f_s (eqs. 9, 14) of a touching pair in a recorded force pass.
+struct PairForce {
+  int i, j;
+  double fn, fs;
+};
+
 class World {
  public:
   Discs discs;
@@ -40,6 +46,30 @@ class World {
   double particle_steps = 0;  // sum over steps of the number of discs (throughput)
   double max_overlap = 0;  // largest overlap seen by the last force computation [cm]
 
+  // The total forces of the pairs that touched in the force pass of step `pair_forces_step`,
+  // sorted by (i, j). They are outputs, not history (the next step needs e_n and e_s alone), so a
+  // pass records them only when record_pair_forces is set: the run loops set it before the steps
+  // whose contacts they write or read. Keeping them in the pair list cost 16 bytes a pair and a
+  // third of the force pass's memory traffic.
+  bool record_pair_forces = false;
+  std::vector<PairForce> pair_forces;
+  long pair_forces_step = -1;
+  bool pair_forces_current() const { return pair_forces_step == steps; }
+  // f(c, fn, fs) for each pair c of the list, in order, with its recorded totals (0, 0 for a pair
+  // the recorded pass found apart or did not have). Both lists are sorted by (i, j).
+  template <class F>
+  void each_pair_with_forces(F&& f) const {
+    std::size_t r = 0;
+    const std::size_t nr = pair_forces.size();
+    for (const PairContact& c : neighbors.pairs) {
+      while (r < nr && (pair_forces[r].i < c.i || (pair_forces[r].i == c.i && pair_forces[r].j < c.j))) ++r;
+      if (r < nr && pair_forces[r].i == c.i && pair_forces[r].j == c.j)
+        f(c, pair_forces[r].fn, pair_forces[r].fs);
+      else
+        f(c, 0.0, 0.0);
+    }
+  }
+
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
   // Selects the specialised force kernel and computes the first forces (call before step()).
   void init();
@@ -48,7 +78,7 @@ class World {
   // One time step; the whole algorithm is here.
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
-  void compute_forces_now() { (this->*force_kernel_)(Then::nothing, 0.0); }
+  void compute_forces_now() { force_pass(Then::nothing, 0.0); }
   // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp): the kick
   // v += a h of eq. 17 and a drift. They return whether some disc is now more than skin/2 from
   // where the lists were built (the lists must be rebuilt before the next force pass).
@@ -70,6 +100,7 @@ class World {
   enum class Then { nothing, kick, kick_drift_eq18, kick_drift_eq19 };
   using ForceKernel = bool (World::*)(Then, double);
   ForceKernel force_kernel_ = nullptr;
+  bool force_pass(Then then, double h);  // the selected kernel, and the bookkeeping of a recorded pass
  public:
   // What the selected kernel skips (for the header and the skip benchmark).
   bool kernel_shear = true, kernel_dashpots = true;
@@ -80,8 +111,9 @@ class World {
     int j;
     double fx, fy, tq;
   };
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
-  double pair_forces(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later);
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD>
+  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                   std::vector<PairForce>* record);
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
@@ -92,6 +124,7 @@ class World {
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
   void start_resultants(int i0, int i1);
   std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
+  std::vector<Padded<std::vector<PairForce>>> record_parts_;  // per thread but the first: a recorded pass's totals
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
   void select_kernel();
   void rebuild_lists();       // neighbour lists without the bonded pairs

@@ -59,11 +59,12 @@ Outcome simulate(bool with_wall, ContactOptions opt, Scheme scheme, double dt) {
   // The increments of the last (virtual) step, so eq. (19) starts from steady flight.
   for (std::size_t i = 0; i < w.discs.size(); ++i) w.discs.dux[i] = w.discs.vx[i] * dt;
   w.init();
+  w.record_pair_forces = true;  // the pair's total force, every step
   long touching = 0;
   for (int s = 0; s < 200000; ++s) {
     w.step();
     const bool in_contact = with_wall ? (!w.neighbors.walls.empty() && w.neighbors.walls[0].fn != 0)
-                                      : (!w.neighbors.pairs.empty() && w.neighbors.pairs[0].fn != 0);
+                                      : (!w.pair_forces.empty() && w.pair_forces[0].fn != 0);
     if (in_contact) ++touching;
     else if (touching > 0) break;
   }

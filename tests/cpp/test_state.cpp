@@ -101,7 +101,7 @@ TEST(State, SplitRunWithTwoThreadsIsBitIdentical) {
     std::remove(path.c_str());
     for (long s = split; s < steps; ++s) d.step();
     long touching = 0;
-    for (const PairContact& p : b.neighbors.pairs) touching += p.fn != 0;
+    for (const PairContact& p : b.neighbors.pairs) touching += p.en != 0;
     EXPECT_GT(touching, static_cast<long>(b.discs.size() / 2)) << scheme << ": the discs must be in contact";
     EXPECT_GT(b.neighbors.rebuilds, 2) << scheme << ": the run must rebuild its lists";
     ASSERT_EQ(b.discs.size(), d.discs.size());
