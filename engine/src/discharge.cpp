@@ -319,7 +319,8 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
       // snapshot's, and a jam check's (the arch). A step that ends the run early (jam, empty) is a
       // jam check's or has no pairs.
       const double t_next = w.time + w.dt - st.t_open;
-      w.record_pair_forces = s % sample_every == 0 || s == steps_total || t_next - st.last_removal > ds.jam_time ||
+      w.record_pair_forces = s % sample_every == 0 || s == steps_total || stop_signal() ||
+                             t_next - st.last_removal > ds.jam_time ||
                              (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t_next + 0.5 * w.dt);
       w.step();
     }
@@ -460,9 +461,10 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
     }
     if (st.status != "discharged" || last) break;
     st.next_s = s + 1;
-    // A stop request ends the run here (the caller writes the final checkpoint); checkpoints
+    // A stop request ends the run here (the caller writes the final checkpoint), on a step that
+    // recorded its pair forces (the next one if the request came during this one); checkpoints
     // follow the world's step count, so a resumed run writes them at the same steps.
-    if (stop_signal()) {
+    if (stop_signal() && w.pair_forces_current()) {
       st.status = "interrupted";
       break;
     }
