@@ -66,6 +66,7 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
   while (w.steps < max_steps) {
     w.record_pair_forces = stop_after || w.steps + 1 == max_steps ||
                            (spec.stop_at_rest && !res.rest_reached && (w.steps + 1) % check_every == 0);
+    w.measure_increments = (w.steps + 1) % check_every == 0;  // Verlet's rest measure
     w.step();
     // A run that cannot be trusted stops here: overlap blow-up or non-finite values.
     if (!(w.max_overlap <= overlap_limit)) {

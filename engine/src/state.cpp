@@ -41,9 +41,11 @@ void read_discs(BinaryIn& r, Discs& d) {
   r.vec(d.x); r.vec(d.y); r.vec(d.phi); r.vec(d.vx); r.vec(d.vy); r.vec(d.omega);
   r.vec(d.dux); r.vec(d.duy); r.vec(d.dphi); r.vec(d.fx); r.vec(d.fy); r.vec(d.torque);
   const std::size_t n = d.r.size();
-  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.dux, &d.duy,
-                  &d.dphi, &d.fx, &d.fy, &d.torque})
+  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.fx, &d.fy,
+                  &d.torque})
     if (v->size() != n) r.fail("corrupt file (arrays of different lengths)");
+  for (auto* v : {&d.dux, &d.duy, &d.dphi})  // kept by eq. 19 only (World::increments)
+    if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
   if (d.material.size() != n || d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
 }
 

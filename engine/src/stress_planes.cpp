@@ -24,11 +24,13 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
   // Positions of the last force computation: eqs. 18/19 move the discs after it, Verlet before.
   const bool moved = w.scheme != Scheme::velocity_verlet;
   std::vector<double> px(d.x), py(d.y);
-  if (moved)
+  if (moved) {
+    const World::Increments u = w.increments();
     for (std::size_t i = 0; i < d.size(); ++i) {
-      px[i] -= d.dux[i];
-      py[i] -= d.duy[i];
+      px[i] -= u.x[i] * u.factor;
+      py[i] -= u.y[i] * u.factor;
     }
+  }
   // Cut contacts: accumulate the force on the part above from below (then reverse it).
   auto add_cut = [&](int i, int j, double fn, double fs) {
     const double dx = px[j] - px[i], dy = py[j] - py[i];

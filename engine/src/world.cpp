@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "contact_law.hpp"
 #include "parallel.hpp"
@@ -38,6 +39,7 @@ void World::step() {
   if (far) rebuild_lists();  // eqs. (18), (19): for the next step's forces
   time += dt;
   ++steps;
+  if (measure_increments && scheme == Scheme::velocity_verlet) increments_measured_step_ = steps;
   particle_steps += static_cast<double>(discs.size());
 }
 
@@ -58,6 +60,13 @@ void World::prepare() {
   dist_scratch_.assign(slots, std::vector<double>(geometry.obstacle_count() + 1, 0.0));
   deferred_.assign(slots, {});
   record_parts_.assign(slots, {});
+  increment_sums_.assign(slots, {});
+  // Only eq. (19) keeps increment arrays (increments()); they start at zero (at rest, or as set).
+  Discs& d = discs;
+  for (auto* v : {&d.dux, &d.duy, &d.dphi}) {
+    if (scheme != Scheme::paper_eq19) std::vector<double>().swap(*v);
+    else v->resize(d.size(), 0.0);
+  }
   if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
   rebuild_lists();  // keeps the history already in the lists
 }
@@ -101,7 +110,7 @@ void World::kick_drift_block(double h, int i0, int i1) {
   const double* __restrict tq = d.torque.data();
   const double* __restrict im = d.inv_mass.data(); const double* __restrict ii = d.inv_inertia.data();
   double* __restrict vx = d.vx.data(); double* __restrict vy = d.vy.data(); double* __restrict om = d.omega.data();
-  double* __restrict ux = d.dux.data(); double* __restrict uy = d.duy.data(); double* __restrict up = d.dphi.data();
+  double* __restrict ux = d.dux.data(); double* __restrict uy = d.duy.data(); double* __restrict up = d.dphi.data();  // eq. 19
   double* __restrict x = d.x.data(); double* __restrict y = d.y.data(); double* __restrict phi = d.phi.data();
   for (int i = i0; i < i1; ++i) {
     const double v = vx[i] + fx[i] * im[i] * h;  // (16), (17)
@@ -119,7 +128,7 @@ void World::kick_drift_block(double h, int i0, int i1) {
       b = w * step;
       c = o * step;
     }
-    ux[i] = a; uy[i] = b; up[i] = c;
+    if constexpr (D == Drift::eq19) { ux[i] = a; uy[i] = b; up[i] = c; }  // (18): v dt, read from v (increments())
     x[i] += a;
     y[i] += b;
     phi[i] += c;
@@ -144,7 +153,10 @@ bool World::moved_far(int i0, int i1) const {
 bool World::then_block(Then then, double h, int i0, int i1) {
   switch (then) {
     case Then::nothing: return false;
-    case Then::kick: kick_drift_block<Drift::none>(h, i0, i1); return false;
+    case Then::kick:
+      if (measure_increments) measure_block(i0, i1);
+      kick_drift_block<Drift::none>(h, i0, i1);
+      return false;
     case Then::kick_drift_eq18: kick_drift_block<Drift::eq18>(h, i0, i1); return moved_far(i0, i1);
     case Then::kick_drift_eq19: kick_drift_block<Drift::eq19>(h, i0, i1); return moved_far(i0, i1);
   }
@@ -188,6 +200,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
   PairContact* pc = neighbors.pairs.data();
+  const Increments u = increments();
   double worst = 0;
   for (std::size_t p = p0; p < p1; ++p) {
     PairContact& c = pc[p];
@@ -200,10 +213,11 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
     }
     const double R = std::sqrt(R2);
     const double nx = dx / R, ny = dy / R;  // (4): cos(alpha), sin(alpha), from i to j
-    const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
+    const double ddx = u.x[i] * u.factor - u.x[j] * u.factor, ddy = u.y[i] * u.factor - u.y[j] * u.factor;
     const double du_n = ddx * nx + ddy * ny;                                       // (5a)
     double du_s = 0;
-    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i] + d.r[j] * d.dphi[j];  // (5b)
+    if constexpr (SHEAR)
+      du_s = -ddx * ny + ddy * nx + d.r[i] * (u.phi[i] * u.factor) + d.r[j] * (u.phi[j] * u.factor);  // (5b)
     const double overlap = sum - R;
     worst = std::max(worst, overlap);
     double fn, fs;
@@ -239,6 +253,7 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
   const std::size_t nw = w1;
   const int n_walls = static_cast<int>(geometry.walls.size());
   const int n_mat = n_materials;
+  const Increments u = increments();
   for (std::size_t b = w0; b < nw;) {
     std::size_t e = b;
     while (e < nw && wl[e].i == wl[b].i) ++e;  // the entries of one disc: [b, e)
@@ -276,13 +291,14 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
       if constexpr (MOVING) {
         // The wall's material point at the contact moved too: (5) with j the wall.
         const ObstacleMotion& m = moving.motion[c.k];
-        const double ddx = d.dux[i] - (m.dux - m.dtheta * (c.py - m.pivot_y));
-        const double ddy = d.duy[i] - (m.duy + m.dtheta * (c.px - m.pivot_x));
+        const double ddx = u.x[i] * u.factor - (m.dux - m.dtheta * (c.py - m.pivot_y));
+        const double ddy = u.y[i] * u.factor - (m.duy + m.dtheta * (c.px - m.pivot_x));
         du_n = ddx * nx + ddy * ny;                                      // (5a)
-        du_s = -ddx * ny + ddy * nx + d.r[i] * d.dphi[i];                // (5b)
+        du_s = -ddx * ny + ddy * nx + d.r[i] * (u.phi[i] * u.factor);    // (5b)
       } else {
-        du_n = d.dux[i] * nx + d.duy[i] * ny;                            // (5a)
-        du_s = -d.dux[i] * ny + d.duy[i] * nx + d.r[i] * d.dphi[i];      // (5b)
+        const double uxi = u.x[i] * u.factor, uyi = u.y[i] * u.factor;
+        du_n = uxi * nx + uyi * ny;                                      // (5a)
+        du_s = -uxi * ny + uyi * nx + d.r[i] * (u.phi[i] * u.factor);    // (5b)
       }
       const double overlap = d.r[i] - dist;
       worst = std::max(worst, overlap);
@@ -373,14 +389,15 @@ bool World::compute_forces(Then then, double h) {
 
   if constexpr (BONDS) {
     // Paper 2: inside a cluster both springs act in tension and without limit, with dashpots.
+    const Increments u = increments();
     for (Bond& b : bonds) {
       const int i = b.i, j = b.j;
       const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
       const double R = std::sqrt(dx * dx + dy * dy);
       const double nx = dx / R, ny = dy / R;
-      const double ddx = d.dux[i] - d.dux[j], ddy = d.duy[i] - d.duy[j];
+      const double ddx = u.x[i] * u.factor - u.x[j] * u.factor, ddy = u.y[i] * u.factor - u.y[j] * u.factor;
       const double du_n = ddx * nx + ddy * ny;                                       // (5a)
-      const double du_s = -ddx * ny + ddy * nx + b.ai * d.dphi[i] + b.aj * d.dphi[j];  // (5b)
+      const double du_s = -ddx * ny + ddy * nx + b.ai * (u.phi[i] * u.factor) + b.aj * (u.phi[j] * u.factor);  // (5b)
       const PairProps& p = pair(d.material[i], d.material[j]);
       if constexpr (NS == NormalSpring::incremental)
         b.en += p.kn * du_n;        // (7a), without (8): tension allowed
@@ -459,7 +476,8 @@ void World::remove_discs(const std::vector<char>& dead) {
   };
   keep(d.r); keep(d.mass); keep(d.inv_mass); keep(d.inv_inertia); keep(d.material); keep(d.id);
   keep(d.x); keep(d.y); keep(d.phi); keep(d.vx); keep(d.vy); keep(d.omega);
-  keep(d.dux); keep(d.duy); keep(d.dphi); keep(d.fx); keep(d.fy); keep(d.torque);
+  if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
+  keep(d.fx); keep(d.fy); keep(d.torque);
   neighbors.compact(new_index);
   std::size_t r = 0;  // the recorded totals follow their discs
   for (const PairForce& f : pair_forces) {
@@ -492,11 +510,43 @@ bool World::deactivate_wall(const std::string& name) {
   return false;
 }
 
+World::Increments World::increments() const {
+  const Discs& d = discs;
+  if (scheme == Scheme::paper_eq19) return {d.dux.data(), d.duy.data(), d.dphi.data(), 1.0};
+  return {d.vx.data(), d.vy.data(), d.omega.data(), dt};
+}
+
+// The sums of parallel_sum (its blocks, each summed in order): the same bits as summing stored
+// increments with it, whichever threads run this step's passes.
+void World::measure_block(int i0, int i1) {
+  const int n = static_cast<int>(discs.size());
+  const int nb = threads_for(n);
+  const double* vx = discs.vx.data(); const double* vy = discs.vy.data();
+  for (int b = 0; b < nb; ++b) {
+    const int a = std::max(i0, block_start(n, nb, b)), e = std::min(i1, block_start(n, nb, b + 1));
+    if (a >= e) continue;
+    double sx = 0, sy = 0;
+    for (int i = a; i < e; ++i) {
+      sx += std::abs(vx[i] * dt);
+      sy += std::abs(vy[i] * dt);
+    }
+    increment_sums_[b].value = {sx, sy};
+  }
+}
+
 void World::mean_abs_increment(double& mx, double& my) const {
   const long n = static_cast<long>(discs.size());
   const int nt = threads_for(static_cast<int>(n));
-  mx = parallel_sum(n, nt, [&](long i) { return std::abs(discs.dux[i]); });
-  my = parallel_sum(n, nt, [&](long i) { return std::abs(discs.duy[i]); });
+  if (scheme == Scheme::velocity_verlet) {
+    if (increments_measured_step_ != steps)
+      throw std::logic_error("mean_abs_increment: this Verlet step did not measure its increments");
+    mx = my = 0;
+    for (int b = 0; b < (n ? nt : 0); ++b) { mx += increment_sums_[b].value[0]; my += increment_sums_[b].value[1]; }
+  } else {
+    const Increments u = increments();
+    mx = parallel_sum(n, nt, [&](long i) { return std::abs(u.x[i] * u.factor); });
+    my = parallel_sum(n, nt, [&](long i) { return std::abs(u.y[i] * u.factor); });
+  }
   if (n) { mx /= static_cast<double>(n); my /= static_cast<double>(n); }
 }
 

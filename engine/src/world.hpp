@@ -1,6 +1,7 @@
 // The simulated world and its time step.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -90,8 +91,22 @@ class World {
   // Removes a wall (the slit's gate) from the computation; false if there is no such wall.
   bool deactivate_wall(const std::string& name);
 
-  // Paper's rest measure (note 3): mean over discs of |du| and |dv| of the last step.
+  // The increments du, dv, dphi of the last move (eqs. 5), as arrays times a factor. Eq. (19)
+  // keeps its own (the mean of the last one and v dt: Discs::dux, duy, dphi, factor 1). Eq. (18)
+  // and Verlet move by exactly v dt, and that v is still in vx, vy, omega when the forces and the
+  // rest measure read it: they read v and multiply by dt (the same bits), and keep no increment
+  // arrays (24 bytes a disc).
+  struct Increments {
+    const double *x, *y, *phi;
+    double factor;
+  };
+  Increments increments() const;
+  // Paper's rest measure (note 3): mean over discs of |du| and |dv| of the last step. Verlet's
+  // closing half kick overwrites the v of its move, so a Verlet step adds them up before it
+  // when measure_increments is set (the run loop sets it for its check steps); otherwise the
+  // last step must be of another scheme.
   void mean_abs_increment(double& mx, double& my) const;
+  bool measure_increments = false;
   double kinetic_energy() const;
   bool all_finite() const;
 
@@ -122,6 +137,9 @@ class World {
   void kick_drift_block(double h, int i0, int i1);  // eq. 17 kick, then the drift D, for discs [i0, i1)
   bool moved_far(int i0, int i1) const;  // some disc of [i0, i1) is more than skin/2 from its list position
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
+  void measure_block(int i0, int i1);  // Verlet: sums of |v dt| of discs [i0, i1) before the closing kick
+  std::vector<Padded<std::array<double, 2>>> increment_sums_;  // by parallel_sum's blocks
+  long increments_measured_step_ = -1;
   void start_resultants(int i0, int i1);
   std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
   std::vector<Padded<std::vector<PairForce>>> record_parts_;  // per thread but the first: a recorded pass's totals

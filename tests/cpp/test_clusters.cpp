@@ -77,7 +77,7 @@ TEST(Clusters, TensilePullIsResistedLinearlyWithoutCapOnlyByABond) {
   const PairProps p = paper_disc();
   const double dt = 1e-4;
   for (bool bonded : {true, false}) {
-    World w = make_world(p, {}, Scheme::paper_eq18, dt);
+    World w = make_world(p, {}, Scheme::paper_eq19, dt);  // eq. 19 keeps the increments set here
     w.discs.add(0, 0, 1, kRho, 0);
     w.discs.add(2, 0, 1, kRho, 0);  // touching
     if (bonded) {
@@ -113,7 +113,7 @@ TEST(Clusters, BondedShearHasNoCoulombCap) {
   const PairProps p = paper_disc();
   const double dt = 1e-4;
   for (bool bonded : {true, false}) {
-    World w = make_world(p, {}, Scheme::paper_eq18, dt);
+    World w = make_world(p, {}, Scheme::paper_eq19, dt);  // eq. 19 keeps the increments set here
     w.discs.add(0, 0, 1, kRho, 0);
     w.discs.add(1.999, 0, 1, kRho, 0);  // overlapping by 1e-3: in contact as a free pair too
     if (bonded) {

@@ -33,7 +33,7 @@ World resting_disc(Scheme scheme, double dt) {
 World launched(Scheme scheme, double v0) {
   World w = resting_disc(scheme, 5e-5);
   w.discs.vx[0] = v0;
-  w.discs.dux[0] = v0 * w.dt;
+  if (scheme == Scheme::paper_eq19) w.discs.dux[0] = v0 * w.dt;  // the others read v dt
   return w;
 }
 }  // namespace
