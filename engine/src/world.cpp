@@ -199,43 +199,50 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
                         std::vector<PairForce>* record) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
-  PairContact* pc = neighbors.pairs.data();
+  PairContact* __restrict pc = neighbors.pairs.data();
   const Increments u = increments();
+  // Distinct arrays: restrict lets the compiler keep values in registers across the stores.
+  const double* __restrict x = d.x.data(); const double* __restrict y = d.y.data();
+  const double* __restrict r = d.r.data(); const int* __restrict mat = d.material.data();
+  const double* __restrict ux = u.x; const double* __restrict uy = u.y; const double* __restrict uphi = u.phi;
+  const double uf = u.factor;
+  double* __restrict fxa = d.fx.data(); double* __restrict fya = d.fy.data(); double* __restrict tq = d.torque.data();
+  const PairProps* __restrict props_ = props.data();
+  const int n_mat = n_materials;
   double worst = 0;
   for (std::size_t p = p0; p < p1; ++p) {
     PairContact& c = pc[p];
     const int i = c.i, j = c.j;
-    const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
-    const double R2 = dx * dx + dy * dy, sum = d.r[i] + d.r[j];
+    const double dx = x[j] - x[i], dy = y[j] - y[i];
+    const double R2 = dx * dx + dy * dy, sum = r[i] + r[j];
     if (R2 > sum * sum) {  // (3): apart; the contact and its history end
       c.en = c.es = 0;
       continue;
     }
     const double R = std::sqrt(R2);
     const double nx = dx / R, ny = dy / R;  // (4): cos(alpha), sin(alpha), from i to j
-    const double ddx = u.x[i] * u.factor - u.x[j] * u.factor, ddy = u.y[i] * u.factor - u.y[j] * u.factor;
+    const double ddx = ux[i] * uf - ux[j] * uf, ddy = uy[i] * uf - uy[j] * uf;
     const double du_n = ddx * nx + ddy * ny;                                       // (5a)
     double du_s = 0;
-    if constexpr (SHEAR)
-      du_s = -ddx * ny + ddy * nx + d.r[i] * (u.phi[i] * u.factor) + d.r[j] * (u.phi[j] * u.factor);  // (5b)
+    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + r[i] * (uphi[i] * uf) + r[j] * (uphi[j] * uf);  // (5b)
     const double overlap = sum - R;
     worst = std::max(worst, overlap);
     double fn, fs;
-    contact_law<NS, NT, FC, SHEAR, DASH>(pair(d.material[i], d.material[j]), overlap, du_n, du_s, inv_dt,
-                                         c.en, c.es, fn, fs);
+    contact_law<NS, NT, FC, SHEAR, DASH>(props_[mat[i] * n_mat + mat[j]], overlap, du_n, du_s, inv_dt, c.en, c.es,
+                                         fn, fs);
     if constexpr (RECORD) record->push_back(PairForce{i, j, fn, fs});
     double fx = -fn * nx, fy = -fn * ny;  // (15a), (15b) terms on i
     if constexpr (SHEAR) {
       fx += fs * ny;
       fy -= fs * nx;
     }
-    d.fx[i] += fx; d.fy[i] += fy;
-    if constexpr (SHEAR) d.torque[i] -= d.r[i] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+    fxa[i] += fx; fya[i] += fy;
+    if constexpr (SHEAR) tq[i] -= r[i] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
     if (j < own_end) {
-      d.fx[j] -= fx; d.fy[j] -= fy;
-      if constexpr (SHEAR) d.torque[j] -= d.r[j] * fs;
+      fxa[j] -= fx; fya[j] -= fy;
+      if constexpr (SHEAR) tq[j] -= r[j] * fs;
     } else {
-      later->push_back(Deferred{j, fx, fy, SHEAR ? d.r[j] * fs : 0.0});
+      later->push_back(Deferred{j, fx, fy, SHEAR ? r[j] * fs : 0.0});
     }
   }
   return worst;
