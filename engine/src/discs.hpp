@@ -18,7 +18,7 @@ struct Discs {
   // Kinematics.
   std::vector<double> x, y, phi;       // position [cm], rotation [rad], counter-clockwise
   std::vector<double> vx, vy, omega;   // velocities
-  std::vector<double> dux, duy, dphi;  // last step's increments du, dv, dphi (eqs. 18/19)
+  std::vector<double> dux, duy, dphi;  // last increments du, dv, dphi: eq. 19 only (World::increments)
   // Resultants of eq. (15), gravity included.
   std::vector<double> fx, fy, torque;
 
