@@ -125,6 +125,7 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
     }
   }
   if (progress && std::chrono::duration<double>(last_print - t0).count() > 0) std::fprintf(stderr, "\n");
+  w.record_pair_forces = w.measure_increments = false;  // what follows (a discharge) asks for its own
   res.wall_seconds = wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
