@@ -166,26 +166,22 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const Discs& d = w.discs;
   // Which entries are written, by index (4 bytes a contact; the columns are read from the lists).
   std::vector<std::uint32_t> pairs, bonds, walls;
-  // A pair's totals: its entry in the recorded forces of this step, -1 for a pair that pass found
-  // apart (0, 0), -2 when this step's forces were not recorded (NaN; the run loops record them).
-  std::vector<std::int32_t> totals;
+  // A pair's totals: its entry in the recorded forces of this step, or none for a pair that pass
+  // found apart (0, 0); NaN when this step's forces were not recorded (the run loops record them).
+  std::vector<const PairForce*> totals;
   const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
-  const std::vector<PairForce>& rec = w.pair_forces;
   const bool recorded = w.pair_forces_current();
-  std::size_t r = 0;
-  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
+  w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
     const PairContact& c = w.neighbors.pairs[p];
     const double R = dist(c.i, c.j);
-    if (!(R <= d.r[c.i] + d.r[c.j] && R != 0)) continue;
+    if (!(R <= d.r[c.i] + d.r[c.j] && R != 0)) return;
     pairs.push_back(static_cast<std::uint32_t>(p));
-    while (r < rec.size() && (rec[r].i < c.i || (rec[r].i == c.i && rec[r].j < c.j))) ++r;  // both sorted by (i, j)
-    const bool has = r < rec.size() && rec[r].i == c.i && rec[r].j == c.j;
-    totals.push_back(!recorded ? -2 : has ? static_cast<std::int32_t>(r) : -1);
-  }
+    totals.push_back(rec);
+  });
   const auto total = [&](std::size_t c, double& fn, double& fs) {  // c: index into pairs
-    const std::int32_t k = totals[c];
-    fn = k >= 0 ? rec[k].fn : k == -1 ? 0.0 : NAN;
-    fs = k >= 0 ? rec[k].fs : k == -1 ? 0.0 : NAN;
+    const PairForce* k = totals[c];
+    fn = !recorded ? NAN : k ? k->fn : 0.0;
+    fs = !recorded ? NAN : k ? k->fs : 0.0;
   };
   for (std::size_t p = 0; p < w.bonds.size(); ++p)
     if (dist(w.bonds[p].i, w.bonds[p].j) != 0) bonds.push_back(static_cast<std::uint32_t>(p));

@@ -140,8 +140,9 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
     s.ratio = s.sigma != 0 ? s.tau / s.sigma : 0;
     samples.push_back(s);
     int contacts = 0, sliding = 0;
-    w.each_pair_with_forces([&](const PairContact& c, double fn, double) {
-      if (fn == 0 && c.en == 0) return;
+    w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
+      const PairContact& c = w.neighbors.pairs[p];
+      if ((!rec || rec->fn == 0) && c.en == 0) return;
       ++contacts;
       const PairProps& pp = w.pair(d.material[c.i], d.material[c.j]);
       if (c.es != 0 && std::abs(c.es) >= pp.mu * std::max(c.en, 0.0) * (1 - 1e-12)) ++sliding;

@@ -56,18 +56,17 @@ class World {
   std::vector<PairForce> pair_forces;
   long pair_forces_step = -1;
   bool pair_forces_current() const { return pair_forces_step == steps; }
-  // f(c, fn, fs) for each pair c of the list, in order, with its recorded totals (0, 0 for a pair
-  // the recorded pass found apart or did not have). Both lists are sorted by (i, j).
+  // f(p, rec) for each pair p of the list, in order, with its recorded totals rec (nullptr for a
+  // pair the recorded pass found apart or did not have). Both lists are sorted by (i, j).
   template <class F>
   void each_pair_with_forces(F&& f) const {
     std::size_t r = 0;
     const std::size_t nr = pair_forces.size();
-    for (const PairContact& c : neighbors.pairs) {
+    for (std::size_t p = 0; p < neighbors.pairs.size(); ++p) {
+      const PairContact& c = neighbors.pairs[p];
       while (r < nr && (pair_forces[r].i < c.i || (pair_forces[r].i == c.i && pair_forces[r].j < c.j))) ++r;
-      if (r < nr && pair_forces[r].i == c.i && pair_forces[r].j == c.j)
-        f(c, pair_forces[r].fn, pair_forces[r].fs);
-      else
-        f(c, 0.0, 0.0);
+      const bool has = r < nr && pair_forces[r].i == c.i && pair_forces[r].j == c.j;
+      f(p, has ? &pair_forces[r] : nullptr);
     }
   }
 
