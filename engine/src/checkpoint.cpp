@@ -65,8 +65,8 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
   // The fill's progress (run.hpp).
   o.put<std::int32_t>(static_cast<std::int32_t>(fill.status));
   o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
-  o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds); o.put(fill.last_good_time);
-  for (const auto* v : std::as_const(fill.last_good).arrays()) o.vec(*v);
+  o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds);
+  fill.last_good.write_to(o);
   o.put(fill.energy_started); o.put(fill.energy.active);
   o.put(fill.energy.budget); o.put(fill.energy.scale); o.put(fill.energy.gain);
   // The world, its counters and its lists exactly as they are (no rebuild on resume).
@@ -120,8 +120,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   fill.status = static_cast<RunStatus>(status);
   fill.rest_reached = r.get<bool>(); fill.rest_time = r.get<double>(); fill.rest_threshold = r.get<double>();
   fill.mean_abs_du = r.get<double>(); fill.mean_abs_dv = r.get<double>(); fill.wall_seconds = r.get<double>();
-  fill.last_good_time = r.get<double>();
-  for (auto* v : fill.last_good.arrays()) r.vec(*v);
+  fill.last_good.read_from(r);
   fill.energy_started = r.get<bool>(); fill.energy.active = r.get<bool>();
   fill.energy.budget = r.get<double>(); fill.energy.scale = r.get<double>(); fill.energy.gain = r.get<double>();
   read_world(r, w);

@@ -57,14 +57,16 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   double rmax = 0;
   for (double r : d.r) rmax = std::max(rmax, r);
   // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it.
-  std::vector<char> at_left(n, 0), at_right(n, 0);
+  // One byte a disc: bit 1 a left foot, bit 2 a right foot.
+  constexpr char kLeft = 1, kRight = 2;
+  std::vector<char> foot(n, 0);
   const int nw = static_cast<int>(w.geometry.walls.size());
   for (const WallContact& c : w.neighbors.walls) {
     if (!c.touching) continue;
     const bool near_floor = std::abs(c.py - floor_y) < 1e-9 * (1 + std::abs(floor_y));
     if (c.k >= nw || near_floor) {
-      if (std::abs(c.px - slit_left) <= 2 * rmax) at_left[c.i] = 1;
-      if (std::abs(c.px - slit_right) <= 2 * rmax) at_right[c.i] = 1;
+      if (std::abs(c.px - slit_left) <= 2 * rmax) foot[c.i] |= kLeft;
+      if (std::abs(c.px - slit_right) <= 2 * rmax) foot[c.i] |= kRight;
     }
   }
   // Breadth-first search over touching pairs from the left feet to the right feet. The touching
@@ -80,25 +82,25 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
     }
   for (int i = 0; i < n; ++i) start[i + 1] += start[i];
   std::vector<int> adj(static_cast<std::size_t>(start[n]));
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (const PairForce& p : w.pair_forces)
-      if (p.fn > 0) {
-        adj[fill[p.i]++] = p.j;
-        adj[fill[p.j]++] = p.i;
-      }
-  }
+  // start[i] as disc i's fill cursor (it ends at start[i + 1]); one shift back restores it.
+  for (const PairForce& p : w.pair_forces)
+    if (p.fn > 0) {
+      adj[start[p.i]++] = p.j;
+      adj[start[p.j]++] = p.i;
+    }
+  for (int i = n; i > 0; --i) start[i] = start[i - 1];
+  start[0] = 0;
   std::vector<int> prev(n, -2);
   std::deque<int> q;
   for (int i = 0; i < n; ++i)
-    if (at_left[i]) {
+    if (foot[i] & kLeft) {
       prev[i] = -1;
       q.push_back(i);
     }
   while (!q.empty()) {
     const int i = q.front();
     q.pop_front();
-    if (at_right[i]) {
+    if (foot[i] & kRight) {
       std::vector<int> path;
       for (int k = i; k >= 0; k = prev[k]) path.push_back(k);
       if (path.size() < 2) return {};  // one disc on both ends is not an arch
@@ -281,7 +283,7 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) 
   return "";
 }
 
-DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress) {
+DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress, LastGood* good) {
   DischargeState st;
   const std::string why = open_discharge(spec, w, st);
   if (!why.empty()) {
@@ -290,11 +292,11 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
     res.reason = why;
     return res;
   }
-  return continue_discharge(spec, w, st, out, progress, nullptr);
+  return continue_discharge(spec, w, st, out, progress, nullptr, good);
 }
 
 DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out,
-                                   bool progress, const RunControl* ctl) {
+                                   bool progress, const RunControl* ctl, LastGood* good) {
   const DischargeSpec& ds = spec.discharge;
   DischargeResult res;
   const Frame f = frame(spec, w);
@@ -342,6 +344,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
           st.status = "unstable";
           break;
         }
+        if (good && s % kKeepEvery == 0) good->keep(w.discs, w.time);  // checked: finite, within budget
       }
       // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
       // One read of y per step; the removal mask is built only on the steps that remove.

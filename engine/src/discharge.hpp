@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "control.hpp"
+#include "last_good.hpp"
 #include "outputs.hpp"
 #include "scene.hpp"
 #include "world.hpp"
@@ -36,8 +37,10 @@ struct DischargeResult {
 };
 
 // Opens the gate and runs the discharge phase, writing series and snapshots into out_dir
-// (which exists). The world must be at the state to open from.
-DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress);
+// (which exists). The world must be at the state to open from. The last good state is kept in
+// `good` every kKeepEvery steps (last_good.hpp) when given.
+DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress,
+                              LastGood* good = nullptr);
 
 struct BinaryOut;
 struct BinaryIn;
@@ -79,7 +82,7 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st);
 // Runs the discharge from st (just opened, or restored from a checkpoint with the world) to its
 // end, a jam, or a stop request (status "interrupted"), then writes its files and metrics.
 DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out_dir,
-                                   bool progress, const RunControl* ctl);
+                                   bool progress, const RunControl* ctl, LastGood* good = nullptr);
 
 // Disc ids of the arch over the slit: the shortest chain of touching discs from one slit end
 // (point L or the bottom wall within 2 r of it) to the other. Empty when there is none.

@@ -86,16 +86,16 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
       std::filesystem::create_directories(dir);
       try {
       World w;
-      build_world(specs[k], w);
+      build_world_releasing_discs(specs[k], w);
       const StabilityReport stab = stability_report(w, specs[k].material_names);
-      RunResult res = run_scene(specs[k], w, false);
+      RunResult res = run_scene(specs[k], w, false, dir + "/last_good.bin");
       json extra;
       Member& m = members[k];
       m.index = k;
       m.fill_rest = res.rest_reached;
       m.status = to_string(res.status);
       if (specs[k].discharge.enabled && res.status != RunStatus::unstable) {
-        const DischargeResult dr = run_discharge(specs[k], w, dir, false);
+        const DischargeResult dr = run_discharge(specs[k], w, dir, false, &res.last_good);
         res.wall_seconds += dr.wall_seconds;
         extra["status"] = dr.status;
         extra["discharge"] = dr.metrics;
@@ -104,10 +104,10 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
         if (dr.status == "unstable") {
           res.status = RunStatus::unstable;
           res.reason = dr.reason;
-          res.last_good.take(w.discs);
         }
       }
       write_outputs(dir, specs[k], w, res, stab, &extra);
+      res.last_good.discard();
       } catch (const std::exception& e) {  // one failed member must not take the others down
         members[k].index = k;
         members[k].status = std::string("error: ") + e.what();

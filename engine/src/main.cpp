@@ -210,8 +210,7 @@ int cmd_run(int argc, char** argv) {
   bool resumed_in_discharge = false;
   try {
     spec = load_scene(scene, ov);
-    build_world(spec, world);
-    std::vector<DiscInit>().swap(spec.discs);  // the world has them now (56 B a disc less for the run)
+    build_world_releasing_discs(spec, world);  // the world has the discs: 56 B a disc less at the peak
     stab = stability_report(world, spec.material_names);
     key = checkpoint_key(scene, ov);
     if (!resume && !spec.start_from.empty()) load_state(world, spec.start_from);
@@ -226,6 +225,9 @@ int cmd_run(int argc, char** argv) {
       (!world.bonds.empty() || !world.moving.empty()))
     return bad("--save-state / --from / checkpoints / --resume: state files do not hold cluster bonds or moving "
                "walls yet (shear-box and cluster scenes run in one go)");
+  // The last good state is kept in the output directory, not in memory (last_good.hpp); it is
+  // removed when the run ends.
+  res.last_good.set_file(out + "/last_good.bin");
   if (resume) {
     // The checkpoint replaces the fill (or start.from): the run goes on from where it was.
     const std::string path = checkpoint_path(out);
@@ -256,15 +258,12 @@ int cmd_run(int argc, char** argv) {
   if (resumed_in_discharge) {
     res.status = RunStatus::end_time;  // the fill is over; the discharge goes on below
   } else if (spec.start_from.empty() || resume) {
-    if (!resume) {
-      res.last_good.take(world.discs);
-      res.last_good_time = world.time;
-    }
+    if (!resume) res.last_good.keep(world.discs, world.time);
     continue_scene(spec, world, spec.progress && !quiet, res, &ctl);  // the fill, to rest
     if (res.status == RunStatus::interrupted) write_checkpoint(ckpt, key, world, res, nullptr);
   } else {
     res.status = RunStatus::end_time;
-    res.last_good.take(world.discs);
+    res.last_good.keep(world.discs, world.time);
     if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
   }
   nlohmann::ordered_json extra;
@@ -276,7 +275,7 @@ int cmd_run(int argc, char** argv) {
     }
     DischargeResult dr;
     if (why.empty()) {
-      dr = continue_discharge(spec, world, dstate, out, spec.progress && !quiet, &ctl);
+      dr = continue_discharge(spec, world, dstate, out, spec.progress && !quiet, &ctl, &res.last_good);
       if (dr.status == "interrupted") write_checkpoint(ckpt, key, world, res, &dstate);
     } else {
       dr.status = "unstable";
@@ -287,7 +286,6 @@ int cmd_run(int argc, char** argv) {
     if (dr.status == "unstable") {
       res.status = RunStatus::unstable;
       res.reason = dr.reason;
-      res.last_good.take(world.discs);
       extra["reason"] = dr.reason;
     }
     extra["discharge"] = dr.metrics;
@@ -300,13 +298,12 @@ int cmd_run(int argc, char** argv) {
   }
   if (spec.shear_box.shear && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {  // paper 2
     if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
-    const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet);
+    const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet, &res.last_good);
     res.wall_seconds += sr.wall_seconds;
     extra["status"] = sr.status;
     if (sr.status == "unstable") {
       res.status = RunStatus::unstable;
       res.reason = sr.reason;
-      res.last_good.take(world.discs);
       extra["reason"] = sr.reason;
     }
     extra["shear"] = sr.metrics;
@@ -317,11 +314,12 @@ int cmd_run(int argc, char** argv) {
                   sr.metrics["sigma_initial"].get<double>());
   }
   write_outputs(out, spec, world, res, stab, &extra);
+  res.last_good.discard();  // the outputs hold it when it was needed; a checkpoint carries its own copy
   if (!save_to.empty() && res.status != RunStatus::unstable) save_state(world, save_to);
   if (plots && res.status != RunStatus::unstable) make_plots(out, quiet);
   if (res.status == RunStatus::unstable) {
     std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),
-                 res.last_good_time, out.c_str());
+                 res.last_good.time(), out.c_str());
     return 3;
   }
   if (res.status == RunStatus::interrupted || (extra.contains("status") && extra["status"] == "interrupted")) {

@@ -117,11 +117,12 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     if (cell_of_[i] >= 0) ++cell_start_[cell_of_[i] + 1];
   for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
   order_.resize(n);
-  {
-    std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (int i = 0; i < n; ++i)
-      if (cell_of_[i] >= 0) order_[fill[cell_of_[i]]++] = i;
-  }
+  // Each cell's start serves as its fill cursor, ending at the next cell's start; one shift back
+  // restores the starts (no second array of cells).
+  for (int i = 0; i < n; ++i)
+    if (cell_of_[i] >= 0) order_[cell_start_[cell_of_[i]]++] = i;
+  for (long c = ncell; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
+  cell_start_[0] = 0;
 
   grid_ = Grid{static_cast<double>(xmin), static_cast<double>(ymin), nx, ny};
   // Each obstacle's box grown by the largest reach: a disc outside it cannot be a candidate, so
@@ -142,6 +143,11 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     if (!std::isfinite(reach)) b = Box{-HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, b.live};
   }
   build_pairs(d, nt);
+  // The cells serve this build only: freed, not kept for the next (at a million discs 12 bytes
+  // a disc or more, which would add to the peak of the steps between builds).
+  std::vector<int>().swap(cell_of_);
+  std::vector<int>().swap(order_);
+  std::vector<int>().swap(cell_start_);
   // Obstacle entries: a few per disc at a wall, a small list; built beside the old one.
   if (nt <= 1) {
     make_room(new_walls_, walls.size());

@@ -297,13 +297,10 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
                    const StabilityReport& stab, const json* extra) {
   const bool unstable = res.status == RunStatus::unstable;
-  // An unstable run writes its last good positions and velocities (of the same discs).
-  const bool rewind = unstable && res.last_good.size() == w.discs.size();
-  Discs good;
-  if (rewind) {
-    good = w.discs;
-    res.last_good.put_into(good);
-  }
+  // An unstable run writes its discs as they were in the last good state (a discharge may have
+  // removed some since); wall loads and the summary's counters are those of the stop.
+  const bool rewind = unstable && res.last_good.has();
+  const Discs good = rewind ? res.last_good.load() : Discs{};
   const Discs& d = rewind ? good : w.discs;
   std::vector<WallLoad> walls;
   std::vector<PointLoad> points;

@@ -31,10 +31,10 @@ std::string diagnose(const World& w, double overlap_limit) {
 }
 }  // namespace
 
-RunResult run_scene(const SceneSpec& spec, World& w, bool progress) {
+RunResult run_scene(const SceneSpec& spec, World& w, bool progress, const std::string& keep_file) {
   RunResult res;
-  res.last_good.take(w.discs);
-  res.last_good_time = w.time;
+  res.last_good.set_file(keep_file);
+  res.last_good.keep(w.discs, w.time);
   continue_scene(spec, w, progress, res, nullptr);
   return res;
 }
@@ -49,7 +49,6 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
   const double overlap_limit = spec.max_overlap_fraction * rmin;
   const long max_steps = static_cast<long>(std::ceil(spec.end_time / w.dt - 1e-9));
   const long check_every = 10;
-  const long keep_every = 1000;
   const double wall_before = res.wall_seconds;
   if (!res.energy_started) {
     res.energy.start(w, spec.max_energy_gain);
@@ -95,10 +94,7 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
           stop_status = RunStatus::rest;
         }
       }
-      if (w.steps % keep_every == 0) {
-        res.last_good.take(w.discs);
-        res.last_good_time = w.time;
-      }
+      if (w.steps % kKeepEvery == 0) res.last_good.keep(w.discs, w.time);
     }
     if (stop_signal() && !stop_after) {
       stop_after = true;

@@ -6,6 +6,7 @@
 #include "blowup.hpp"
 #include "control.hpp"
 #include "discs.hpp"
+#include "last_good.hpp"
 #include "scene.hpp"
 #include "world.hpp"
 
@@ -21,16 +22,16 @@ struct RunResult {
   double rest_threshold = 0;   // rest_factor * g dt^2 [cm]
   double mean_abs_du = 0, mean_abs_dv = 0;  // last measured (x and y increments per step)
   double wall_seconds = 0;
-  Kinematics last_good;        // state at the last check that passed (written when unstable)
-  double last_good_time = 0;
+  LastGood last_good;          // state at the last check kept (written when unstable)
   bool energy_started = false; // the energy budget of blowup.hpp, set at the first step
   EnergyWatch energy;
 };
 
 const char* to_string(RunStatus s);
 
-// Steps the world until its end condition. Progress goes to stderr when `progress`.
-RunResult run_scene(const SceneSpec& spec, World& w, bool progress);
+// Steps the world until its end condition. Progress goes to stderr when `progress`. The last
+// good state goes to keep_file ("" : kept in memory).
+RunResult run_scene(const SceneSpec& spec, World& w, bool progress, const std::string& keep_file = "");
 
 // The same from the state in `res` (a fresh RunResult, or one restored from a checkpoint with
 // the world): checkpoints through ctl (may be null), and a stop request (control.hpp) ends the

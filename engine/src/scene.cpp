@@ -792,7 +792,9 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
   return s;
 }
 
-void build_world(const SceneSpec& s, World& w) {
+namespace {
+// Everything but the contact lists (World::init).
+void set_up_world(const SceneSpec& s, World& w) {
   w = World{};
   w.n_materials = static_cast<int>(s.material_names.size());
   w.props = s.props;
@@ -804,6 +806,7 @@ void build_world(const SceneSpec& s, World& w) {
   w.gy = s.gy;
   w.geometry = s.geometry;
   w.geometry.link_points();
+  w.discs.reserve(s.discs.size());
   for (const auto& d : s.discs) {
     w.discs.add(d.x, d.y, d.r, s.density[d.material], d.material);
     w.discs.vx.back() = d.vx;
@@ -822,6 +825,17 @@ void build_world(const SceneSpec& s, World& w) {
        << "); set integrator.force_dt = true (or --force-dt) to run it anyway";
     throw SceneError(os.str());
   }
+}
+}  // namespace
+
+void build_world(const SceneSpec& s, World& w) {
+  set_up_world(s, w);
+  w.init();
+}
+
+void build_world_releasing_discs(SceneSpec& s, World& w) {
+  set_up_world(s, w);
+  std::vector<DiscInit>().swap(s.discs);
   w.init();
 }
 

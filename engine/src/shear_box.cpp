@@ -83,7 +83,7 @@ double moving_max(const std::vector<Sample>& s, int half, double& at) {
 
 }  // namespace
 
-ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, bool progress) {
+ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, bool progress, LastGood* good) {
   const ShearBoxSpec& b = spec.shear_box;
   ShearResult res;
   const Discs& d = w.discs;
@@ -198,6 +198,7 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
       res.reason = os.str();
       break;
     }
+    if (good && (step + 1) % kKeepEvery == 0) good->keep(w.discs, w.time);  // checked just above
     if (progress && (step & 1023) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_print).count() > 2.0) {

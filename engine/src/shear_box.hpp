@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "last_good.hpp"
+
 namespace dem {
 
 struct ShearBoxSpec {
@@ -47,7 +49,9 @@ struct ShearResult {
 void build_shear_world(const SceneSpec& s, World& w);
 
 // Shears the compressed sample to max_strain, writing shear_series.csv, shear_planes.csv and
-// snapshots into out_dir (which exists).
-ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress);
+// snapshots into out_dir (which exists). The last good state is kept in `good` every kKeepEvery
+// steps (last_good.hpp) when given.
+ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress,
+                      LastGood* good = nullptr);
 
 }  // namespace dem

@@ -41,8 +41,28 @@ def check_file(path):
         assert matplotlib.image.imread(path).size > 0
     elif name == "checkpoint.dem":
         pass  # checked by resuming
+    elif name == "last_good.bin":
+        check_last_good(path)
     else:
         raise AssertionError(f"unexpected file {path}")
+
+
+# The per-disc arrays of the last good state in their order (engine/src/state.cpp write_discs),
+# by item size: r, mass, 1/m, 1/I, material, id, x, y, phi, vx, vy, omega, du, dv, dphi, fx, fy, torque.
+LAST_GOOD_ITEMS = [8, 8, 8, 8, 4, 4] + [8] * 12
+
+
+def check_last_good(path):
+    """A kept last good state (engine/src/last_good.cpp): magic, time, the arrays, nothing more."""
+    data = path.read_bytes()
+    assert data[:8] == b"DEMGOOD1", path
+    at, n = 16, None
+    for k, size in enumerate(LAST_GOOD_ITEMS):
+        count = int.from_bytes(data[at:at + 8], "little")
+        assert n is None or count == n or (count == 0 and 12 <= k < 15), (path, k, count, n)
+        n = count if n is None else n
+        at += 8 + count * size
+    assert at == len(data) and 0 < n <= 350, (path, at, len(data), n)  # the discharge removes discs
 
 
 def check_dir(out):
@@ -51,7 +71,7 @@ def check_dir(out):
         if path.is_dir():
             continue
         if path.name.endswith(".tmp"):  # an unfinished file keeps its temporary name
-            assert (path.parent / path.name[:-4]).suffix in (".json", ".csv", ".vtu", ".pvd", ".png", ".dem"), path
+            assert (path.parent / path.name[:-4]).suffix in (".json", ".csv", ".vtu", ".pvd", ".png", ".dem", ".bin"), path
             continue
         check_file(path)
         checked += 1
