@@ -54,9 +54,9 @@ World variant(Variant v, int threads) {
     dem::Bond b;
     b.i = 0;
     b.j = 1;
-    b.ai = w.discs.r[0];
-    b.aj = w.discs.r[1];
-    b.rest = w.discs.r[0] + w.discs.r[1];
+    b.ai = w.discs.r(0);
+    b.aj = w.discs.r(1);
+    b.rest = w.discs.r(0) + w.discs.r(1);
     w.bonds.push_back(b);
   }
   w.prepare();  // picks the kernel for the variant and rebuilds the lists

@@ -13,7 +13,7 @@ double potential_energy(const World& w) {
   const Discs& d = w.discs;
   const long n = static_cast<long>(d.size());
   return -parallel_sum(n, w.threads_for(static_cast<int>(n)),
-                       [&](long i) { return d.mass[i] * (w.gx * d.x[i] + w.gy * d.y[i]); });
+                       [&](long i) { return d.mass(i) * (w.gx * d.x[i] + w.gy * d.y[i]); });
 }
 
 double elastic_energy(const World& w) {
@@ -21,17 +21,17 @@ double elastic_energy(const World& w) {
   double e = 0;
   auto spring = [](double f, double k) { return k > 0 ? 0.5 * f * f / k : 0.0; };
   for (const PairContact& c : w.neighbors.pairs) {
-    const PairProps& p = w.pair(d.material[c.i], d.material[c.j]);
+    const PairProps& p = w.pair(d.material(c.i), d.material(c.j));
     e += spring(c.en, p.kn) + spring(c.es, p.ks);
   }
   const int nw = static_cast<int>(w.geometry.walls.size());
   for (const WallContact& c : w.neighbors.walls) {
     const int km = c.k < nw ? w.geometry.walls[c.k].material : w.geometry.points[c.k - nw].material;
-    const PairProps& p = w.props[d.material[c.i] * w.n_materials + km];
+    const PairProps& p = w.props[d.material(c.i) * w.n_materials + km];
     e += spring(c.en, p.kn) + spring(c.es, p.ks);
   }
   for (const Bond& b : w.bonds) {
-    const PairProps& p = w.pair(d.material[b.i], d.material[b.j]);
+    const PairProps& p = w.pair(d.material(b.i), d.material(b.j));
     e += spring(b.en, p.kn) + spring(b.es, p.ks);
   }
   return e;
@@ -51,8 +51,8 @@ void EnergyWatch::start(const World& w, double max_gain) {
     const double h = g > 0 ? -(w.gx * d.x[i] + w.gy * d.y[i]) / g : 0;  // height along -g
     lo = std::min(lo, h);
     hi = std::max(hi, h);
-    mass += d.mass[i];
-    rmax = std::max(rmax, d.r[i]);
+    mass += d.mass(i);
+    rmax = std::max(rmax, d.r(i));
   }
   scale = ke + el + mass * g * (hi - lo + 2 * rmax);
   if (!(scale > 0) || !std::isfinite(scale)) active = false;  // nothing to release: no criterion

@@ -11,7 +11,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '2'};  // 2: pair totals out of the pair list
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '3'};  // 2: pair totals out of the pair list; 3: disc kinds
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -135,7 +135,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   if (in_discharge) {
     discharge.load(r);
     for (int id : w.discs.id)
-      if (id < 0 || static_cast<std::size_t>(id) >= discharge.x0.size()) r.fail("corrupt checkpoint (disc ids)");
+      if (id < 0 || static_cast<std::uint64_t>(id) >= discharge.at_open.size()) r.fail("corrupt checkpoint (disc ids)");
   }
   if (in.peek() != std::char_traits<char>::eof()) r.fail("corrupt checkpoint (trailing bytes)");
   // Kernel, point links and scratch as for any start, then the lists exactly as saved.

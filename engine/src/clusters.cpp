@@ -44,7 +44,7 @@ std::vector<Bond> make_bonds(const Discs& d, const ClusterSpec& spec) {
       for (std::size_t b = a + 1; b < m.size(); ++b) {
         const int i = std::min(m[a], m[b]), j = std::max(m[a], m[b]);
         const double R = std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]);
-        const double sum = d.r[i] + d.r[j];
+        const double sum = d.r(i) + d.r(j);
         if (spec.bonds == BondSet::touching && R - sum > spec.touch_tolerance) continue;
         if (!(R > 0)) throw std::invalid_argument(where + ": discs " + std::to_string(i) + " and " +
                                                   std::to_string(j) + " are at the same place");
@@ -53,8 +53,8 @@ std::vector<Bond> make_bonds(const Discs& d, const ClusterSpec& spec) {
         bd.j = j;
         bd.rest = R;
         const double stretch = std::max(1.0, R / sum);
-        bd.ai = d.r[i] * stretch;
-        bd.aj = d.r[j] * stretch;
+        bd.ai = d.r(i) * stretch;
+        bd.aj = d.r(j) * stretch;
         bonds.push_back(bd);
         parent[root(static_cast<int>(a))] = root(static_cast<int>(b));
       }

@@ -44,7 +44,7 @@ Slit find_slit(const World& w, const std::string& gate) {
 double surface(const Discs& d, double x0, double x1, double floor) {
   double top = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < d.size(); ++i)
-    if (d.x[i] >= x0 && d.x[i] < x1 && d.y[i] > floor) top = std::max(top, d.y[i] + d.r[i]);
+    if (d.x[i] >= x0 && d.x[i] < x1 && d.y[i] > floor) top = std::max(top, d.y[i] + d.r(i));
   return top;
 }
 
@@ -55,7 +55,7 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   const int n = static_cast<int>(d.size());
   if (n == 0) return {};
   double rmax = 0;
-  for (double r : d.r) rmax = std::max(rmax, r);
+  for (std::size_t i = 0; i < d.size(); ++i) rmax = std::max(rmax, d.r(i));
   // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it.
   // One byte a disc: bit 1 a left foot, bit 2 a right foot.
   constexpr char kLeft = 1, kRight = 2;
@@ -182,7 +182,7 @@ void load_load(BinaryIn& r, WallLoad& L) {
 void DischargeState::save(BinaryOut& o) const {
   o.put(t_open); o.put(n_initial); o.put(overlap_limit); o.put(rmean); o.put(fill_top);
   for (double v : surf0) o.put(v);
-  o.vec(x0); o.vec(y0);
+  at_open.write_to(o);
   o.put<std::uint64_t>(static_walls.size());
   for (const WallLoad& L : static_walls) save_load(o, L);
   o.put(next_s);
@@ -209,7 +209,7 @@ void DischargeState::load(BinaryIn& r) {
   t_open = r.get<double>(); n_initial = r.get<int>(); overlap_limit = r.get<double>(); rmean = r.get<double>();
   fill_top = r.get<double>();
   for (double& v : surf0) v = r.get<double>();
-  r.vec(x0); r.vec(y0);
+  at_open.read_from(r);
   static_walls.resize(r.count(1 << 20));
   for (WallLoad& L : static_walls) load_load(r, L);
   next_s = r.get<long>();
@@ -244,7 +244,11 @@ void DischargeState::load(BinaryIn& r) {
 std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) {
   const Frame f = frame(spec, w);
   double rmin = std::numeric_limits<double>::infinity(), rmean = 0;
-  for (double r : w.discs.r) { rmin = std::min(rmin, r); rmean += r; }
+  for (std::size_t i = 0; i < w.discs.size(); ++i) {
+    const double r = w.discs.r(i);
+    rmin = std::min(rmin, r);
+    rmean += r;
+  }
   rmean /= std::max<std::size_t>(1, w.discs.size());
   st.overlap_limit = spec.max_overlap_fraction * rmin;
   st.rmean = rmean;
@@ -254,16 +258,9 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) 
   measure_loads(w, spec.profile_bin, st.static_walls, static_points);
   st.t_open = w.time;
   st.n_initial = static_cast<int>(w.discs.size());
-  int max_id = 0;
-  for (int id : w.discs.id) max_id = std::max(max_id, id);
-  st.x0.assign(max_id + 1, NAN);
-  st.y0.assign(max_id + 1, NAN);
+  st.at_open.keep(w.discs);
   st.fill_top = -1e300;
-  for (std::size_t i = 0; i < w.discs.size(); ++i) {
-    st.x0[w.discs.id[i]] = w.discs.x[i];
-    st.y0[w.discs.id[i]] = w.discs.y[i];
-    st.fill_top = std::max(st.fill_top, w.discs.y[i]);
-  }
+  for (std::size_t i = 0; i < w.discs.size(); ++i) st.fill_top = std::max(st.fill_top, w.discs.y[i]);
   surfaces(w, f, spec.discharge.surface_column, st.surf0);
   for (double& v : st.sink_time) v = NAN;
 
@@ -285,6 +282,7 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) 
 
 DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress, LastGood* good) {
   DischargeState st;
+  st.at_open.set_file(out + "/opening_positions.bin");
   const std::string why = open_discharge(spec, w, st);
   if (!why.empty()) {
     DischargeResult res;
@@ -292,7 +290,9 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
     res.reason = why;
     return res;
   }
-  return continue_discharge(spec, w, st, out, progress, nullptr, good);
+  DischargeResult res = continue_discharge(spec, w, st, out, progress, nullptr, good);
+  st.at_open.discard();
+  return res;
 }
 
 DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out,
@@ -357,8 +357,8 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
           if (!any) dead.assign(w.discs.size(), 0);
           dead[i] = 1;
           any = true;
-          st.removals.push_back({t, w.discs.id[i], w.discs.mass[i], w.discs.vx[i], w.discs.vy[i], false});
-          st.removed_mass += w.discs.mass[i];
+          st.removals.push_back({t, w.discs.id[i], w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
+          st.removed_mass += w.discs.mass(i);
         }
       if (any) {
         w.remove_discs(dead);
@@ -384,14 +384,14 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
               if (pick < 0 || w.discs.y[i] > w.discs.y[pick]) pick = i;
             if (pick < 0)
               for (std::size_t i = 0; i < w.discs.size(); ++i)
-                if (std::abs(w.discs.x[i] - xc) <= 0.5 * (slit.right - slit.left) + w.discs.r[i] &&
-                    w.discs.y[i] > slit.floor - w.discs.r[i] &&
+                if (std::abs(w.discs.x[i] - xc) <= 0.5 * (slit.right - slit.left) + w.discs.r(i) &&
+                    w.discs.y[i] > slit.floor - w.discs.r(i) &&
                     (pick < 0 || w.discs.y[i] < w.discs.y[pick]))
                   pick = static_cast<int>(i);
             if (pick < 0) {
               st.status = "jammed";
             } else {
-              st.removals.push_back({t, w.discs.id[pick], w.discs.mass[pick], w.discs.vx[pick], w.discs.vy[pick], true});
+              st.removals.push_back({t, w.discs.id[pick], w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
               dead.assign(w.discs.size(), 0);
               dead[pick] = 1;
               w.remove_discs(dead);
@@ -426,10 +426,12 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
         st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
                   << fmt(P.fy) << '\n';
       int inside = 0, below = 0, moved = 0;
+      OpeningPositions::Reader open_at(st.at_open);  // in id order, the discs' order: block by block
       for (std::size_t i = 0; i < w.discs.size(); ++i) {
         (w.discs.y[i] > slit.floor ? inside : below)++;
-        const int id = w.discs.id[i];
-        if (std::hypot(w.discs.x[i] - st.x0[id], w.discs.y[i] - st.y0[id]) >= w.discs.r[i]) ++moved;
+        double x0, y0;
+        open_at.at(w.discs.id[i], x0, y0);
+        if (std::hypot(w.discs.x[i] - x0, w.discs.y[i] - y0) >= w.discs.r(i)) ++moved;
       }
       const int removed = static_cast<int>(st.removals.size());
       st.moved_fraction = st.n_initial ? double(moved + removed) / st.n_initial : 0.0;
@@ -448,7 +450,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
     while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
       char stem[32];
       std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
-      write_disc_files(snapdir, std::string("discs_") + stem, spec, w.discs, &st.x0, &st.y0);
+      write_disc_files(snapdir, std::string("discs_") + stem, spec, w.discs, &st.at_open);
       write_contact_files(snapdir, std::string("contacts_") + stem, w);
       st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
       st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
@@ -564,7 +566,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   for (const Removal& r : res.removals)
     if (!r.keystone && r.t <= 1.0 + 1e-12) ++out_1s;
   const double q = flow_rate(res.removals);
-  const double m_disc = w.discs.size() ? w.discs.mass[0] : (res.removals.empty() ? 1.0 : res.removals[0].mass);
+  const double m_disc = w.discs.size() ? w.discs.mass(0) : (res.removals.empty() ? 1.0 : res.removals[0].mass);
   res.metrics = {
       {"status", res.status},
       {"t_open", res.t_open},

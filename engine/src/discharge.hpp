@@ -10,6 +10,7 @@
 
 #include "control.hpp"
 #include "last_good.hpp"
+#include "opening_positions.hpp"
 #include "outputs.hpp"
 #include "scene.hpp"
 #include "world.hpp"
@@ -55,7 +56,7 @@ struct DischargeState {
   double rmean = 0;          // [cm] mean radius at opening (surface sinking)
   double fill_top = -1e300;
   double surf0[3] = {0, 0, 0};  // surface of the wall, centre and wall columns
-  std::vector<double> x0, y0;   // positions at opening, by disc id
+  OpeningPositions at_open;     // positions at opening, by disc id (a file beside the outputs)
   std::vector<WallLoad> static_walls;
   // Running.
   long next_s = 0;           // next loop step (steps since opening)

@@ -2,17 +2,26 @@
 #pragma once
 
 #include <cstddef>
+#include <cstring>
 #include <vector>
 
 namespace dem {
 
-struct Discs {
-  // Constant per disc.
-  std::vector<double> r;         // radius [cm]
-  std::vector<double> mass;      // rho pi r^2 [g per cm of thickness]
-  std::vector<double> inv_mass;  // 1/m
+// The constants of a kind of disc: discs of one radius, density and material share one entry,
+// so a scene of a few kinds spends nothing per disc on them (32 bytes a disc as per-disc arrays,
+// a tenth of a million-disc run). A scene whose every disc differs has one kind a disc.
+struct DiscKinds {
+  std::vector<double> r;            // radius [cm]
+  std::vector<double> mass;         // rho pi r^2 [g per cm of thickness]
+  std::vector<double> inv_mass;     // 1/m (0: a disc held in place, Discs::hold)
   std::vector<double> inv_inertia;  // 1/I, I = m r^2 / 2
-  std::vector<int> material;     // index into the scene's materials
+  std::vector<int> material;        // index into the scene's materials
+  std::size_t size() const { return r.size(); }
+};
+
+struct Discs {
+  DiscKinds kinds;
+  std::vector<int> kind;         // index into kinds
   std::vector<int> id;           // stable id (survives removals)
   // Kinematics.
   std::vector<double> x, y, phi;       // position [cm], rotation [rad], counter-clockwise
@@ -21,24 +30,70 @@ struct Discs {
   // Resultants of eq. (15), gravity included.
   std::vector<double> fx, fy, torque;
 
-  std::size_t size() const { return r.size(); }
+  std::size_t size() const { return kind.size(); }
+  // Disc i's constants.
+  double r(std::size_t i) const { return kinds.r[kind[i]]; }
+  double mass(std::size_t i) const { return kinds.mass[kind[i]]; }
+  double inv_mass(std::size_t i) const { return kinds.inv_mass[kind[i]]; }
+  double inv_inertia(std::size_t i) const { return kinds.inv_inertia[kind[i]]; }
+  int material(std::size_t i) const { return kinds.material[kind[i]]; }
+
   // Room for n discs exactly (a fill of known count): no doubling slack, about 5 % at 1M discs.
   void reserve(std::size_t n) {
-    for (auto* v : {&r, &mass, &inv_mass, &inv_inertia, &x, &y, &phi, &vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque})
-      v->reserve(n);
-    material.reserve(n);
+    for (auto* v : {&x, &y, &phi, &vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->reserve(n);
+    kind.reserve(n);
     id.reserve(n);
   }
   void add(double px, double py, double radius, double density, int mat) {
     const double m = density * 3.14159265358979323846 * radius * radius;
-    r.push_back(radius);
-    mass.push_back(m);
-    inv_mass.push_back(1.0 / m);
-    inv_inertia.push_back(2.0 / (m * radius * radius));
-    material.push_back(mat);
+    kind.push_back(kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
     id.push_back(static_cast<int>(id.size()));
     x.push_back(px); y.push_back(py); phi.push_back(0);
     for (auto* v : {&vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->push_back(0);
+  }
+  // Disc i no longer moves under forces: a kind of its own, with zero inverse mass and inertia.
+  void hold(std::size_t i) {
+    kind[i] = kind_of(r(i), mass(i), 0.0, 0.0, material(i));
+  }
+  // Frees the index add() searches kinds with (the world calls it once the discs are in).
+  void forget_kind_index() { std::vector<std::size_t>().swap(slots_); }
+
+ private:
+  // Open-addressing hash of the kinds by their constants' bits; empty until add() needs it.
+  std::vector<std::size_t> slots_;  // kind + 1, 0 empty
+  static std::size_t bits(double v) {
+    std::size_t b;
+    static_assert(sizeof b == sizeof v);
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+  }
+  bool same(std::size_t k, double radius, double m, double im, double ii, int mat) const {
+    return bits(kinds.r[k]) == bits(radius) && bits(kinds.mass[k]) == bits(m) && bits(kinds.inv_mass[k]) == bits(im) &&
+           bits(kinds.inv_inertia[k]) == bits(ii) && kinds.material[k] == mat;
+  }
+  std::size_t slot_of(double radius, double m, double im, double ii, int mat) const {
+    std::size_t h = bits(radius) * 0x9E3779B97F4A7C15ull ^ bits(m) * 0xC2B2AE3D27D4EB4Full ^
+                    bits(im) * 0x165667B19E3779F9ull ^ bits(ii) * 0x27D4EB2F165667C5ull ^ static_cast<std::size_t>(mat);
+    h ^= h >> 29;
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t s = h & mask;; s = (s + 1) & mask)
+      if (slots_[s] == 0 || same(slots_[s] - 1, radius, m, im, ii, mat)) return s;
+  }
+  int kind_of(double radius, double m, double im, double ii, int mat) {
+    if (slots_.size() < 2 * kinds.size() + 2) {  // (re)build at a load of at most 1/2
+      std::size_t cap = 16;
+      while (cap < 4 * kinds.size() + 4) cap *= 2;
+      slots_.assign(cap, 0);
+      for (std::size_t k = 0; k < kinds.size(); ++k)
+        slots_[slot_of(kinds.r[k], kinds.mass[k], kinds.inv_mass[k], kinds.inv_inertia[k], kinds.material[k])] = k + 1;
+    }
+    const std::size_t s = slot_of(radius, m, im, ii, mat);
+    if (slots_[s] == 0) {
+      kinds.r.push_back(radius); kinds.mass.push_back(m); kinds.inv_mass.push_back(im);
+      kinds.inv_inertia.push_back(ii); kinds.material.push_back(mat);
+      slots_[s] = kinds.size();
+    }
+    return static_cast<int>(slots_[s] - 1);
   }
 };
 

@@ -225,9 +225,10 @@ int cmd_run(int argc, char** argv) {
       (!world.bonds.empty() || !world.moving.empty()))
     return bad("--save-state / --from / checkpoints / --resume: state files do not hold cluster bonds or moving "
                "walls yet (shear-box and cluster scenes run in one go)");
-  // The last good state is kept in the output directory, not in memory (last_good.hpp); it is
-  // removed when the run ends.
+  // The last good state and a discharge's positions at opening are kept in the output directory,
+  // not in memory; they are removed when the run ends.
   res.last_good.set_file(out + "/last_good.bin");
+  dstate.at_open.set_file(out + "/opening_positions.bin");  // likewise (opening_positions.hpp)
   if (resume) {
     // The checkpoint replaces the fill (or start.from): the run goes on from where it was.
     const std::string path = checkpoint_path(out);
@@ -277,6 +278,7 @@ int cmd_run(int argc, char** argv) {
     if (why.empty()) {
       dr = continue_discharge(spec, world, dstate, out, spec.progress && !quiet, &ctl, &res.last_good);
       if (dr.status == "interrupted") write_checkpoint(ckpt, key, world, res, &dstate);
+      dstate.at_open.discard();  // the checkpoint carries its own copy
     } else {
       dr.status = "unstable";
       dr.reason = why;

@@ -72,7 +72,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const double inf = std::numeric_limits<double>::infinity();
   double rmax = 0, dxmin = inf, dxmax = -inf, dymin = inf, dymax = -inf;
   const auto extend = [&](int i, double& rm, double& x0, double& x1, double& y0, double& y1) {
-    if (std::isfinite(d.r[i])) rm = std::max(rm, d.r[i]);
+    if (std::isfinite(d.r(i))) rm = std::max(rm, d.r(i));
     const double x = d.x[i], y = d.y[i];
     if (!std::isfinite(x) || !std::isfinite(y)) return;
     x0 = std::min(x0, x); x1 = std::max(x1, x);
@@ -298,7 +298,7 @@ void Neighbors::candidates(const Discs& d, int i, F&& f) const {
   const long nx = grid_.nx, ny = grid_.ny;
   const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
   const long a0 = std::max(0L, ci - 1), a1 = std::min(nx - 1, ci + 1);
-  const double xi = d.x[i], yi = d.y[i], ri = d.r[i];
+  const double xi = d.x[i], yi = d.y[i], ri = d.r(i);
   // The 3 cells of a row are consecutive in the sorted order: one run of discs per row.
   for (long b = std::max(0L, cj - 1); b <= std::min(ny - 1, cj + 1); ++b) {
     const int s1 = cell_start_[b * nx + a1 + 1];
@@ -306,7 +306,7 @@ void Neighbors::candidates(const Discs& d, int i, F&& f) const {
       const int j = order_[s];
       if (j <= i) continue;
       const double dx = d.x[j] - xi, dy = d.y[j] - yi;
-      const double reach = ri + d.r[j] + skin;
+      const double reach = ri + d.r(j) + skin;
       if (dx * dx + dy * dy < reach * reach) f(j);
     }
   }
@@ -344,7 +344,7 @@ void Neighbors::search_walls(const Discs& d, const Geometry& g, int i0, int i1, 
     for (int k = 0; k < nk; ++k) {
       const Box& b = boxes_[k];
       if (!b.live || !(xi >= b.xlo && xi <= b.xhi && yi >= b.ylo && yi <= b.yhi)) continue;
-      if (obstacle_distance(g, k, xi, yi) < d.r[i] + skin) out.push_back(WallContact{i, k});
+      if (obstacle_distance(g, k, xi, yi) < d.r(i) + skin) out.push_back(WallContact{i, k});
     }
   }
 }

@@ -1,3 +1,4 @@
+#include "opening_positions.hpp"
 #include "outputs.hpp"
 
 #include <cmath>
@@ -5,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -174,7 +176,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
     const PairContact& c = w.neighbors.pairs[p];
     const double R = dist(c.i, c.j);
-    if (!(R <= d.r[c.i] + d.r[c.j] && R != 0)) return;
+    if (!(R <= d.r(c.i) + d.r(c.j) && R != 0)) return;
     pairs.push_back(static_cast<std::uint32_t>(p));
     totals.push_back(rec);
   });
@@ -227,8 +229,8 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     total(e, fn, fs);
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
-    const double nx = dx / R, ny = dy / R, ov = d.r[c.i] + d.r[c.j] - R;
-    const double cx = d.x[c.i] + nx * (d.r[c.i] - 0.5 * ov), cy = d.y[c.i] + ny * (d.r[c.i] - 0.5 * ov);
+    const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;
+    const double cx = d.x[c.i] + nx * (d.r(c.i) - 0.5 * ov), cy = d.y[c.i] + ny * (d.r(c.i) - 0.5 * ov);
     o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
       << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
   }
@@ -261,19 +263,24 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
 }
 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
-                      const std::vector<double>* x0, const std::vector<double>* y0) {
-  const bool disp = x0 && y0;
+                      const OpeningPositions* at_open) {
+  const bool disp = at_open != nullptr;
+  // Read in id order, the discs' order: a block of positions at a time (opening_positions.hpp).
+  std::optional<OpeningPositions::Reader> open_at;
+  if (disp) open_at.emplace(*at_open);
   const auto displacement = [&](std::size_t i, double& dx, double& dy) {
-    dx = d.x[i] - (*x0)[d.id[i]];
-    dy = d.y[i] - (*y0)[d.id[i]];
+    double x0, y0;
+    open_at->at(d.id[i], x0, y0);
+    dx = d.x[i] - x0;
+    dy = d.y[i] - y0;
   };
   std::ofstream o;  // NAME.csv.tmp, renamed when complete
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
   o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << "\n";
   for (std::size_t i = 0; i < d.size(); ++i) {
-    o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r[i]) << ',' << fmt(d.vx[i]) << ','
-      << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material[i]];
+    o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r(i)) << ',' << fmt(d.vx[i]) << ','
+      << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material(i)];
     if (disp) {
       double dx, dy;
       displacement(i, dx, dy);
@@ -289,7 +296,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   if (disp) vec.push_back({"displacement", displacement});
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
     vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1,
-        {{"radius", [&](std::size_t i) { return d.r[i]; }}, {"omega", [&](std::size_t i) { return d.omega[i]; }}}, vec,
+        {{"radius", [&](std::size_t i) { return d.r(i); }}, {"omega", [&](std::size_t i) { return d.omega[i]; }}}, vec,
         {{"id", [&](std::size_t i) { return static_cast<long long>(d.id[i]); }}}, false);
   });
 }
@@ -308,7 +315,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   const double g = std::hypot(w.gx, w.gy);
   const double ghx = w.gx / g, ghy = w.gy / g;
   double weight = 0;
-  for (double m : d.mass) weight += m * g;
+  for (std::size_t i = 0; i < d.size(); ++i) weight += d.mass(i) * g;
   const double top = w.geometry.max_y();
 
   json js;
@@ -332,7 +339,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                 {"rest_factor", spec.rest_factor}, {"threshold", res.rest_threshold},
                 {"mean_abs_du", res.mean_abs_du}, {"mean_abs_dv", res.mean_abs_dv}};
   js["weight"] = weight;
-  js["disc_weight"] = d.mass.empty() ? 0.0 : d.mass[0] * g;
+  js["disc_weight"] = d.size() == 0 ? 0.0 : d.mass(0) * g;
   js["width"] = w.geometry.max_x() - w.geometry.min_x();
   js["height"] = top - w.geometry.min_y();
   json jw = json::array();
@@ -406,7 +413,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   if (extra)
     for (const auto& [k, v] : extra->items()) js[k] = v;
   if (!unstable) write_contact_files(dir, "contacts", w);
-  write_disc_files(dir, "discs", spec, d, nullptr, nullptr);
+  write_disc_files(dir, "discs", spec, d, nullptr);
   write_file_atomic(dir + "/summary.json", js.dump(2) + "\n");
 }
 

@@ -14,6 +14,10 @@
 #include "world.hpp"
 
 namespace dem {
+class OpeningPositions;
+}
+
+namespace dem {
 
 // Forces exerted by the discs on one wall, totals and per bin along the wall.
 struct WallLoad {
@@ -39,10 +43,10 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
 
 // STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w);
-// STEM.csv and STEM.vtu of the discs; with displacement columns from the reference positions
-// x0, y0 (indexed by disc id) when given.
+// STEM.csv and STEM.vtu of the discs; with displacement columns from the positions at opening
+// when given.
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
-                      const std::vector<double>* x0, const std::vector<double>* y0);
+                      const OpeningPositions* at_open);
 
 // A double at full precision (%.17g), and a JSON number or null when not finite.
 std::string fmt17(double v);

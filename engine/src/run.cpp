@@ -45,7 +45,7 @@ void continue_scene(const SceneSpec& spec, World& w, bool progress, RunResult& r
   const double g = std::hypot(w.gx, w.gy);
   res.rest_threshold = spec.rest_factor * g * w.dt * w.dt;  // note 3: ~1e-9 cm at dt = 1e-4
   double rmin = 1e300;
-  for (double r : w.discs.r) rmin = std::min(rmin, r);
+  for (std::size_t i = 0; i < w.discs.size(); ++i) rmin = std::min(rmin, w.discs.r(i));
   const double overlap_limit = spec.max_overlap_fraction * rmin;
   const long max_steps = static_cast<long>(std::ceil(spec.end_time / w.dt - 1e-9));
   const long check_every = 10;

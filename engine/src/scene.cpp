@@ -515,8 +515,8 @@ void check_initial_discs(const SceneSpec& s) {
   };
   for (const auto& p : nb.pairs) {
     const double dx = d.x[p.j] - d.x[p.i], dy = d.y[p.j] - d.y[p.i];
-    const double sum = d.r[p.i] + d.r[p.j];
-    const double allowed = s.max_initial_overlap * std::min(d.r[p.i], d.r[p.j]);
+    const double sum = d.r(p.i) + d.r(p.j);
+    const double allowed = s.max_initial_overlap * std::min(d.r(p.i), d.r(p.j));
     if (dx * dx + dy * dy < (sum - allowed) * (sum - allowed))
       throw SceneError(s.file + ": fill: " + where(p.i) + " overlaps " + where(p.j) +
                        (allowed > 0 ? " by more than fill.max_initial_overlap = " + show(s.max_initial_overlap) + " r"
@@ -534,7 +534,7 @@ void check_initial_discs(const SceneSpec& s) {
   for (const auto& c : nb.walls) {
     const int nw = static_cast<int>(g.walls.size());
     const double dist = obstacle_distance(g, c.k, d.x[c.i], d.y[c.i]);
-    if (dist < d.r[c.i] * (1.0 - s.max_initial_overlap)) {
+    if (dist < d.r(c.i) * (1.0 - s.max_initial_overlap)) {
       const std::string name = c.k < nw ? "wall \"" + g.walls[c.k].name + "\"" : "point \"" + g.points[c.k - nw].name + "\"";
       throw SceneError(s.file + ": fill: " + where(c.i) + " overlaps " + name + ": discs must start inside the walls");
     }

@@ -88,7 +88,10 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   ShearResult res;
   const Discs& d = w.discs;
   double rmean = 0, rmin = 1e300;
-  for (double r : d.r) { rmean += r; rmin = std::min(rmin, r); }
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    rmean += d.r(i);
+    rmin = std::min(rmin, d.r(i));
+  }
   rmean /= std::max<std::size_t>(1, d.size());
   int n_rows = 0;
   const std::vector<int> row = assign_rows(d, 0.5 * rmean, n_rows);
@@ -102,7 +105,7 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   }();
   const double weight = [&] {
     double s = 0;
-    for (double m : d.mass) s += m * std::hypot(w.gx, w.gy);
+    for (std::size_t i = 0; i < d.size(); ++i) s += d.mass(i) * std::hypot(w.gx, w.gy);
     return s;
   }();
   const double plate_weight = w.moving.plates[0].mass * std::hypot(w.gx, w.gy);
@@ -144,7 +147,7 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
       const PairContact& c = w.neighbors.pairs[p];
       if ((!rec || rec->fn == 0) && c.en == 0) return;
       ++contacts;
-      const PairProps& pp = w.pair(d.material[c.i], d.material[c.j]);
+      const PairProps& pp = w.pair(d.material(c.i), d.material(c.j));
       if (c.es != 0 && std::abs(c.es) >= pp.mu * std::max(c.en, 0.0) * (1 - 1e-12)) ++sliding;
     });
     const ObstacleMotion& mp = w.moving.motion[plate];
@@ -165,7 +168,7 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
     char stem[64];
     std::snprintf(stem, sizeof stem, "%02zu", next_snap);
     write_contact_files(out + "/snapshots", std::string("contacts_") + stem, w);
-    write_disc_files(out + "/snapshots", std::string("discs_") + stem, spec, d, nullptr, nullptr);
+    write_disc_files(out + "/snapshots", std::string("discs_") + stem, spec, d, nullptr);
     json walls = json::array();
     for (const Wall& wl : w.geometry.walls)
       walls.push_back({{"name", wl.name}, {"from", {wl.ax, wl.ay}}, {"to", {wl.bx, wl.by}}});

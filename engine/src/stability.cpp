@@ -56,7 +56,7 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
   const int nm = w.n_materials;
   // Mean disc mass per material present among the discs.
   std::vector<double> msum(nm, 0), cnt(nm, 0);
-  for (std::size_t i = 0; i < d.size(); ++i) { msum[d.material[i]] += d.mass[i]; cnt[d.material[i]] += 1; }
+  for (std::size_t i = 0; i < d.size(); ++i) { msum[d.material(i)] += d.mass(i); cnt[d.material(i)] += 1; }
   std::vector<bool> obstacle_mat(nm, false);
   for (const auto& wl : w.geometry.walls) obstacle_mat[wl.material] = true;
   for (const auto& p : w.geometry.points) obstacle_mat[p.material] = true;

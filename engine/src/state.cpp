@@ -11,7 +11,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '2'};  // 2: pair totals out of the pair list
+constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '3'};  // 2: pair totals out of the pair list; 3: disc kinds
 
 // The wall contacts in their memory layout with the padding after `touching` zeroed, so that
 // equal states give equal files.
@@ -31,22 +31,30 @@ std::vector<WallContact> zero_padded(const std::vector<WallContact>& v) {
 }  // namespace
 
 void write_discs(BinaryOut& o, const Discs& d) {
-  o.vec(d.r); o.vec(d.mass); o.vec(d.inv_mass); o.vec(d.inv_inertia); o.vec(d.material); o.vec(d.id);
+  const DiscKinds& k = d.kinds;
+  o.vec(k.r); o.vec(k.mass); o.vec(k.inv_mass); o.vec(k.inv_inertia); o.vec(k.material);
+  o.vec(d.kind); o.vec(d.id);
   o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
   o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
 }
 
 void read_discs(BinaryIn& r, Discs& d) {
-  r.vec(d.r); r.vec(d.mass); r.vec(d.inv_mass); r.vec(d.inv_inertia); r.vec(d.material); r.vec(d.id);
+  DiscKinds& k = d.kinds;
+  r.vec(k.r); r.vec(k.mass); r.vec(k.inv_mass); r.vec(k.inv_inertia); r.vec(k.material);
+  for (std::size_t n : {k.mass.size(), k.inv_mass.size(), k.inv_inertia.size(), k.material.size()})
+    if (n != k.size()) r.fail("corrupt file (kind arrays of different lengths)");
+  r.vec(d.kind); r.vec(d.id);
   r.vec(d.x); r.vec(d.y); r.vec(d.phi); r.vec(d.vx); r.vec(d.vy); r.vec(d.omega);
   r.vec(d.dux); r.vec(d.duy); r.vec(d.dphi); r.vec(d.fx); r.vec(d.fy); r.vec(d.torque);
-  const std::size_t n = d.r.size();
-  for (auto* v : {&d.mass, &d.inv_mass, &d.inv_inertia, &d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.fx, &d.fy,
+  const std::size_t n = d.kind.size();
+  for (int c : d.kind)
+    if (c < 0 || static_cast<std::size_t>(c) >= k.size()) r.fail("corrupt file (a disc of no kind)");
+  for (auto* v : {&d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.fx, &d.fy,
                   &d.torque})
     if (v->size() != n) r.fail("corrupt file (arrays of different lengths)");
   for (auto* v : {&d.dux, &d.duy, &d.dphi})  // kept by eq. 19 only (World::increments)
     if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
-  if (d.material.size() != n || d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
+  if (d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
 }
 
 void write_world(BinaryOut& o, const World& w) {
@@ -73,8 +81,8 @@ void read_world(BinaryIn& r, World& w) {
   if (scheme != static_cast<std::int32_t>(w.scheme)) r.fail("saved with another integration scheme");
   Discs& d = w.discs;
   read_discs(r, d);
-  const std::size_t n = d.r.size();
-  for (int m : d.material)
+  const std::size_t n = d.size();
+  for (int m : d.kinds.material)
     if (m < 0 || m >= w.n_materials) r.fail("a disc material does not exist in this scene");
   std::vector<char> active;
   r.vec(active, 1u << 20);

@@ -49,7 +49,7 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
   if (!w.pair_forces_current()) throw std::logic_error("plane stresses: the pair forces of this step were not recorded");
   for (const PairForce& c : w.pair_forces) {  // the pairs that touched in the last force pass
     const double dx = px[c.j] - px[c.i], dy = py[c.j] - py[c.i];
-    const double sum = d.r[c.i] + d.r[c.j];
+    const double sum = d.r(c.i) + d.r(c.j);
     if (dx * dx + dy * dy > sum * sum) continue;  // (as they must, at the positions of that pass)
     if (c.fn == 0 && c.fs == 0) continue;
     add_cut(c.i, c.j, c.fn, c.fs);
@@ -63,8 +63,8 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
     double max = 0, may = 0;  // sum of m a (the resultants of the last force computation)
     for (std::size_t i = 0; i < d.size(); ++i) {
       if (!(py[i] > p.y)) continue;
-      gxs += d.mass[i] * w.gx;
-      gys += d.mass[i] * w.gy;
+      gxs += d.mass(i) * w.gx;
+      gys += d.mass(i) * w.gy;
       max += d.fx[i];
       may += d.fy[i];
     }

@@ -63,6 +63,7 @@ void World::prepare() {
   increment_sums_.assign(slots, {});
   // Only eq. (19) keeps increment arrays (increments()); they start at zero (at rest, or as set).
   Discs& d = discs;
+  d.forget_kind_index();  // the discs are in
   for (auto* v : {&d.dux, &d.duy, &d.dphi}) {
     if (scheme != Scheme::paper_eq19) std::vector<double>().swap(*v);
     else v->resize(d.size(), 0.0);
@@ -108,14 +109,17 @@ void World::kick_drift_block(double h, int i0, int i1) {
   // Distinct arrays: restrict lets the compiler keep values in registers.
   const double* __restrict fx = d.fx.data(); const double* __restrict fy = d.fy.data();
   const double* __restrict tq = d.torque.data();
-  const double* __restrict im = d.inv_mass.data(); const double* __restrict ii = d.inv_inertia.data();
+  // 1/m and 1/I by kind: a small table, read through the disc's kind.
+  const int* __restrict kd = d.kind.data();
+  const double* __restrict im = d.kinds.inv_mass.data(); const double* __restrict ii = d.kinds.inv_inertia.data();
   double* __restrict vx = d.vx.data(); double* __restrict vy = d.vy.data(); double* __restrict om = d.omega.data();
   double* __restrict ux = d.dux.data(); double* __restrict uy = d.duy.data(); double* __restrict up = d.dphi.data();  // eq. 19
   double* __restrict x = d.x.data(); double* __restrict y = d.y.data(); double* __restrict phi = d.phi.data();
   for (int i = i0; i < i1; ++i) {
-    const double v = vx[i] + fx[i] * im[i] * h;  // (16), (17)
-    const double w = vy[i] + fy[i] * im[i] * h;
-    const double o = om[i] + tq[i] * ii[i] * h;
+    const int k = kd[i];
+    const double v = vx[i] + fx[i] * im[k] * h;  // (16), (17)
+    const double w = vy[i] + fy[i] * im[k] * h;
+    const double o = om[i] + tq[i] * ii[k] * h;
     vx[i] = v; vy[i] = w; om[i] = o;
     if constexpr (D == Drift::none) continue;
     double a, b, c;
@@ -184,8 +188,8 @@ bool World::kick_drift_eq19(double h) { return integrate(Then::kick_drift_eq19, 
 void World::start_resultants(int i0, int i1) {
   Discs& d = discs;
   for (int i = i0; i < i1; ++i) {
-    d.fx[i] = d.mass[i] * gx;
-    d.fy[i] = d.mass[i] * gy;
+    d.fx[i] = d.mass(i) * gx;
+    d.fy[i] = d.mass(i) * gy;
     d.torque[i] = 0;
   }
 }
@@ -203,7 +207,9 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   const Increments u = increments();
   // Distinct arrays: restrict lets the compiler keep values in registers across the stores.
   const double* __restrict x = d.x.data(); const double* __restrict y = d.y.data();
-  const double* __restrict r = d.r.data(); const int* __restrict mat = d.material.data();
+  // Radius and material by kind: a small table, read through each disc's kind.
+  const int* __restrict kd = d.kind.data();
+  const double* __restrict kr = d.kinds.r.data(); const int* __restrict kmat = d.kinds.material.data();
   const double* __restrict ux = u.x; const double* __restrict uy = u.y; const double* __restrict uphi = u.phi;
   const double uf = u.factor;
   double* __restrict fxa = d.fx.data(); double* __restrict fya = d.fy.data(); double* __restrict tq = d.torque.data();
@@ -213,8 +219,10 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   for (std::size_t p = p0; p < p1; ++p) {
     PairContact& c = pc[p];
     const int i = c.i, j = c.j;
+    const int ki = kd[i], kj = kd[j];
+    const double ri = kr[ki], rj = kr[kj];
     const double dx = x[j] - x[i], dy = y[j] - y[i];
-    const double R2 = dx * dx + dy * dy, sum = r[i] + r[j];
+    const double R2 = dx * dx + dy * dy, sum = ri + rj;
     if (R2 > sum * sum) {  // (3): apart; the contact and its history end
       c.en = c.es = 0;
       continue;
@@ -224,11 +232,11 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
     const double ddx = ux[i] * uf - ux[j] * uf, ddy = uy[i] * uf - uy[j] * uf;
     const double du_n = ddx * nx + ddy * ny;                                       // (5a)
     double du_s = 0;
-    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + r[i] * (uphi[i] * uf) + r[j] * (uphi[j] * uf);  // (5b)
+    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + ri * (uphi[i] * uf) + rj * (uphi[j] * uf);  // (5b)
     const double overlap = sum - R;
     worst = std::max(worst, overlap);
     double fn, fs;
-    contact_law<NS, NT, FC, SHEAR, DASH>(props_[mat[i] * n_mat + mat[j]], overlap, du_n, du_s, inv_dt, c.en, c.es,
+    contact_law<NS, NT, FC, SHEAR, DASH>(props_[kmat[ki] * n_mat + kmat[kj]], overlap, du_n, du_s, inv_dt, c.en, c.es,
                                          fn, fs);
     if constexpr (RECORD) record->push_back(PairForce{i, j, fn, fs});
     double fx = -fn * nx, fy = -fn * ny;  // (15a), (15b) terms on i
@@ -237,12 +245,12 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       fy -= fs * nx;
     }
     fxa[i] += fx; fya[i] += fy;
-    if constexpr (SHEAR) tq[i] -= r[i] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+    if constexpr (SHEAR) tq[i] -= ri * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
     if (j < own_end) {
       fxa[j] -= fx; fya[j] -= fy;
-      if constexpr (SHEAR) tq[j] -= r[j] * fs;
+      if constexpr (SHEAR) tq[j] -= rj * fs;
     } else {
-      later->push_back(Deferred{j, fx, fy, SHEAR ? r[j] * fs : 0.0});
+      later->push_back(Deferred{j, fx, fy, SHEAR ? rj * fs : 0.0});
     }
   }
   return worst;
@@ -272,7 +280,7 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
     for (std::size_t a = b; a < e; ++a) {
       WallContact& c = wl[a];
       ObstacleHit h{};
-      now[a - b] = closest_point(geometry, c.k, d.x[i], d.y[i], h) && h.dist <= d.r[i] && h.dist > 0;
+      now[a - b] = closest_point(geometry, c.k, d.x[i], d.y[i], h) && h.dist <= d.r(i) && h.dist > 0;
       if (now[a - b]) {
         dist_scratch[a - b] = h.dist;
         c.px = h.px; c.py = h.py;
@@ -301,21 +309,21 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
         const double ddx = u.x[i] * u.factor - (m.dux - m.dtheta * (c.py - m.pivot_y));
         const double ddy = u.y[i] * u.factor - (m.duy + m.dtheta * (c.px - m.pivot_x));
         du_n = ddx * nx + ddy * ny;                                      // (5a)
-        du_s = -ddx * ny + ddy * nx + d.r[i] * (u.phi[i] * u.factor);    // (5b)
+        du_s = -ddx * ny + ddy * nx + d.r(i) * (u.phi[i] * u.factor);    // (5b)
       } else {
         const double uxi = u.x[i] * u.factor, uyi = u.y[i] * u.factor;
         du_n = uxi * nx + uyi * ny;                                      // (5a)
-        du_s = -uxi * ny + uyi * nx + d.r[i] * (u.phi[i] * u.factor);    // (5b)
+        du_s = -uxi * ny + uyi * nx + d.r(i) * (u.phi[i] * u.factor);    // (5b)
       }
-      const double overlap = d.r[i] - dist;
+      const double overlap = d.r(i) - dist;
       worst = std::max(worst, overlap);
       const int km = c.k < n_walls ? geometry.walls[c.k].material
                                    : geometry.points[c.k - n_walls].material;
-      contact_law<NS, NT, FC, SHEAR, DASH>(props[d.material[i] * n_mat + km], overlap, du_n, du_s, inv_dt,
+      contact_law<NS, NT, FC, SHEAR, DASH>(props[d.material(i) * n_mat + km], overlap, du_n, du_s, inv_dt,
                                            c.en, c.es, c.fn, c.fs);
       d.fx[i] += -c.fn * nx + c.fs * ny;  // (15a)
       d.fy[i] += -c.fn * ny - c.fs * nx;  // (15b)
-      d.torque[i] -= d.r[i] * c.fs;       // (15c)
+      d.torque[i] -= d.r(i) * c.fs;       // (15c)
       if constexpr (MOVING) {  // the reaction on the obstacle
         ObstacleMotion& m = moving.motion[c.k];
         const double wx = c.fn * nx - c.fs * ny, wy = c.fn * ny + c.fs * nx;
@@ -405,7 +413,7 @@ bool World::compute_forces(Then then, double h) {
       const double ddx = u.x[i] * u.factor - u.x[j] * u.factor, ddy = u.y[i] * u.factor - u.y[j] * u.factor;
       const double du_n = ddx * nx + ddy * ny;                                       // (5a)
       const double du_s = -ddx * ny + ddy * nx + b.ai * (u.phi[i] * u.factor) + b.aj * (u.phi[j] * u.factor);  // (5b)
-      const PairProps& p = pair(d.material[i], d.material[j]);
+      const PairProps& p = pair(d.material(i), d.material(j));
       if constexpr (NS == NormalSpring::incremental)
         b.en += p.kn * du_n;        // (7a), without (8): tension allowed
       else
@@ -413,7 +421,7 @@ bool World::compute_forces(Then then, double h) {
       b.es += p.ks * du_s;          // (11a), without (13): no cap
       b.fn = b.en + p.eta_n * du_n * inv_dt;
       b.fs = b.es + p.eta_s * du_s * inv_dt;
-      worst = std::max(worst, d.r[i] + d.r[j] - R);
+      worst = std::max(worst, d.r(i) + d.r(j) - R);
       const double fx = -b.fn * nx + b.fs * ny;
       const double fy = -b.fn * ny - b.fs * nx;
       d.fx[i] += fx; d.fy[i] += fy;
@@ -481,7 +489,7 @@ void World::remove_discs(const std::vector<char>& dead) {
       if (!dead[i]) v[k++] = v[i];
     v.resize(k);
   };
-  keep(d.r); keep(d.mass); keep(d.inv_mass); keep(d.inv_inertia); keep(d.material); keep(d.id);
+  keep(d.kind); keep(d.id);  // the kinds table stays (a kind without discs costs its entry only)
   keep(d.x); keep(d.y); keep(d.phi); keep(d.vx); keep(d.vy); keep(d.omega);
   if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
   keep(d.fx); keep(d.fy); keep(d.torque);
@@ -561,8 +569,8 @@ double World::kinetic_energy() const {
   const Discs& d = discs;
   const long n = static_cast<long>(d.size());
   return parallel_sum(n, threads_for(static_cast<int>(n)), [&](long i) {
-    return 0.5 * d.mass[i] * (d.vx[i] * d.vx[i] + d.vy[i] * d.vy[i]) +
-           0.5 / d.inv_inertia[i] * d.omega[i] * d.omega[i];
+    return 0.5 * d.mass(i) * (d.vx[i] * d.vx[i] + d.vy[i] * d.vy[i]) +
+           0.5 / d.inv_inertia(i) * d.omega[i] * d.omega[i];
   });
 }
 

@@ -165,7 +165,7 @@ TEST(Clusters, FallingClusterStaysIntact) {
   w.bonds = make_bonds(w.discs, c);
   w.init();
   double M = 0, y0 = 0;
-  for (int i = 0; i < 3; ++i) { M += w.discs.mass[i]; y0 += w.discs.mass[i] * w.discs.y[i]; }
+  for (int i = 0; i < 3; ++i) { M += w.discs.mass(i); y0 += w.discs.mass(i) * w.discs.y[i]; }
   y0 /= M;
   double worst = 0, worst_rot = 0;
   for (int k = 0; k < 20000; ++k) {  // 1 s
@@ -174,7 +174,7 @@ TEST(Clusters, FallingClusterStaysIntact) {
     worst_rot = std::max({worst_rot, std::abs(w.discs.phi[0] - w.discs.phi[2]), std::abs(w.discs.phi[1] - w.discs.phi[2])});
   }
   double y1 = 0;
-  for (int i = 0; i < 3; ++i) y1 += w.discs.mass[i] * w.discs.y[i];
+  for (int i = 0; i < 3; ++i) y1 += w.discs.mass(i) * w.discs.y[i];
   y1 /= M;
   const double E = M * kG * (y0 - y1);
   ASSERT_GT(E, 0);

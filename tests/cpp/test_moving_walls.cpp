@@ -66,7 +66,7 @@ TEST(MovingWalls, WallMotionEntersTheContactIncrements) {
     w.discs.add(r, L, r, 2.65, 0);  // touching the wall x = 0 at height L
     add_rotating_wall(w, 30, -0.05);  // clockwise: the wall leans to +X, onto the disc
     w.init();
-    w.discs.inv_mass[0] = w.discs.inv_inertia[0] = 0;  // hold the disc: only the wall moves
+    w.discs.hold(0);  // only the wall moves
     // Eqs. 18/19 compute forces before they move: the wall's first turn is seen by the second
     // step's force computation; Verlet moves first.
     w.step();
@@ -123,7 +123,7 @@ TEST(MovingWalls, PlateWeightIsCarried) {
   for (int k = 0; k < 20000; ++k) w.step();
   const ObstacleMotion& m = w.moving.motion[1];
   EXPECT_NEAR(m.fy, p.mass * g, 1e-6 * p.mass * g);  // discs push the plate up by its weight
-  EXPECT_NEAR(w.moving.motion[0].fy, -(p.mass + w.discs.mass[0]) * g, 1e-6 * p.mass * g);
+  EXPECT_NEAR(w.moving.motion[0].fy, -(p.mass + w.discs.mass(0)) * g, 1e-6 * p.mass * g);
   EXPECT_NEAR(w.moving.plates[0].vy, 0, 1e-9);
 }
 

@@ -65,33 +65,33 @@ TEST(PairForces, RecordRebuildsTheResultants) {
     const std::size_t n = d.size();
     std::vector<double> fx(n), fy(n), tq(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
-      fx[i] = d.mass[i] * w.gx;
-      fy[i] = d.mass[i] * w.gy;
+      fx[i] = d.mass(i) * w.gx;
+      fy[i] = d.mass(i) * w.gy;
     }
     long touching = 0;
     for (const PairForce& c : w.pair_forces) {
       const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
       const double R = std::hypot(dx, dy);
-      ASSERT_LE(R, d.r[c.i] + d.r[c.j]) << "a recorded pair touches";
+      ASSERT_LE(R, d.r(c.i) + d.r(c.j)) << "a recorded pair touches";
       const double nx = dx / R, ny = dy / R;
       const double ox = -c.fn * nx + c.fs * ny, oy = -c.fn * ny - c.fs * nx;  // (15a), (15b) on i
-      fx[c.i] += ox; fy[c.i] += oy; tq[c.i] -= d.r[c.i] * c.fs;
-      fx[c.j] -= ox; fy[c.j] -= oy; tq[c.j] -= d.r[c.j] * c.fs;
+      fx[c.i] += ox; fy[c.i] += oy; tq[c.i] -= d.r(c.i) * c.fs;
+      fx[c.j] -= ox; fy[c.j] -= oy; tq[c.j] -= d.r(c.j) * c.fs;
       touching += c.fn > 0;
     }
     for (const WallContact& c : w.neighbors.walls) {
       if (!c.touching) continue;
       fx[c.i] += -c.fn * c.nx + c.fs * c.ny;
       fy[c.i] += -c.fn * c.ny - c.fs * c.nx;
-      tq[c.i] -= d.r[c.i] * c.fs;
+      tq[c.i] -= d.r(c.i) * c.fs;
     }
     EXPECT_GT(touching, static_cast<long>(n / 2)) << "the packing must be in contact";
     double scale = 0;
-    for (std::size_t i = 0; i < n; ++i) scale = std::max(scale, std::abs(d.mass[i] * w.gy));
+    for (std::size_t i = 0; i < n; ++i) scale = std::max(scale, std::abs(d.mass(i) * w.gy));
     for (std::size_t i = 0; i < n; ++i) {
       ASSERT_NEAR(fx[i], d.fx[i], 1e-9 * scale) << threads << " threads, disc " << i;
       ASSERT_NEAR(fy[i], d.fy[i], 1e-9 * scale) << threads << " threads, disc " << i;
-      ASSERT_NEAR(tq[i], d.torque[i], 1e-9 * scale * d.r[i]) << threads << " threads, disc " << i;
+      ASSERT_NEAR(tq[i], d.torque[i], 1e-9 * scale * d.r(i)) << threads << " threads, disc " << i;
     }
   }
 }

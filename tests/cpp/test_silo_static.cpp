@@ -36,7 +36,7 @@ TEST_P(StaticSilo, WeightEqualsFloorForcePlusWallFrictionAndIsSymmetric) {
   std::vector<PointLoad> points;
   measure_loads(w, 2.0, walls, points);
   double weight = 0;
-  for (double m : w.discs.mass) weight += m * 980.0;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) weight += w.discs.mass(i) * 980.0;
   double floor = 0, friction = 0;
   for (const auto& L : walls) {
     if (L.group == "bottom") floor += -L.fy;               // discs push the floor down

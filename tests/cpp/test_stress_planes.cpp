@@ -45,8 +45,8 @@ TEST(StressPlanes, HandMadeForcesAcrossTwoPlanes) {
   const double g = -980.0;
   const double wx = -(50.0 * 0 - 2.0 * 1), wy = -(50.0 * 1 + 2.0 * 0);  // plate on disc 3
   w.discs.fx = {-f02x - f01x, -f12x + f01x, f02x + f12x - f23x, f23x + wx};
-  w.discs.fy = {w.discs.mass[0] * g - f02y - f01y, w.discs.mass[1] * g - f12y + f01y,
-                w.discs.mass[2] * g + f02y + f12y - f23y, w.discs.mass[3] * g + f23y + wy};
+  w.discs.fy = {w.discs.mass(0) * g - f02y - f01y, w.discs.mass(1) * g - f12y + f01y,
+                w.discs.mass(2) * g + f02y + f12y - f23y, w.discs.mass(3) * g + f23y + wy};
 
   int rows = 0;
   const std::vector<int> row = assign_rows(w.discs, 0.5, rows);
@@ -71,7 +71,7 @@ TEST(StressPlanes, HandMadeForcesAcrossTwoPlanes) {
   EXPECT_LT(ps[1].sigma, 0);
   EXPECT_NEAR(ps[1].tau, -f23x / b, 1e-12);
   // The part above plane 2.6 is disc 3: weight and plate; the cut equals check + inertia.
-  EXPECT_NEAR(ps[1].sigma_check, -(w.discs.mass[3] * g + wy) / b, 1e-12);
+  EXPECT_NEAR(ps[1].sigma_check, -(w.discs.mass(3) * g + wy) / b, 1e-12);
   EXPECT_NEAR(ps[1].tau_check, wx / b, 1e-12);
   for (const PlaneStress& q : ps) {
     EXPECT_NEAR(q.sigma, q.sigma_check + q.sigma_inertia, 1e-9);

@@ -43,26 +43,35 @@ def check_file(path):
         pass  # checked by resuming
     elif name == "last_good.bin":
         check_last_good(path)
+    elif name == "opening_positions.bin":  # magic, count of ids, then x, y per id
+        data = path.read_bytes()
+        assert data[:8] == b"DEMOPEN1" and len(data) == 16 + 16 * int.from_bytes(data[8:16], "little"), path
     else:
         raise AssertionError(f"unexpected file {path}")
 
 
-# The per-disc arrays of the last good state in their order (engine/src/state.cpp write_discs),
-# by item size: r, mass, 1/m, 1/I, material, id, x, y, phi, vx, vy, omega, du, dv, dphi, fx, fy, torque.
-LAST_GOOD_ITEMS = [8, 8, 8, 8, 4, 4] + [8] * 12
+# The arrays of the last good state in their order (engine/src/state.cpp write_discs), by item
+# size: per kind r, mass, 1/m, 1/I, material; per disc kind, id, x, y, phi, vx, vy, omega, du, dv,
+# dphi (eq. 19 only: may be empty), fx, fy, torque.
+KIND_ITEMS = [8, 8, 8, 8, 4]
+DISC_ITEMS = [4, 4] + [8] * 12
 
 
 def check_last_good(path):
     """A kept last good state (engine/src/last_good.cpp): magic, time, the arrays, nothing more."""
     data = path.read_bytes()
     assert data[:8] == b"DEMGOOD1", path
-    at, n = 16, None
-    for k, size in enumerate(LAST_GOOD_ITEMS):
-        count = int.from_bytes(data[at:at + 8], "little")
-        assert n is None or count == n or (count == 0 and 12 <= k < 15), (path, k, count, n)
-        n = count if n is None else n
-        at += 8 + count * size
-    assert at == len(data) and 0 < n <= 350, (path, at, len(data), n)  # the discharge removes discs
+    at = 16
+    counts = []
+    for size in KIND_ITEMS + DISC_ITEMS:
+        counts.append(int.from_bytes(data[at:at + 8], "little"))
+        at += 8 + counts[-1] * size
+    assert at == len(data), (path, at, len(data))
+    kinds, discs = counts[:len(KIND_ITEMS)], counts[len(KIND_ITEMS):]
+    assert len(set(kinds)) == 1 and kinds[0] >= 1, (path, kinds)
+    n = discs[0]
+    assert 0 < n <= 350, (path, n)  # the discharge removes discs
+    assert all(c == n or (c == 0 and 8 <= k < 11) for k, c in enumerate(discs)), (path, discs)
 
 
 def check_dir(out):
