@@ -93,6 +93,7 @@ void World::init() {
 }
 
 bool World::force_pass(Then then, double h) {
+  one_kind_ = discs.kinds.size() == 1;
   const bool record = record_pair_forces;
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
@@ -102,7 +103,7 @@ bool World::force_pass(Then then, double h) {
 // Integration loops: each disc on its own, so any thread count gives the same bits. The kick
 // and the drift of a disc go in one pass over the arrays (the same operations, in the same order,
 // as a kick pass followed by a drift pass: one sweep of memory instead of two).
-template <World::Drift D>
+template <World::Drift D, bool ONE_KIND>
 void World::kick_drift_block(double h, int i0, int i1) {
   Discs& d = discs;
   const double step = dt;
@@ -116,7 +117,7 @@ void World::kick_drift_block(double h, int i0, int i1) {
   double* __restrict ux = d.dux.data(); double* __restrict uy = d.duy.data(); double* __restrict up = d.dphi.data();  // eq. 19
   double* __restrict x = d.x.data(); double* __restrict y = d.y.data(); double* __restrict phi = d.phi.data();
   for (int i = i0; i < i1; ++i) {
-    const int k = kd[i];
+    const int k = ONE_KIND ? 0 : kd[i];
     const double v = vx[i] + fx[i] * im[k] * h;  // (16), (17)
     const double w = vy[i] + fy[i] * im[k] * h;
     const double o = om[i] + tq[i] * ii[k] * h;
@@ -159,10 +160,14 @@ bool World::then_block(Then then, double h, int i0, int i1) {
     case Then::nothing: return false;
     case Then::kick:
       if (measure_increments) measure_block(i0, i1);
-      kick_drift_block<Drift::none>(h, i0, i1);
+      one_kind_ ? kick_drift_block<Drift::none, true>(h, i0, i1) : kick_drift_block<Drift::none, false>(h, i0, i1);
       return false;
-    case Then::kick_drift_eq18: kick_drift_block<Drift::eq18>(h, i0, i1); return moved_far(i0, i1);
-    case Then::kick_drift_eq19: kick_drift_block<Drift::eq19>(h, i0, i1); return moved_far(i0, i1);
+    case Then::kick_drift_eq18:
+      one_kind_ ? kick_drift_block<Drift::eq18, true>(h, i0, i1) : kick_drift_block<Drift::eq18, false>(h, i0, i1);
+      return moved_far(i0, i1);
+    case Then::kick_drift_eq19:
+      one_kind_ ? kick_drift_block<Drift::eq19, true>(h, i0, i1) : kick_drift_block<Drift::eq19, false>(h, i0, i1);
+      return moved_far(i0, i1);
   }
   return false;
 }
@@ -187,18 +192,41 @@ bool World::kick_drift_eq19(double h) { return integrate(Then::kick_drift_eq19, 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
 void World::start_resultants(int i0, int i1) {
   Discs& d = discs;
-  for (int i = i0; i < i1; ++i) {
-    d.fx[i] = d.mass(i) * gx;
-    d.fy[i] = d.mass(i) * gy;
-    d.torque[i] = 0;
+  const int* __restrict kd = d.kind.data();
+  const double* __restrict km = d.kinds.mass.data();
+  double* __restrict fx = d.fx.data(); double* __restrict fy = d.fy.data(); double* __restrict tq = d.torque.data();
+  if (one_kind_) {
+    const double m = km[0];
+    for (int i = i0; i < i1; ++i) {
+      fx[i] = m * gx;
+      fy[i] = m * gy;
+      tq[i] = 0;
+    }
+    return;
   }
+  for (int i = i0; i < i1; ++i) {
+    const double m = km[kd[i]];
+    fx[i] = m * gx;
+    fy[i] = m * gy;
+    tq[i] = 0;
+  }
+}
+
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
+double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                            std::vector<PairForce>* record) {
+  if (record)
+    return one_kind_ ? pair_pass<NS, NT, FC, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
+                     : pair_pass<NS, NT, FC, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
+  return one_kind_ ? pair_pass<NS, NT, FC, SHEAR, DASH, false, true>(p0, p1, own_end, later, nullptr)
+                   : pair_pass<NS, NT, FC, SHEAR, DASH, false, false>(p0, p1, own_end, later, nullptr);
 }
 
 // Disc-disc contacts [p0, p1) of the sorted pair list. The i side of each pair is added at once;
 // the j side too when j < own_end, otherwise (j belongs to another thread's discs) it is kept in
 // `later` and added after the parallel part, in a fixed order. RECORD: the totals of the touching
 // pairs are appended to `record`. Returns the largest overlap.
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
 double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                         std::vector<PairForce>* record) {
   Discs& d = discs;
@@ -219,7 +247,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   for (std::size_t p = p0; p < p1; ++p) {
     PairContact& c = pc[p];
     const int i = c.i, j = c.j;
-    const int ki = kd[i], kj = kd[j];
+    const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
     const double ri = kr[ki], rj = kr[kj];
     const double dx = x[j] - x[i], dy = y[j] - y[i];
     const double R2 = dx * dx + dy * dy, sum = ri + rj;
@@ -349,8 +377,7 @@ bool World::compute_forces(Then then, double h) {
   if (nt == 1) {
     start_resultants(0, n);
     const std::size_t np = neighbors.pairs.size();
-    worst = record ? pair_pass<NS, NT, FC, SHEAR, DASH, true>(0, np, n, nullptr, &pair_forces)
-                   : pair_pass<NS, NT, FC, SHEAR, DASH, false>(0, np, n, nullptr, nullptr);
+    worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? &pair_forces : nullptr);
   } else {
     // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
     // computed by the owner of its i. What a thread adds to a later block's discs is added by
@@ -378,9 +405,7 @@ bool World::compute_forces(Then then, double h) {
       // std::max(pairs(), walls()), whose arguments it evaluates right to left; now explicit.
       std::vector<PairForce>* mine = t == 0 ? &pair_forces : &record_parts_[t].value;
       const double ww = wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t);
-      const double pw =
-          record ? pair_pass<NS, NT, FC, SHEAR, DASH, true>(p0, p1, i1, &deferred_[t].value, mine)
-                 : pair_pass<NS, NT, FC, SHEAR, DASH, false>(p0, p1, i1, &deferred_[t].value, nullptr);
+      const double pw = pair_pass_for<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value, record ? mine : nullptr);
       part[t] = std::max(pw, ww);
 #pragma omp barrier
       for (int u = 0; u < t; ++u)  // earlier threads' reactions on this block, in their order

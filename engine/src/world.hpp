@@ -125,14 +125,21 @@ class World {
     int j;
     double fx, fy, tq;
   };
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
   double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                    std::vector<PairForce>* record);
+  // pair_pass for this pass: recording or not (record null), one kind of disc or several.
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
+  double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                       std::vector<PairForce>* record);
+  // Every disc of one kind (set by each force pass): the kernels keep its constants in registers
+  // instead of reading them through each disc's kind.
+  bool one_kind_ = false;
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
   bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region
-  template <Drift D>
+  template <Drift D, bool ONE_KIND>
   void kick_drift_block(double h, int i0, int i1);  // eq. 17 kick, then the drift D, for discs [i0, i1)
   bool moved_far(int i0, int i1) const;  // some disc of [i0, i1) is more than skin/2 from its list position
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
