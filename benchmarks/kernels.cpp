@@ -2,8 +2,9 @@
 // integration pass on a settled 10k-disc lattice silo (reference_inputs/scenes/bench_silo_10k.toml,
 // the paper's law and eq. 19, 300 steps after the start so the lattice is in contact), at 1 and 2
 // threads; and the rows of the skip table: the same force pass with and without a feature
-// (shear, dashpots, walls, bonds), each variant its own compiled kernel, and the pass that records
-// the pair totals (an output step's) against the one that does not.
+// (shear, dashpots, walls, bonds), each variant its own compiled kernel, the pass that records
+// the pair totals (an output step's) against the one that does not, and a scene of one disc kind
+// (its constants in registers) against several (read through each disc's kind).
 //
 //   cmake --build build --target dem_kernels && build/benchmarks/dem_kernels
 //   DEM_KERNELS_SCENE=reference_inputs/scenes/bench_silo_100k.toml build/benchmarks/dem_kernels
@@ -37,7 +38,7 @@ const World& settled() {
   return *w;
 }
 
-enum Variant { full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded };
+enum Variant { full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded, several_kinds };
 
 World variant(Variant v, int threads) {
   World w = settled();
@@ -59,6 +60,11 @@ World variant(Variant v, int threads) {
     b.rest = w.discs.r(0) + w.discs.r(1);
     w.bonds.push_back(b);
   }
+  if (v == several_kinds) {  // a second kind that no disc has: the general path, through each disc's kind
+    dem::DiscKinds& k = w.discs.kinds;
+    k.r.push_back(2.0); k.mass.push_back(1.0); k.inv_mass.push_back(1.0); k.inv_inertia.push_back(1.0);
+    k.material.push_back(0);
+  }
   w.prepare();  // picks the kernel for the variant and rebuilds the lists
   w.record_pair_forces = v == recorded;  // the pass of an output step: it keeps f_n, f_s of the touching pairs
   return w;
@@ -73,12 +79,12 @@ void BM_ContactForces(benchmark::State& st) {
   st.SetItemsProcessed(st.iterations() * static_cast<long>(w.neighbors.pairs.size()));
   st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
   static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond",
-                                "recorded"};
+                                "recorded", "several_kinds"};
   st.SetLabel(std::string(names[st.range(0)]) + (w.kernel_shear ? "" : " [shear compiled out]") +
               (w.kernel_dashpots ? "" : " [dashpots compiled out]"));
 }
 BENCHMARK(BM_ContactForces)
-    ->ArgsProduct({{full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded}, {1}})
+    ->ArgsProduct({{full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded, several_kinds}, {1}})
     ->ArgsProduct({{full}, {2}})
     ->Unit(benchmark::kMicrosecond);
 
@@ -93,9 +99,11 @@ void BM_CellRebuild(benchmark::State& st) {
 BENCHMARK(BM_CellRebuild)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 // Eq. (17) kick and the drift of every disc, one pass: eq. (19) (range 0 = 19), which stores its
-// increments, or eq. (18) (18), whose increments are v dt and not stored (the skip row).
+// increments, or eq. (18) (18), whose increments are v dt and not stored (the skip row); one kind
+// of disc (range 2 = 1) or several (2).
 void BM_Integration(benchmark::State& st) {
-  World w = variant(full, static_cast<int>(st.range(1)));
+  World w = variant(st.range(2) == 1 ? full : several_kinds, static_cast<int>(st.range(1)));
+  w.compute_forces_now();  // a pass picks the one-kind path or not
   const bool eq19 = st.range(0) == 19;
   for (auto _ : st) {
     if (eq19) w.kick_drift_eq19(w.dt);
@@ -103,9 +111,10 @@ void BM_Integration(benchmark::State& st) {
     benchmark::DoNotOptimize(w.discs.x.data());
   }
   st.SetItemsProcessed(st.iterations() * static_cast<long>(w.discs.size()));
-  st.SetLabel(eq19 ? "eq. 19 (stores du)" : "eq. 18 (du = v dt, not stored)");
+  st.SetLabel(std::string(eq19 ? "eq. 19 (stores du)" : "eq. 18 (du = v dt, not stored)") +
+              (st.range(2) == 1 ? ", one kind" : ", several kinds"));
 }
-BENCHMARK(BM_Integration)->ArgsProduct({{19, 18}, {1, 2}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Integration)->ArgsProduct({{19, 18}, {1, 2}, {1, 2}})->Unit(benchmark::kMicrosecond);
 
 void BM_Step(benchmark::State& st) {  // the whole step, for scale
   World w = variant(full, static_cast<int>(st.range(0)));
