@@ -14,9 +14,11 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 
+#include "last_good.hpp"
 #include "scene.hpp"
 #include "world.hpp"
 
@@ -115,6 +117,18 @@ void BM_Integration(benchmark::State& st) {
               (st.range(2) == 1 ? ", one kind" : ", several kinds"));
 }
 BENCHMARK(BM_Integration)->ArgsProduct({{19, 18}, {1, 2}, {1, 2}})->Unit(benchmark::kMicrosecond);
+
+// Keeping the last good state (last_good.hpp) in a file, as runs do every 1000 steps instead of
+// holding a copy in memory: every per-disc array written and renamed into place.
+void BM_KeepLastGood(benchmark::State& st) {
+  World w = variant(full, 1);
+  dem::LastGood good;
+  good.set_file((std::filesystem::temp_directory_path() / "dem_kernels_last_good.bin").string());
+  for (auto _ : st) good.keep(w.discs, w.time);
+  good.discard();
+  st.SetItemsProcessed(st.iterations() * static_cast<long>(w.discs.size()));
+}
+BENCHMARK(BM_KeepLastGood)->Unit(benchmark::kMicrosecond);
 
 void BM_Step(benchmark::State& st) {  // the whole step, for scale
   World w = variant(full, static_cast<int>(st.range(0)));

@@ -1,4 +1,3 @@
-#include "opening_positions.hpp"
 #include "outputs.hpp"
 
 #include <cmath>
@@ -6,12 +5,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
+
+#include "opening_positions.hpp"
 
 namespace dem {
 
