@@ -118,6 +118,23 @@ void BM_Integration(benchmark::State& st) {
 }
 BENCHMARK(BM_Integration)->ArgsProduct({{19, 18}, {1, 2}, {1, 2}})->Unit(benchmark::kMicrosecond);
 
+// The same pass (eq. 19, 1 thread) keeping the rotation angle phi (output.rotation_angle, range 1)
+// or not (0): the skip row of the angle, an output the law never reads.
+void BM_IntegrationRotationAngle(benchmark::State& st) {
+  World w = settled();
+  w.threads = 1;
+  w.rotation_angle = st.range(0) == 1;
+  w.prepare();
+  w.compute_forces_now();
+  for (auto _ : st) {
+    w.kick_drift_eq19(w.dt);
+    benchmark::DoNotOptimize(w.discs.x.data());
+  }
+  st.SetItemsProcessed(st.iterations() * static_cast<long>(w.discs.size()));
+  st.SetLabel(w.discs.phi.empty() ? "no angle" : "angle kept");
+}
+BENCHMARK(BM_IntegrationRotationAngle)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 // Keeping the last good state (last_good.hpp) in a file, as runs do every 1000 steps instead of
 // holding a copy in memory: every per-disc array written and renamed into place.
 void BM_KeepLastGood(benchmark::State& st) {

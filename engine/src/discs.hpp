@@ -24,7 +24,8 @@ struct Discs {
   std::vector<int> kind;         // index into kinds
   std::vector<int> id;           // stable id (survives removals)
   // Kinematics.
-  std::vector<double> x, y, phi;       // position [cm], rotation [rad], counter-clockwise
+  std::vector<double> x, y;            // position [cm]
+  std::vector<double> phi;             // rotation [rad], counter-clockwise: only with World::rotation_angle
   std::vector<double> vx, vy, omega;   // velocities
   std::vector<double> dux, duy, dphi;  // last increments du, dv, dphi: eq. 19 only (World::increments)
   // Resultants of eq. (15), gravity included.
@@ -50,6 +51,15 @@ struct Discs {
     id.push_back(static_cast<int>(id.size()));
     x.push_back(px); y.push_back(py); phi.push_back(0);
     for (auto* v : {&vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->push_back(0);
+  }
+  // Position, radius and material only (unit density; no velocities, forces or angle): for a
+  // contact search over discs that are not stepped (the scene's check of its initial discs).
+  void add_position(double px, double py, double radius, int mat) {
+    const double m = 3.14159265358979323846 * radius * radius;
+    kind.push_back(kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
+    id.push_back(static_cast<int>(id.size()));
+    x.push_back(px);
+    y.push_back(py);
   }
   // Disc i no longer moves under forces: a kind of its own, with zero inverse mass and inertia.
   void hold(std::size_t i) {

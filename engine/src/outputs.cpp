@@ -278,7 +278,8 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   std::ofstream o;  // NAME.csv.tmp, renamed when complete
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
-  o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << "\n";
+  const bool angle = !d.phi.empty();  // output.rotation_angle
+  o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << (angle ? ",phi" : "") << "\n";
   for (std::size_t i = 0; i < d.size(); ++i) {
     o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r(i)) << ',' << fmt(d.vx[i]) << ','
       << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material(i)];
@@ -287,6 +288,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
       displacement(i, dx, dy);
       o << ',' << fmt(dx) << ',' << fmt(dy);
     }
+    if (angle) o << ',' << fmt(d.phi[i]);
     o << '\n';
   }
   o.close();
@@ -295,9 +297,11 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   std::vector<Column2> vec;
   vec.push_back({"velocity", [&](std::size_t i, double& vx, double& vy) { vx = d.vx[i]; vy = d.vy[i]; }});
   if (disp) vec.push_back({"displacement", displacement});
+  std::vector<Column> scalars = {{"radius", [&](std::size_t i) { return d.r(i); }},
+                                 {"omega", [&](std::size_t i) { return d.omega[i]; }}};
+  if (angle) scalars.push_back({"phi", [&](std::size_t i) { return d.phi[i]; }});
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
-    vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1,
-        {{"radius", [&](std::size_t i) { return d.r(i); }}, {"omega", [&](std::size_t i) { return d.omega[i]; }}}, vec,
+    vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1, scalars, vec,
         {{"id", [&](std::size_t i) { return static_cast<long long>(d.id[i]); }}}, false);
   });
 }

@@ -500,8 +500,12 @@ void read_fill(SceneSpec& s, Tab& root) {
 
 // Overlapping discs and discs outside the walls are refused (cell grid, no O(N^2)).
 void check_initial_discs(const SceneSpec& s) {
-  Discs d;
-  for (const auto& c : s.discs) d.add(c.x, c.y, c.r, 1.0, c.material);
+  Discs d;  // what the contact search reads, beside the scene's own list (at 1M discs the run's peak)
+  d.x.reserve(s.discs.size());
+  d.y.reserve(s.discs.size());
+  d.kind.reserve(s.discs.size());
+  d.id.reserve(s.discs.size());
+  for (const auto& c : s.discs) d.add_position(c.x, c.y, c.r, c.material);
   Neighbors nb;
   nb.skin = 0;
   Geometry g = s.geometry;
@@ -745,6 +749,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
                                                        "\", more than the limit of " + limit_text(kMaxProfileBins));
     }
     s.progress = t.boolean("progress", true);
+    s.rotation_angle = t.boolean("rotation_angle", false);
     s.checkpoint_every = t.non_negative("checkpoint_every", 0.0);
     t.finish();
   }
@@ -800,6 +805,7 @@ void set_up_world(const SceneSpec& s, World& w) {
   w.props = s.props;
   w.options = s.contact;
   w.scheme = s.scheme;
+  w.rotation_angle = s.rotation_angle;
   w.dt = s.dt;
   w.threads = s.threads;
   w.gx = s.gx;

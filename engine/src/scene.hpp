@@ -84,6 +84,7 @@ struct SceneSpec {
   double profile_bin = 0;          // [output]
   double checkpoint_every = 0;     // [s] simulated; 0: no checkpoints (--checkpoint-every overrides)
   bool progress = true;
+  bool rotation_angle = false;     // [output] integrate and write each disc's rotation angle phi
 };
 
 // Reads and validates; throws SceneError. Overrides (NaN / empty = none) come from the CLI.

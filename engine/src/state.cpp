@@ -49,10 +49,10 @@ void read_discs(BinaryIn& r, Discs& d) {
   const std::size_t n = d.kind.size();
   for (int c : d.kind)
     if (c < 0 || static_cast<std::size_t>(c) >= k.size()) r.fail("corrupt file (a disc of no kind)");
-  for (auto* v : {&d.x, &d.y, &d.phi, &d.vx, &d.vy, &d.omega, &d.fx, &d.fy,
+  for (auto* v : {&d.x, &d.y, &d.vx, &d.vy, &d.omega, &d.fx, &d.fy,
                   &d.torque})
     if (v->size() != n) r.fail("corrupt file (arrays of different lengths)");
-  for (auto* v : {&d.dux, &d.duy, &d.dphi})  // kept by eq. 19 only (World::increments)
+  for (auto* v : {&d.dux, &d.duy, &d.dphi, &d.phi})  // kept by eq. 19 / with the rotation angle only
     if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
   if (d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
 }

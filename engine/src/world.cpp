@@ -68,6 +68,8 @@ void World::prepare() {
     if (scheme != Scheme::paper_eq19) std::vector<double>().swap(*v);
     else v->resize(d.size(), 0.0);
   }
+  if (!rotation_angle) std::vector<double>().swap(d.phi);  // an output a scene asks for
+  else d.phi.resize(d.size(), 0.0);
   if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
   rebuild_lists();  // keeps the history already in the lists
 }
@@ -103,7 +105,7 @@ bool World::force_pass(Then then, double h) {
 // Integration loops: each disc on its own, so any thread count gives the same bits. The kick
 // and the drift of a disc go in one pass over the arrays (the same operations, in the same order,
 // as a kick pass followed by a drift pass: one sweep of memory instead of two).
-template <World::Drift D, bool ONE_KIND>
+template <World::Drift D, bool ONE_KIND, bool PHI>
 void World::kick_drift_block(double h, int i0, int i1) {
   Discs& d = discs;
   const double step = dt;
@@ -136,7 +138,7 @@ void World::kick_drift_block(double h, int i0, int i1) {
     if constexpr (D == Drift::eq19) { ux[i] = a; uy[i] = b; up[i] = c; }  // (18): v dt, read from v (increments())
     x[i] += a;
     y[i] += b;
-    phi[i] += c;
+    if constexpr (PHI) phi[i] += c;
   }
 }
 
@@ -155,19 +157,26 @@ bool World::moved_far(int i0, int i1) const {
   return far != 0;
 }
 
+// kick_drift_block for this pass: one disc kind or several, the rotation angle kept or not.
+template <World::Drift D>
+void World::kick_drift_for(double h, int i0, int i1) {
+  const bool phi = !discs.phi.empty();
+  if (one_kind_) {
+    phi ? kick_drift_block<D, true, true>(h, i0, i1) : kick_drift_block<D, true, false>(h, i0, i1);
+  } else {
+    phi ? kick_drift_block<D, false, true>(h, i0, i1) : kick_drift_block<D, false, false>(h, i0, i1);
+  }
+}
+
 bool World::then_block(Then then, double h, int i0, int i1) {
   switch (then) {
     case Then::nothing: return false;
     case Then::kick:
       if (measure_increments) measure_block(i0, i1);
-      one_kind_ ? kick_drift_block<Drift::none, true>(h, i0, i1) : kick_drift_block<Drift::none, false>(h, i0, i1);
+      kick_drift_for<Drift::none>(h, i0, i1);
       return false;
-    case Then::kick_drift_eq18:
-      one_kind_ ? kick_drift_block<Drift::eq18, true>(h, i0, i1) : kick_drift_block<Drift::eq18, false>(h, i0, i1);
-      return moved_far(i0, i1);
-    case Then::kick_drift_eq19:
-      one_kind_ ? kick_drift_block<Drift::eq19, true>(h, i0, i1) : kick_drift_block<Drift::eq19, false>(h, i0, i1);
-      return moved_far(i0, i1);
+    case Then::kick_drift_eq18: kick_drift_for<Drift::eq18>(h, i0, i1); return moved_far(i0, i1);
+    case Then::kick_drift_eq19: kick_drift_for<Drift::eq19>(h, i0, i1); return moved_far(i0, i1);
   }
   return false;
 }
@@ -515,7 +524,8 @@ void World::remove_discs(const std::vector<char>& dead) {
     v.resize(k);
   };
   keep(d.kind); keep(d.id);  // the kinds table stays (a kind without discs costs its entry only)
-  keep(d.x); keep(d.y); keep(d.phi); keep(d.vx); keep(d.vy); keep(d.omega);
+  keep(d.x); keep(d.y); keep(d.vx); keep(d.vy); keep(d.omega);
+  if (!d.phi.empty()) keep(d.phi);  // output.rotation_angle only
   if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
   keep(d.fx); keep(d.fy); keep(d.torque);
   neighbors.compact(new_index);

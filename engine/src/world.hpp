@@ -34,6 +34,10 @@ class World {
   MovingWalls moving;
   Scheme scheme = Scheme::paper_eq19;
   double dt = 1e-4;         // [s]
+  // Integrate each disc's rotation angle phi (the last line of eqs. 18, 19), an output only: the
+  // law reads the increments, never the angle. Off: Discs::phi is empty and the drift skips it
+  // (output.rotation_angle).
+  bool rotation_angle = false;
   // Threads of the force and integration loops (OpenMP; run.threads, --threads). A given count
   // always gives bit-identical results; 1 is the plain serial loop. Scenes with bonds or moving
   // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
@@ -139,8 +143,10 @@ class World {
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
   bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region
-  template <Drift D, bool ONE_KIND>
+  template <Drift D, bool ONE_KIND, bool PHI>
   void kick_drift_block(double h, int i0, int i1);  // eq. 17 kick, then the drift D, for discs [i0, i1)
+  template <Drift D>
+  void kick_drift_for(double h, int i0, int i1);  // kick_drift_block for this pass's kinds and angle
   bool moved_far(int i0, int i1) const;  // some disc of [i0, i1) is more than skin/2 from its list position
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
   void measure_block(int i0, int i1);  // Verlet: sums of |v dt| of discs [i0, i1) before the closing kick

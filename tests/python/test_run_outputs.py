@@ -74,6 +74,28 @@ def test_vtu_files_read_with_meshio(run_dir):
     assert contacts.cell_data["f_n"][0].shape == (n_csv,)
 
 
+def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
+    """output.rotation_angle adds a phi column (CSV and VTU) and changes nothing else."""
+    import subprocess
+    assert "phi" not in read_csv(run_dir / "discs.csv")[0]
+    assert "phi" not in meshio.read(run_dir / "discs.vtu").point_data
+    text = SCENE.read_text()
+    scene = tmp_path / "angle.toml"
+    scene.write_text(text.replace("[output]\n", "[output]\nrotation_angle = true\n", 1) if "[output]\n" in text
+                     else text + "\n[output]\nrotation_angle = true\n")
+    out = tmp_path / "run"
+    proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", "--no-plots"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    plain, angle = read_csv(run_dir / "discs.csv"), read_csv(out / "discs.csv")
+    assert len(plain) == len(angle)
+    for a, b in zip(plain, angle):
+        assert {k: v for k, v in b.items() if k != "phi"} == a  # same bits everywhere else
+    phi = np.array([float(r["phi"]) for r in angle])
+    assert np.all(np.isfinite(phi)) and np.abs(phi).max() > 1e-3  # the fill turns its discs
+    assert np.allclose(meshio.read(out / "discs.vtu").point_data["phi"], phi)
+
+
 def test_run_draws_its_pictures(run_dir):
     for name in ("network.png", "side_walls.png"):
         assert (run_dir / name).stat().st_size > 10000
