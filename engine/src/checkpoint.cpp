@@ -1,9 +1,12 @@
 #include "checkpoint.hpp"
 
+#include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include "outputs.hpp"
 #include "state.hpp"
@@ -21,6 +24,40 @@ std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) 
   }
   return h;
 }
+
+// Passes what is written on to `to` in blocks, hashing it (FNV-1a 64) on the way: the checksum
+// that closes a checkpoint, without the checkpoint in memory (at a million discs, hundreds of MB).
+class HashingBuf : public std::streambuf {
+ public:
+  explicit HashingBuf(std::streambuf* to) : to_(to) { setp(buf_, buf_ + sizeof buf_); }
+  std::uint64_t finish() {  // the hash of everything written
+    flush_block();
+    return hash_;
+  }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!flush_block()) return traits_type::eof();
+    if (c != traits_type::eof()) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override { return flush_block() ? 0 : -1; }
+
+ private:
+  bool flush_block() {
+    const std::streamsize n = pptr() - pbase();
+    hash_ = fnv1a(pbase(), static_cast<std::size_t>(n), hash_);
+    const bool ok = to_->sputn(pbase(), n) == n;
+    setp(buf_, buf_ + sizeof buf_);
+    return ok;
+  }
+  std::streambuf* to_;
+  std::uint64_t hash_ = kFnvOffset;
+  char buf_[1 << 16];
+};
 
 std::string hex(std::uint64_t v) {
   char buf[20];
@@ -55,7 +92,10 @@ std::string checkpoint_path(const std::string& out_dir) { return out_dir + "/che
 
 void write_checkpoint(const std::string& path, const CheckpointKey& key, const World& w, const RunResult& fill,
                       const DischargeState* discharge) {
-  std::ostringstream buf(std::ios::binary);
+  write_stream_atomic(path, [&](std::ostream& file) {
+  // Streamed into the file through the hash: no copy of the checkpoint in memory.
+  HashingBuf hashing(file.rdbuf());
+  std::ostream buf(&hashing);
   BinaryOut o{buf};
   buf.write(kMagic, sizeof kMagic);
   o.str(key.engine);
@@ -77,29 +117,41 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
   o.vec(w.neighbors.reference_x());
   o.vec(w.neighbors.reference_y());
   if (discharge) discharge->save(o);
-  std::string body = buf.str();
-  const std::uint64_t sum = fnv1a(body.data(), body.size());
-  body.append(reinterpret_cast<const char*>(&sum), sizeof sum);
-  write_file_atomic(path, body);
+  buf.flush();
+  if (!buf) throw std::runtime_error("cannot write " + path + ".tmp");
+  const std::uint64_t sum = hashing.finish();
+  file.write(reinterpret_cast<const char*>(&sum), sizeof sum);
+  });
 }
 
 void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w, RunResult& fill,
                      DischargeState& discharge, bool& in_discharge) {
-  std::string body;
+  // Two passes over the file, neither holding it in memory: the checksum over every byte before
+  // the last 8 (which hold it), then the reading.
+  std::uint64_t size = 0;
   {
     std::ifstream f(path, std::ios::binary);
     if (!f) throw std::runtime_error(path + ": cannot open the checkpoint");
-    std::ostringstream all;
-    all << f.rdbuf();
-    body = all.str();
+    std::error_code ec;
+    size = std::filesystem::file_size(path, ec);
+    char magic[sizeof kMagic];
+    std::uint64_t sum = 0;
+    if (ec || size < sizeof kMagic + sizeof sum || !f.read(magic, sizeof magic) ||
+        std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+      throw std::runtime_error(path + ": not a dem checkpoint (or another format version)");
+    std::uint64_t h = fnv1a(magic, sizeof magic);
+    std::vector<char> block(1 << 16);
+    for (std::uint64_t left = size - sizeof kMagic - sizeof sum; left > 0;) {
+      const auto n = static_cast<std::streamsize>(std::min<std::uint64_t>(left, block.size()));
+      if (!f.read(block.data(), n)) throw std::runtime_error(path + ": damaged checkpoint (cut short)");
+      h = fnv1a(block.data(), static_cast<std::size_t>(n), h);
+      left -= static_cast<std::uint64_t>(n);
+    }
+    if (!f.read(reinterpret_cast<char*>(&sum), sizeof sum) || h != sum)
+      throw std::runtime_error(path + ": damaged checkpoint (checksum)");
   }
-  std::uint64_t sum = 0;
-  if (body.size() < sizeof kMagic + sizeof sum || std::memcmp(body.data(), kMagic, sizeof kMagic) != 0)
-    throw std::runtime_error(path + ": not a dem checkpoint (or another format version)");
-  std::memcpy(&sum, body.data() + body.size() - sizeof sum, sizeof sum);
-  body.resize(body.size() - sizeof sum);
-  if (fnv1a(body.data(), body.size()) != sum) throw std::runtime_error(path + ": damaged checkpoint (checksum)");
-  std::istringstream in(body.substr(sizeof kMagic), std::ios::binary);
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(sizeof kMagic));
   BinaryIn r{in, path};
   const std::string engine = r.str(256);
   if (engine != key.engine)
@@ -137,13 +189,10 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
     for (int id : w.discs.id)
       if (id < 0 || static_cast<std::uint64_t>(id) >= discharge.at_open.size()) r.fail("corrupt checkpoint (disc ids)");
   }
-  if (in.peek() != std::char_traits<char>::eof()) r.fail("corrupt checkpoint (trailing bytes)");
-  // Kernel, point links and scratch as for any start, then the lists exactly as saved.
-  const auto pairs = w.neighbors.pairs;
-  const auto walls = w.neighbors.walls;
-  w.prepare();
-  w.neighbors.pairs = pairs;
-  w.neighbors.walls = walls;
+  if (static_cast<std::uint64_t>(in.tellg()) != size - sizeof(std::uint64_t)) r.fail("corrupt checkpoint (trailing bytes)");
+  // Kernel, point links and scratch as for any start, with the lists exactly as saved (no build
+  // beside them: the pair list is the largest array).
+  w.prepare(false);
   w.neighbors.rebuilds = rebuilds;
   w.neighbors.restore_reference(std::move(x0), std::move(y0), cell);
 }

@@ -52,7 +52,7 @@ bool World::adjacent(int k1, int k2) const {
   return false;
 }
 
-void World::prepare() {
+void World::prepare(bool build_lists) {
   select_kernel();
   geometry.link_points();
   const int slots = std::max(1, threads);
@@ -71,7 +71,7 @@ void World::prepare() {
   if (!rotation_angle) std::vector<double>().swap(d.phi);  // an output a scene asks for
   else d.phi.resize(d.size(), 0.0);
   if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
-  rebuild_lists();  // keeps the history already in the lists
+  if (build_lists) rebuild_lists();  // keeps the history already in the lists
 }
 
 void World::rebuild_lists() {

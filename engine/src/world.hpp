@@ -77,8 +77,9 @@ class World {
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
   // Selects the specialised force kernel and computes the first forces (call before step()).
   void init();
-  // The same without computing forces: for a state restored with its forces and history.
-  void prepare();
+  // The same without computing forces: for a state restored with its forces and history. Without
+  // build_lists the contact lists are taken as they are (a checkpoint restores them exactly).
+  void prepare(bool build_lists = true);
   // One time step; the whole algorithm is here.
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
