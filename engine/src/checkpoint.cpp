@@ -93,34 +93,34 @@ std::string checkpoint_path(const std::string& out_dir) { return out_dir + "/che
 void write_checkpoint(const std::string& path, const CheckpointKey& key, const World& w, const RunResult& fill,
                       const DischargeState* discharge) {
   write_stream_atomic(path, [&](std::ostream& file) {
-  // Streamed into the file through the hash: no copy of the checkpoint in memory.
-  HashingBuf hashing(file.rdbuf());
-  std::ostream buf(&hashing);
-  BinaryOut o{buf};
-  buf.write(kMagic, sizeof kMagic);
-  o.str(key.engine);
-  o.put(key.scene_hash);
-  o.str(key.overrides);
-  o.put<std::int32_t>(discharge ? 1 : 0);
-  // The fill's progress (run.hpp).
-  o.put<std::int32_t>(static_cast<std::int32_t>(fill.status));
-  o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
-  o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds);
-  fill.last_good.write_to(o);
-  o.put(fill.energy_started); o.put(fill.energy.active);
-  o.put(fill.energy.budget); o.put(fill.energy.scale); o.put(fill.energy.gain);
-  // The world, its counters and its lists exactly as they are (no rebuild on resume).
-  write_world(o, w);
-  o.put(w.particle_steps);
-  o.put(w.neighbors.rebuilds);
-  o.put(w.neighbors.cell_size());
-  o.vec(w.neighbors.reference_x());
-  o.vec(w.neighbors.reference_y());
-  if (discharge) discharge->save(o);
-  buf.flush();
-  if (!buf) throw std::runtime_error("cannot write " + path + ".tmp");
-  const std::uint64_t sum = hashing.finish();
-  file.write(reinterpret_cast<const char*>(&sum), sizeof sum);
+    // Streamed into the file through the hash: no copy of the checkpoint in memory.
+    HashingBuf hashing(file.rdbuf());
+    std::ostream buf(&hashing);
+    BinaryOut o{buf};
+    buf.write(kMagic, sizeof kMagic);
+    o.str(key.engine);
+    o.put(key.scene_hash);
+    o.str(key.overrides);
+    o.put<std::int32_t>(discharge ? 1 : 0);
+    // The fill's progress (run.hpp).
+    o.put<std::int32_t>(static_cast<std::int32_t>(fill.status));
+    o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
+    o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds);
+    fill.last_good.write_to(o);
+    o.put(fill.energy_started); o.put(fill.energy.active);
+    o.put(fill.energy.budget); o.put(fill.energy.scale); o.put(fill.energy.gain);
+    // The world, its counters and its lists exactly as they are (no rebuild on resume).
+    write_world(o, w);
+    o.put(w.particle_steps);
+    o.put(w.neighbors.rebuilds);
+    o.put(w.neighbors.cell_size());
+    o.vec(w.neighbors.reference_x());
+    o.vec(w.neighbors.reference_y());
+    if (discharge) discharge->save(o);
+    buf.flush();
+    if (!buf) throw std::runtime_error("cannot write " + path + ".tmp");
+    const std::uint64_t sum = hashing.finish();
+    file.write(reinterpret_cast<const char*>(&sum), sizeof sum);
   });
 }
 
