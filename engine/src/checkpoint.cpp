@@ -6,7 +6,6 @@
 #include <fstream>
 #include <sstream>
 #include <utility>
-#include <vector>
 
 #include "outputs.hpp"
 #include "state.hpp"
@@ -21,6 +20,19 @@ std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) 
   for (std::size_t k = 0; k < n; ++k) {
     h ^= static_cast<unsigned char>(p[k]);
     h *= kFnvPrime;
+  }
+  return h;
+}
+
+// FNV-1a 64 of the next n bytes of `in` (fewer at its end: `got` says how many), in blocks.
+std::uint64_t fnv1a_stream(std::istream& in, std::uint64_t n, std::uint64_t& got, std::uint64_t h = kFnvOffset) {
+  char buf[1 << 16];
+  got = 0;
+  while (got < n) {
+    in.read(buf, static_cast<std::streamsize>(std::min<std::uint64_t>(n - got, sizeof buf)));
+    if (in.gcount() <= 0) break;
+    h = fnv1a(buf, static_cast<std::size_t>(in.gcount()), h);
+    got += static_cast<std::uint64_t>(in.gcount());
   }
   return h;
 }
@@ -70,10 +82,8 @@ std::string hex(std::uint64_t v) {
 std::uint64_t file_hash(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot read the scene file");
-  std::uint64_t h = kFnvOffset;
-  char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) h = fnv1a(buf, static_cast<std::size_t>(in.gcount()), h);
-  return h;
+  std::uint64_t got = 0;
+  return fnv1a_stream(in, ~0ull, got);
 }
 
 CheckpointKey checkpoint_key(const std::string& scene_file, const SceneOverrides& ov) {
@@ -139,14 +149,10 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
     if (ec || size < sizeof kMagic + sizeof sum || !f.read(magic, sizeof magic) ||
         std::memcmp(magic, kMagic, sizeof kMagic) != 0)
       throw std::runtime_error(path + ": not a dem checkpoint (or another format version)");
-    std::uint64_t h = fnv1a(magic, sizeof magic);
-    std::vector<char> block(1 << 16);
-    for (std::uint64_t left = size - sizeof kMagic - sizeof sum; left > 0;) {
-      const auto n = static_cast<std::streamsize>(std::min<std::uint64_t>(left, block.size()));
-      if (!f.read(block.data(), n)) throw std::runtime_error(path + ": damaged checkpoint (cut short)");
-      h = fnv1a(block.data(), static_cast<std::size_t>(n), h);
-      left -= static_cast<std::uint64_t>(n);
-    }
+    const std::uint64_t body = size - sizeof kMagic - sizeof sum;
+    std::uint64_t got = 0;
+    const std::uint64_t h = fnv1a_stream(f, body, got, fnv1a(magic, sizeof magic));
+    if (got != body) throw std::runtime_error(path + ": damaged checkpoint (cut short)");
     if (!f.read(reinterpret_cast<char*>(&sum), sizeof sum) || h != sum)
       throw std::runtime_error(path + ": damaged checkpoint (checksum)");
   }

@@ -47,16 +47,13 @@ struct Discs {
     id.reserve(n);
   }
   void add(double px, double py, double radius, double density, int mat) {
-    const double m = density * 3.14159265358979323846 * radius * radius;
-    kind.push_back(kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
-    id.push_back(static_cast<int>(id.size()));
-    x.push_back(px); y.push_back(py); phi.push_back(0);
-    for (auto* v : {&vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->push_back(0);
+    add_position(px, py, radius, density, mat);
+    for (auto* v : {&phi, &vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->push_back(0);
   }
-  // Position, radius and material only (unit density; no velocities, forces or angle): for a
-  // contact search over discs that are not stepped (the scene's check of its initial discs).
-  void add_position(double px, double py, double radius, int mat) {
-    const double m = 3.14159265358979323846 * radius * radius;
+  // Kind, id and position only (no velocities, forces or angle): for a contact search over discs
+  // that are not stepped (the scene's check of its initial discs); add() goes on from here.
+  void add_position(double px, double py, double radius, double density, int mat) {
+    const double m = density * 3.14159265358979323846 * radius * radius;
     kind.push_back(kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
     id.push_back(static_cast<int>(id.size()));
     x.push_back(px);

@@ -80,21 +80,12 @@ void LastGood::read_from(BinaryIn& r) {
   bytes_.clear();
   if (!has_) return;
   const std::uint64_t n = r.count(1ull << 40);
-  auto copy = [&](std::ostream& out) {  // in blocks of 1 MB: no second copy in memory
-    std::string block;
-    for (std::uint64_t left = n; left > 0;) {
-      block.resize(static_cast<std::size_t>(std::min<std::uint64_t>(left, 1 << 20)));
-      if (!r.in.read(block.data(), static_cast<std::streamsize>(block.size()))) r.fail("truncated file");
-      out.write(block.data(), static_cast<std::streamsize>(block.size()));
-      left -= block.size();
-    }
-  };
   if (path_.empty()) {
     std::ostringstream buf(std::ios::binary);
-    copy(buf);
+    r.copy_to(buf, n);
     bytes_ = std::move(buf).str();
   } else {
-    write_stream_atomic(path_, copy);
+    write_stream_atomic(path_, [&](std::ostream& out) { r.copy_to(out, n); });
   }
 }
 

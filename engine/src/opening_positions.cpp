@@ -88,28 +88,18 @@ void OpeningPositions::write_to(BinaryOut& o) const {
 
 void OpeningPositions::read_from(BinaryIn& r) {
   count_ = r.count(1ull << 34);
-  xy_.clear();
-  std::vector<double> block;
-  auto copy = [&](std::ostream* out) {  // in blocks: no second copy in memory
-    for (std::uint64_t first = 0; first < count_; first += kBlock) {
-      block.resize(2 * std::min(kBlock, count_ - first));
-      if (!r.in.read(reinterpret_cast<char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double))))
-        r.fail("truncated file");
-      if (out)
-        out->write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double)));
-      else
-        xy_.insert(xy_.end(), block.begin(), block.end());
-    }
-  };
+  const std::uint64_t bytes = 2 * sizeof(double) * count_;
   if (path_.empty()) {
-    copy(nullptr);
+    xy_.resize(2 * count_);
+    if (!r.in.read(reinterpret_cast<char*>(xy_.data()), static_cast<std::streamsize>(bytes))) r.fail("truncated file");
     return;
   }
+  xy_.clear();
   write_stream_atomic(path_, [&](std::ostream& out) {
     BinaryOut o{out};
     out.write(kMagic, sizeof kMagic);
     o.put(count_);
-    copy(&out);
+    r.copy_to(out, bytes);
   });
 }
 

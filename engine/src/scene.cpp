@@ -505,7 +505,7 @@ void check_initial_discs(const SceneSpec& s) {
   d.y.reserve(s.discs.size());
   d.kind.reserve(s.discs.size());
   d.id.reserve(s.discs.size());
-  for (const auto& c : s.discs) d.add_position(c.x, c.y, c.r, c.material);
+  for (const auto& c : s.discs) d.add_position(c.x, c.y, c.r, 1.0, c.material);
   Neighbors nb;
   nb.skin = 0;
   Geometry g = s.geometry;

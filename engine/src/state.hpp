@@ -53,6 +53,16 @@ struct BinaryIn {
     v.resize(n);
     if (!in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)))) fail("truncated file");
   }
+  // The next n bytes to `out`, in blocks of 1 MB (a large blob without a copy in memory).
+  void copy_to(std::ostream& out, std::uint64_t n) {
+    std::string block;
+    for (std::uint64_t left = n; left > 0;) {
+      block.resize(static_cast<std::size_t>(left < (1u << 20) ? left : (1u << 20)));
+      if (!in.read(block.data(), static_cast<std::streamsize>(block.size()))) fail("truncated file");
+      out.write(block.data(), static_cast<std::streamsize>(block.size()));
+      left -= block.size();
+    }
+  }
   std::string str(std::uint64_t limit = 1ull << 34) {
     std::string s(count(limit), '\0');
     if (!in.read(s.data(), static_cast<std::streamsize>(s.size()))) fail("truncated file");

@@ -95,7 +95,6 @@ void World::init() {
 }
 
 bool World::force_pass(Then then, double h) {
-  one_kind_ = discs.kinds.size() == 1;
   const bool record = record_pair_forces;
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
@@ -161,7 +160,7 @@ bool World::moved_far(int i0, int i1) const {
 template <World::Drift D>
 void World::kick_drift_for(double h, int i0, int i1) {
   const bool phi = !discs.phi.empty();
-  if (one_kind_) {
+  if (one_kind()) {
     phi ? kick_drift_block<D, true, true>(h, i0, i1) : kick_drift_block<D, true, false>(h, i0, i1);
   } else {
     phi ? kick_drift_block<D, false, true>(h, i0, i1) : kick_drift_block<D, false, false>(h, i0, i1);
@@ -204,7 +203,7 @@ void World::start_resultants(int i0, int i1) {
   const int* __restrict kd = d.kind.data();
   const double* __restrict km = d.kinds.mass.data();
   double* __restrict fx = d.fx.data(); double* __restrict fy = d.fy.data(); double* __restrict tq = d.torque.data();
-  if (one_kind_) {
+  if (one_kind()) {
     const double m = km[0];
     for (int i = i0; i < i1; ++i) {
       fx[i] = m * gx;
@@ -225,9 +224,9 @@ template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
 double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                             std::vector<PairForce>* record) {
   if (record)
-    return one_kind_ ? pair_pass<NS, NT, FC, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
+    return one_kind() ? pair_pass<NS, NT, FC, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
                      : pair_pass<NS, NT, FC, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
-  return one_kind_ ? pair_pass<NS, NT, FC, SHEAR, DASH, false, true>(p0, p1, own_end, later, nullptr)
+  return one_kind() ? pair_pass<NS, NT, FC, SHEAR, DASH, false, true>(p0, p1, own_end, later, nullptr)
                    : pair_pass<NS, NT, FC, SHEAR, DASH, false, false>(p0, p1, own_end, later, nullptr);
 }
 

@@ -137,9 +137,9 @@ class World {
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
   double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                        std::vector<PairForce>* record);
-  // Every disc of one kind (set by each force pass): the kernels keep its constants in registers
-  // instead of reading them through each disc's kind.
-  bool one_kind_ = false;
+  // Every disc of one kind: the kernels keep its constants in registers instead of reading them
+  // through each disc's kind.
+  bool one_kind() const { return discs.kinds.size() == 1; }
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
