@@ -16,8 +16,10 @@ namespace dem {
 // with a shear spring, so the cap holds e_s at 0): the shear part is not computed (same result).
 // DASH = false: no pair has a dashpot: the dashpot terms are not computed (same result).
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR = true, bool DASH = true>
-inline void contact_law(const PairProps& p, double overlap, double du_n, double du_s,
-                        double inv_dt, double& en, double& es, double& fn, double& fs) {
+inline void contact_law(const PairProps& p, double overlap, double du_n, double du_s, double inv_dt,
+                        double& en, double& es, double& fn, double& fs) {
+  // Choices are selects, not branches: in a dense packing whether a contact slides or goes slack
+  // is data the branch predictor cannot learn, and a select gives the very same values.
   // Normal: spring and dashpot in parallel.
   if constexpr (NS == NormalSpring::incremental)
     en += p.kn * du_n;  // (6a), (7a)
@@ -26,11 +28,9 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
   double dn = 0;
   if constexpr (DASH) dn = p.eta_n * du_n * inv_dt;  // (6b), (7b): the dashpot is not accumulated
 
+  bool slack = false;  // NoTension::elastic, (8), (12): the elastic part in tension; the contact carries nothing
   if constexpr (NT == NoTension::elastic) {
-    if (en < 0) {  // (8), (12): no tension in the elastic part; the contact carries nothing
-      en = es = fn = fs = 0;
-      return;
-    }
+    slack = en < 0;
     fn = en + dn;  // (9) -- may be tensile through the dashpot alone, as written
   } else if constexpr (NT == NoTension::total) {
     en = std::max(en, 0.0);
@@ -39,20 +39,28 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
     fn = en + dn;  // viscous pull allowed while the discs overlap
   }
 
-  if constexpr (!SHEAR) {
+  double s = 0;  // the new e_s
+  if constexpr (SHEAR) {
+    // Shear: spring and dashpot in parallel, the spring capped by Coulomb friction.
+    s = es + p.ks * du_s;                       // (10a), (11a)
+    double ds = 0;
+    if constexpr (DASH) ds = p.eta_s * du_s * inv_dt;  // (10b), (11b)
+    const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
+    const bool slide = std::abs(s) > cap;       // (13a): capped, not reset
+    s = slide ? std::copysign(cap, s) : s;
+    ds = slide ? 0.0 : ds;                      // (13b): no shear dashpot while sliding
+    fs = s + ds;                                // (14)
+  } else {
     fs = 0;
-    return;
   }
-  // Shear: spring and dashpot in parallel, the spring capped by Coulomb friction.
-  es += p.ks * du_s;                          // (10a), (11a)
-  double ds = 0;
-  if constexpr (DASH) ds = p.eta_s * du_s * inv_dt;  // (10b), (11b)
-  const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
-  if (std::abs(es) > cap) {                   // (13a): capped, not reset
-    es = std::copysign(cap, es);
-    ds = 0;                                   // (13b): no shear dashpot while sliding
+  if constexpr (NT == NoTension::elastic) {
+    en = slack ? 0.0 : en;
+    fn = slack ? 0.0 : fn;
+    s = slack ? 0.0 : s;
+    fs = slack ? 0.0 : fs;
   }
-  fs = es + ds;                               // (14)
+  if constexpr (SHEAR) es = s;
+  else if constexpr (NT == NoTension::elastic) es = slack ? 0.0 : es;
 }
 
 }  // namespace dem

@@ -46,6 +46,7 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
   json discs = json::array();
   for (const DiscInit& d : s.discs) discs.push_back({d.x, d.y, d.r, d.material});
   j["discs"] = discs;  // [x, y, r, material index]
+  j["fill"] = {{"max_initial_overlap", s.max_initial_overlap}};
   j["end"] = {{"time", s.end_time}, {"stop_at_rest", s.stop_at_rest}, {"rest_factor", s.rest_factor},
               {"max_overlap", s.max_overlap_fraction}};
   j["neighbor"] = {{"skin", s.skin}, {"cell", s.cell}};

@@ -9,6 +9,15 @@
 
 namespace dem {
 
+bool World::cpu_has_wide_law() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+bool World::wide_law = World::cpu_has_wide_law();
+
 int World::threads_for(int n) const {
   return std::max(1, std::min(threads, n / kMinDiscsPerThread));
 }
@@ -61,6 +70,7 @@ void World::prepare(bool build_lists) {
   deferred_.assign(slots, {});
   record_parts_.assign(slots, {});
   increment_sums_.assign(slots, {});
+  pair_blocks_.resize(slots);
   // Only eq. (19) keeps increment arrays (increments()); they start at zero (at rest, or as set).
   Discs& d = discs;
   d.forget_kind_index();  // the discs are in
@@ -230,10 +240,64 @@ double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::ve
                    : pair_pass<NS, NT, FC, SHEAR, DASH, false, false>(p0, p1, own_end, later, nullptr);
 }
 
-// Disc-disc contacts [p0, p1) of the sorted pair list. The i side of each pair is added at once;
-// the j side too when j < own_end, otherwise (j belongs to another thread's discs) it is kept in
-// `later` and added after the parallel part, in a fixed order. RECORD: the totals of the touching
-// pairs are appended to `record`. Returns the largest overlap.
+// The law for n touching pairs of a block, in the block's arrays (pair_pass): no branch and no
+// store that a later pair reads, so the compiler runs it two pairs at a time (SSE2) and the
+// pairs' square roots and divisions overlap. The same operations, in the same order, as the
+// law applied pair by pair: the same bits.
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, int n, const PairProps* __restrict props,
+                                                                  double inv_dt) {
+  for (int k = 0; k < n; ++k) {
+    const double R = std::sqrt(b.R2[k]);
+    const double nx = b.dx[k] / R, ny = b.dy[k] / R;  // (4): cos(alpha), sin(alpha), from i to j
+    const double ddx = b.ddx[k], ddy = b.ddy[k];
+    const double du_n = ddx * nx + ddy * ny;                                          // (5a)
+    double du_s = 0;
+    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + b.rot_i[k] + b.rot_j[k];       // (5b)
+    const double overlap = b.sum[k] - R;
+    double fn, fs;
+    contact_law<NS, NT, FC, SHEAR, DASH>(props[ONE_KIND ? 0 : b.prop[k]], overlap, du_n, du_s, inv_dt, b.en[k],
+                                         b.es[k], fn, fs);
+    double fx = -fn * nx, fy = -fn * ny;  // (15a), (15b) terms on i
+    if constexpr (SHEAR) {
+      fx += fs * ny;
+      fy -= fs * nx;
+    }
+    b.overlap[k] = overlap;
+    b.fn[k] = fn; b.fs[k] = fs;
+    b.fx[k] = fx; b.fy[k] = fy;
+  }
+}
+
+// The block's law compiled twice: for any x86-64 (two pairs a vector) and, chosen at run time on
+// a processor that has it, for AVX2 (four). IEEE operations give the same bits at any width, and
+// no contraction into FMA (-ffp-contract=off, and the AVX2 version does not enable FMA).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+static void pair_block_law_sse2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt) {
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+__attribute__((target("avx2"))) static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props,
+                                                                 double inv_dt) {
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+}
+#endif
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (World::wide_law) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+#endif
+  pair_block_law_sse2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+}
+
+// Disc-disc contacts [p0, p1) of the sorted pair list, a block of touching pairs at a time: the
+// geometry of each pair is gathered (a pair found apart loses its history there), the law runs
+// on the block's arrays (pair_block_law), and the results are added to the discs in list order.
+// The i side of each pair is added at once; the j side too when j < own_end, otherwise (j belongs
+// to another thread's discs) it is kept in `later` and added after the parallel part, in a fixed
+// order. RECORD: the totals of the touching pairs are appended to `record`. Returns the largest
+// overlap.
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
 double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                         std::vector<PairForce>* record) {
@@ -249,44 +313,53 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   const double* __restrict ux = u.x; const double* __restrict uy = u.y; const double* __restrict uphi = u.phi;
   const double uf = u.factor;
   double* __restrict fxa = d.fx.data(); double* __restrict fya = d.fy.data(); double* __restrict tq = d.torque.data();
-  const PairProps* __restrict props_ = props.data();
   const int n_mat = n_materials;
+  // One kind of disc: one pair of materials, its constants fetched once.
+  const PairProps* law_props = ONE_KIND ? &props[kmat[0] * n_mat + kmat[0]] : props.data();
+  PairBlock& b = pair_blocks_[omp_thread_index()];
   double worst = 0;
-  for (std::size_t p = p0; p < p1; ++p) {
-    PairContact& c = pc[p];
-    const int i = c.i, j = c.j;
-    const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
-    const double ri = kr[ki], rj = kr[kj];
-    const double dx = x[j] - x[i], dy = y[j] - y[i];
-    const double R2 = dx * dx + dy * dy, sum = ri + rj;
-    if (R2 > sum * sum) {  // (3): apart; the contact and its history end
-      c.en = c.es = 0;
-      continue;
+  for (std::size_t p = p0; p < p1;) {
+    int n = 0;
+    for (; p < p1 && n < PairBlock::kSize; ++p) {
+      PairContact& c = pc[p];
+      const int i = c.i, j = c.j;
+      const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
+      const double ri = kr[ki], rj = kr[kj];
+      const double dx = x[j] - x[i], dy = y[j] - y[i];
+      const double R2 = dx * dx + dy * dy, sum = ri + rj;
+      if (R2 > sum * sum) {  // (3): apart; the contact and its history end
+        c.en = c.es = 0;
+        continue;
+      }
+      b.pair[n] = static_cast<int>(p - p0);
+      b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2; b.sum[n] = sum;
+      b.ddx[n] = ux[i] * uf - ux[j] * uf;  // the relative increment of (5)
+      b.ddy[n] = uy[i] * uf - uy[j] * uf;
+      if constexpr (SHEAR) {
+        b.rot_i[n] = ri * (uphi[i] * uf);
+        b.rot_j[n] = rj * (uphi[j] * uf);
+      }
+      if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
+      b.en[n] = c.en; b.es[n] = c.es;
+      ++n;
     }
-    const double R = std::sqrt(R2);
-    const double nx = dx / R, ny = dy / R;  // (4): cos(alpha), sin(alpha), from i to j
-    const double ddx = ux[i] * uf - ux[j] * uf, ddy = uy[i] * uf - uy[j] * uf;
-    const double du_n = ddx * nx + ddy * ny;                                       // (5a)
-    double du_s = 0;
-    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + ri * (uphi[i] * uf) + rj * (uphi[j] * uf);  // (5b)
-    const double overlap = sum - R;
-    worst = std::max(worst, overlap);
-    double fn, fs;
-    contact_law<NS, NT, FC, SHEAR, DASH>(props_[kmat[ki] * n_mat + kmat[kj]], overlap, du_n, du_s, inv_dt, c.en, c.es,
-                                         fn, fs);
-    if constexpr (RECORD) record->push_back(PairForce{i, j, fn, fs});
-    double fx = -fn * nx, fy = -fn * ny;  // (15a), (15b) terms on i
-    if constexpr (SHEAR) {
-      fx += fs * ny;
-      fy -= fs * nx;
-    }
-    fxa[i] += fx; fya[i] += fy;
-    if constexpr (SHEAR) tq[i] -= ri * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
-    if (j < own_end) {
-      fxa[j] -= fx; fya[j] -= fy;
-      if constexpr (SHEAR) tq[j] -= rj * fs;
-    } else {
-      later->push_back(Deferred{j, fx, fy, SHEAR ? rj * fs : 0.0});
+    pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt);
+    for (int k = 0; k < n; ++k) {
+      PairContact& c = pc[p0 + static_cast<std::size_t>(b.pair[k])];
+      const int i = c.i, j = c.j;
+      c.en = b.en[k]; c.es = b.es[k];
+      worst = std::max(worst, b.overlap[k]);
+      const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
+      if constexpr (RECORD) record->push_back(PairForce{i, j, b.fn[k], fs});
+      fxa[i] += fx; fya[i] += fy;
+      if constexpr (SHEAR) tq[i] -= kr[ONE_KIND ? 0 : kd[i]] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+      const double rj = kr[ONE_KIND ? 0 : kd[j]];
+      if (j < own_end) {
+        fxa[j] -= fx; fya[j] -= fy;
+        if constexpr (SHEAR) tq[j] -= rj * fs;
+      } else {
+        later->push_back(Deferred{j, fx, fy, SHEAR ? rj * fs : 0.0});
+      }
     }
   }
   return worst;

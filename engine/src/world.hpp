@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,18 @@ namespace dem {
 struct PairForce {
   int i, j;
   double fn, fs;
+};
+
+// A block of touching pairs on its way through the law (World::pair_pass): the gathered geometry
+// and history in, the forces out. 128 pairs: some 20 kB, in the first-level cache.
+struct alignas(64) PairBlock {
+  static constexpr int kSize = 128;
+  int pair[kSize];  // offset in the pass's part of the list
+  int prop[kSize];  // index of the pair's constants (several kinds of disc)
+  double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j
+  double ddx[kSize], ddy[kSize], rot_i[kSize], rot_j[kSize];  // (5): du_i - du_j, r_i dphi_i, r_j dphi_j
+  double en[kSize], es[kSize];  // history in, history out
+  double overlap[kSize], fn[kSize], fs[kSize], fx[kSize], fy[kSize];  // out: fx, fy on i
 };
 
 class World {
@@ -43,6 +56,11 @@ class World {
   // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
   int threads = 1;
   static constexpr int kMinDiscsPerThread = 2048;
+  // The pair law runs four pairs a vector (AVX2) where the processor has it, else two (SSE2):
+  // the same bits either way. Set at start from the processor; tests and benchmarks may clear it
+  // (and set it again only where cpu_has_wide_law()).
+  static bool wide_law;
+  static bool cpu_has_wide_law();
   int threads_for(int n) const;  // the thread count used for n discs
   double gx = 0, gy = -980; // gravity [cm/s^2]
 
@@ -130,6 +148,7 @@ class World {
     int j;
     double fx, fy, tq;
   };
+  std::vector<PairBlock> pair_blocks_;  // per thread: pair_pass's block
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
   double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                    std::vector<PairForce>* record);
