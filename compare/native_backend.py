@@ -88,9 +88,11 @@ def scene_toml(case: Case, disc_file: str) -> str:
     for p in r["points"]:
         lines += ["[[points]]", f"name = {_toml_value(p['name'])}", f"group = {_toml_value(p['group'])}",
                   f"at = {_toml_value(p['at'])}", f"material = {_toml_value(p['material'])}", ""]
+    # The frozen packing rested with overlaps; a scene that starts from a packing allows its own.
+    overlap = max(0.05, float(r.get("fill", {}).get("max_initial_overlap", 0.0)))
     lines += ["[fill]", 'type = "file"', f"file = {_toml_value(disc_file)}",
               f"material = {_toml_value(mat)}", "velocities = true",
-              "max_initial_overlap = 0.05       # the frozen packing rested with overlaps", ""]
+              f"max_initial_overlap = {_toml_value(overlap)}       # the frozen packing rested with overlaps", ""]
     lines += ["[end]", f"time = {_toml_value(case.settle if case.mode == 'discharge' else case.duration)}",
               "stop_at_rest = false", f"max_overlap = {_toml_value(r['end']['max_overlap'])}", ""]
     lines += ["[neighbor]", f"skin = {_toml_value(r['neighbor']['skin'])}", ""]
