@@ -240,6 +240,9 @@ def write_report(out, table, meta):
          f"Machine: {meta['machine']}; {meta['cpus']} CPUs; LIGGGHTS {meta['liggghts']}, YADE {meta['yade']}, "
          f"dem {meta['dem_version']}. {meta['repeats']} repeats per point, interleaved; run "
          f"{meta['started']} ({meta['elapsed_s']:.0f} s).", "",
+         ("Scenes start from packings settled before the study (--start settled): dense, about two contacts a disc."
+          if meta.get("start") == "settled" else
+          "Scenes start from their lattices (--start lattice): in the steps timed they barely touch."), "",
          "Microseconds per particle-step (median, [min-max] over repeats) of the stepping alone; memory is the",
          "peak resident set of the process (the largest rank for mpirun) per disc. `shared` rows: the law all",
          f"codes share with velocity Verlet at dt = {DT_SHARED:g} s; `paper` row: native, the paper's law and eq. (19) at",

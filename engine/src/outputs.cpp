@@ -169,22 +169,32 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const Discs& d = w.discs;
   // Which entries are written, by index (4 bytes a contact; the columns are read from the lists).
   std::vector<std::uint32_t> pairs, bonds, walls;
-  // A pair's totals: its entry in the recorded forces of this step, or none for a pair that pass
-  // found apart (0, 0); NaN when this step's forces were not recorded (the run loops record them).
-  std::vector<const PairForce*> totals;
+  // A pair's totals: its entry in the recorded forces of this step (an index, 4 bytes), or none for
+  // a pair that pass found apart (0, 0); NaN when this step's forces were not recorded (the run
+  // loops record them). Both lists are sized exactly first: at the end of a dense run they are
+  // the largest arrays made here.
+  constexpr std::uint32_t kNone = UINT32_MAX;
+  std::vector<std::uint32_t> totals;
   const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
-  const bool recorded = w.pair_forces_current();
-  w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
+  const auto touching = [&](std::size_t p) {
     const PairContact& c = w.neighbors.pairs[p];
     const double R = dist(c.i, c.j);
-    if (!(R <= d.r(c.i) + d.r(c.j) && R != 0)) return;
+    return R <= d.r(c.i) + d.r(c.j) && R != 0;
+  };
+  const bool recorded = w.pair_forces_current();
+  std::size_t count = 0;
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) count += touching(p);
+  pairs.reserve(count);
+  totals.reserve(count);
+  w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
+    if (!touching(p)) return;
     pairs.push_back(static_cast<std::uint32_t>(p));
-    totals.push_back(rec);
+    totals.push_back(rec ? static_cast<std::uint32_t>(rec - w.pair_forces.data()) : kNone);
   });
   const auto total = [&](std::size_t c, double& fn, double& fs) {  // c: index into pairs
-    const PairForce* k = totals[c];
-    fn = !recorded ? NAN : k ? k->fn : 0.0;
-    fs = !recorded ? NAN : k ? k->fs : 0.0;
+    const std::uint32_t k = totals[c];
+    fn = !recorded ? NAN : k != kNone ? w.pair_forces[k].fn : 0.0;
+    fs = !recorded ? NAN : k != kNone ? w.pair_forces[k].fs : 0.0;
   };
   for (std::size_t p = 0; p < w.bonds.size(); ++p)
     if (dist(w.bonds[p].i, w.bonds[p].j) != 0) bonds.push_back(static_cast<std::uint32_t>(p));

@@ -68,7 +68,7 @@ void World::prepare(bool build_lists) {
   touch_scratch_.assign(slots, std::vector<char>(geometry.obstacle_count() + 1, 0));
   dist_scratch_.assign(slots, std::vector<double>(geometry.obstacle_count() + 1, 0.0));
   deferred_.assign(slots, {});
-  record_parts_.assign(slots, {});
+  touching_.assign(slots, {});
   increment_sums_.assign(slots, {});
   pair_blocks_.resize(slots);
   // Only eq. (19) keeps increment arrays (increments()); they start at zero (at rest, or as set).
@@ -102,6 +102,12 @@ void World::rebuild_lists() {
 void World::init() {
   prepare();
   force_pass(Then::nothing, 0.0);  // forces at the start (Verlet's first half kick uses them)
+}
+
+void World::size_pair_forces(std::size_t count) {
+  // A larger count: the old totals are dropped before the new room is taken, never both held.
+  if (count > pair_forces.capacity()) std::vector<PairForce>().swap(pair_forces);
+  pair_forces.resize(count);
 }
 
 bool World::force_pass(Then then, double h) {
@@ -230,9 +236,21 @@ void World::start_resultants(int i0, int i1) {
   }
 }
 
+std::size_t World::touching_pairs(std::size_t p0, std::size_t p1) const {
+  const Discs& d = discs;
+  const PairContact* pc = neighbors.pairs.data();
+  std::size_t n = 0;
+  for (std::size_t p = p0; p < p1; ++p) {
+    const int i = pc[p].i, j = pc[p].j;
+    const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
+    n += !apart(dx * dx + dy * dy, d.r(i) + d.r(j));
+  }
+  return n;
+}
+
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
 double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                            std::vector<PairForce>* record) {
+                            PairForce* record) {
   if (record)
     return one_kind() ? pair_pass<NS, NT, FC, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
                      : pair_pass<NS, NT, FC, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
@@ -296,11 +314,11 @@ static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict
 // on the block's arrays (pair_block_law), and the results are added to the discs in list order.
 // The i side of each pair is added at once; the j side too when j < own_end, otherwise (j belongs
 // to another thread's discs) it is kept in `later` and added after the parallel part, in a fixed
-// order. RECORD: the totals of the touching pairs are appended to `record`. Returns the largest
-// overlap.
+// order. RECORD: the totals of the touching pairs are written from `record` on, room for
+// touching_pairs(p0, p1) of them. Returns the largest overlap.
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
 double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                        std::vector<PairForce>* record) {
+                        PairForce* record) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
   PairContact* __restrict pc = neighbors.pairs.data();
@@ -327,7 +345,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       const double ri = kr[ki], rj = kr[kj];
       const double dx = x[j] - x[i], dy = y[j] - y[i];
       const double R2 = dx * dx + dy * dy, sum = ri + rj;
-      if (R2 > sum * sum) {  // (3): apart; the contact and its history end
+      if (apart(R2, sum)) {  // (3): apart; the contact and its history end
         c.en = c.es = 0;
         continue;
       }
@@ -350,7 +368,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       c.en = b.en[k]; c.es = b.es[k];
       worst = std::max(worst, b.overlap[k]);
       const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
-      if constexpr (RECORD) record->push_back(PairForce{i, j, b.fn[k], fs});
+      if constexpr (RECORD) *record++ = PairForce{i, j, b.fn[k], fs};
       fxa[i] += fx; fya[i] += fy;
       if constexpr (SHEAR) tq[i] -= kr[ONE_KIND ? 0 : kd[i]] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
       const double rj = kr[ONE_KIND ? 0 : kd[j]];
@@ -454,11 +472,11 @@ bool World::compute_forces(Then then, double h) {
   const int nt = (BONDS || MOVING) ? 1 : threads_for(n);
   double worst = 0;
   const bool record = record_pair_forces;
-  if (record) pair_forces.clear();
   if (nt == 1) {
     start_resultants(0, n);
     const std::size_t np = neighbors.pairs.size();
-    worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? &pair_forces : nullptr);
+    if (record) size_pair_forces(touching_pairs(0, np));
+    worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? pair_forces.data() : nullptr);
   } else {
     // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
     // computed by the owner of its i. What a thread adds to a later block's discs is added by
@@ -480,13 +498,26 @@ bool World::compute_forces(Then then, double h) {
       const std::size_t w1 = std::lower_bound(wl.begin(), wl.end(), i1, by_i) - wl.begin();
       deferred_[t].value.clear();
       start_resultants(i0, i1);
-      // A recorded pass: the first thread's totals go straight to pair_forces, the others' are
-      // appended in thread order below (the list's order).
+      // A recorded pass: each thread writes its touching pairs' totals into its own slice of
+      // pair_forces, sized once to the exact count (the list's order; no growth, no copy).
+      PairForce* mine = nullptr;
+      if (record) {  // the same branch on every thread
+        touching_[t].value = touching_pairs(p0, p1);
+#pragma omp barrier
+#pragma omp single
+        {
+          std::size_t total = 0;
+          for (int u = 0; u < nt; ++u) total += touching_[u].value;
+          size_pair_forces(total);
+        }  // (the end of single waits for every thread)
+        std::size_t offset = 0;
+        for (int u = 0; u < t; ++u) offset += touching_[u].value;
+        mine = pair_forces.data() + offset;
+      }
       // Walls before pairs: the order (and the bits) that gcc gave the former
       // std::max(pairs(), walls()), whose arguments it evaluates right to left; now explicit.
-      std::vector<PairForce>* mine = t == 0 ? &pair_forces : &record_parts_[t].value;
       const double ww = wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t);
-      const double pw = pair_pass_for<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value, record ? mine : nullptr);
+      const double pw = pair_pass_for<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value, mine);
       part[t] = std::max(pw, ww);
 #pragma omp barrier
       for (int u = 0; u < t; ++u)  // earlier threads' reactions on this block, in their order
@@ -498,12 +529,6 @@ bool World::compute_forces(Then then, double h) {
       far |= then_block(then, h, i0, i1) ? 1u : 0u;
     }
     for (int t = 0; t < nt; ++t) worst = std::max(worst, part[t]);
-    if (record)
-      for (int t = 1; t < nt; ++t) {  // rare (output steps): the scratch is freed again
-        auto& v = record_parts_[t].value;
-        pair_forces.insert(pair_forces.end(), v.begin(), v.end());
-        std::vector<PairForce>().swap(v);
-      }
     max_overlap = worst;
     return far != 0;
   }

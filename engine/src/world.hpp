@@ -150,12 +150,16 @@ class World {
   };
   std::vector<PairBlock> pair_blocks_;  // per thread: pair_pass's block
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
-  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                   std::vector<PairForce>* record);
+  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later, PairForce* record);
   // pair_pass for this pass: recording or not (record null), one kind of disc or several.
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
   double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                       std::vector<PairForce>* record);
+                       PairForce* record);
+  // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).
+  static bool apart(double R2, double sum) { return R2 > sum * sum; }
+  std::size_t touching_pairs(std::size_t p0, std::size_t p1) const;  // pairs of [p0, p1) that touch now
+  void size_pair_forces(std::size_t count);  // room for exactly count recorded totals
+  std::vector<Padded<std::size_t>> touching_;  // per thread: touching pairs of a recorded pass
   // Every disc of one kind: the kernels keep its constants in registers instead of reading them
   // through each disc's kind.
   bool one_kind() const { return discs.kinds.size() == 1; }
@@ -174,7 +178,6 @@ class World {
   long increments_measured_step_ = -1;
   void start_resultants(int i0, int i1);
   std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
-  std::vector<Padded<std::vector<PairForce>>> record_parts_;  // per thread but the first: a recorded pass's totals
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
   void select_kernel();
   void rebuild_lists();       // neighbour lists without the bonded pairs

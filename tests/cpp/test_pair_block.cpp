@@ -1,7 +1,8 @@
 // The pair pass by blocks (World::pair_pass): on a dense, jittered packing with random history,
 // where pairs touch, slide, go slack and come apart side by side, the forces and the new history
 // are those of the law applied pair by pair (eqs. 3-15, written out here), for every option of
-// the law and for 1 and 2 threads; and the law's AVX2 and SSE2 versions give the same bits.
+// the law and for 1 and 2 threads, and so are the recorded totals of an output step's pass (in
+// exactly sized storage); and the law's AVX2 and SSE2 versions give the same bits.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -44,11 +45,14 @@ World dense_world(ContactOptions opt, int threads, unsigned seed) {
 
 struct Result {
   std::vector<double> fx, fy, tq, en, es;
+  std::vector<PairForce> totals;  // the touching pairs' f_n, f_s, in list order
 };
 
 Result forces_of(World w) {  // a copy: each call starts from the same history
+  w.record_pair_forces = true;
   w.compute_forces_now();
-  Result r{w.discs.fx, w.discs.fy, w.discs.torque, {}, {}};
+  Result r{w.discs.fx, w.discs.fy, w.discs.torque, {}, {}, w.pair_forces};
+  EXPECT_EQ(w.pair_forces.capacity(), w.pair_forces.size()) << "the recorded totals are sized exactly";
   for (const PairContact& c : w.neighbors.pairs) {
     r.en.push_back(c.en);
     r.es.push_back(c.es);
@@ -61,7 +65,7 @@ template <NormalSpring NS, NoTension NT, FrictionCap FC>
 Result by_pairs(World w) {
   const Discs& d = w.discs;
   const std::size_t n = d.size();
-  Result r{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n, 0.0), {}, {}};
+  Result r{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n, 0.0), {}, {}, {}};
   for (std::size_t i = 0; i < n; ++i) {
     r.fx[i] = d.mass(i) * w.gx;
     r.fy[i] = d.mass(i) * w.gy;
@@ -82,6 +86,7 @@ Result by_pairs(World w) {
       const double fx = -fn * nx + fs * ny, fy = -fn * ny - fs * nx;  // (15a), (15b)
       r.fx[i] += fx; r.fy[i] += fy; r.tq[i] -= d.r(i) * fs;            // (15c)
       r.fx[j] -= fx; r.fy[j] -= fy; r.tq[j] -= d.r(j) * fs;
+      r.totals.push_back({i, j, fn, fs});
     }
   }
   for (const PairContact& c : w.neighbors.pairs) {
@@ -138,6 +143,11 @@ TEST(PairBlock, ForcesAndHistoryAreThoseOfThePairByPairLaw) {
       const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-9 * (1.0 + std::abs(b)); };
       std::size_t bad = 0;
       for (std::size_t p = 0; p < want.en.size(); ++p) bad += !near(got.en[p], want.en[p]) || !near(got.es[p], want.es[p]);
+      ASSERT_EQ(got.totals.size(), want.totals.size());
+      for (std::size_t k = 0; k < want.totals.size(); ++k) {
+        const PairForce &g = got.totals[k], &f = want.totals[k];
+        bad += g.i != f.i || g.j != f.j || !near(g.fn, f.fn) || !near(g.fs, f.fs);
+      }
       // Resultants: sums of forces of order 1e6 dyn; a 2-thread pass adds the reactions on
       // another block's discs later, so the last bits may differ.
       const auto close = [](double a, double b) { return std::abs(a - b) <= 1e-6 * (1.0 + std::abs(b)); };
@@ -164,6 +174,11 @@ TEST(PairBlock, WideAndNarrowLawGiveTheSameBits) {
       EXPECT_EQ(wide.tq, narrow.tq);
       EXPECT_EQ(wide.en, narrow.en);
       EXPECT_EQ(wide.es, narrow.es);
+      ASSERT_EQ(wide.totals.size(), narrow.totals.size());
+      for (std::size_t k = 0; k < wide.totals.size(); ++k) {
+        EXPECT_EQ(wide.totals[k].fn, narrow.totals[k].fn);
+        EXPECT_EQ(wide.totals[k].fs, narrow.totals[k].fs);
+      }
     }
 }
 
