@@ -70,7 +70,6 @@ void World::prepare(bool build_lists) {
   deferred_.assign(slots, {});
   touching_.assign(slots, {});
   increment_sums_.assign(slots, {});
-  pair_blocks_.resize(slots);
   // Only eq. (19) keeps increment arrays (increments()); they start at zero (at rest, or as set).
   Discs& d = discs;
   d.forget_kind_index();  // the discs are in
@@ -334,7 +333,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   const int n_mat = n_materials;
   // One kind of disc: one pair of materials, its constants fetched once.
   const PairProps* law_props = ONE_KIND ? &props[kmat[0] * n_mat + kmat[0]] : props.data();
-  PairBlock& b = pair_blocks_[omp_thread_index()];
+  PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
   for (std::size_t p = p0; p < p1;) {
     int n = 0;
