@@ -79,9 +79,14 @@ def settled_scene(base: Path, dem: str, out: Path) -> Path:
     s = json.loads((packing.parent / "summary.json").read_text())
     print(f"settled {base.name}: {s['n_discs']} discs, {SETTLE_TIME} s in {time.monotonic() - t0:.0f} s", flush=True)
     # The bottom of a tall column rests with overlaps of several per cent of a radius (its weight on kn).
-    fill = (f'[fill]\ntype = "file"\nfile = "{packing.parent.name}/discs.csv"\nmaterial = "sand"\n'
+    base_text = base.read_text()
+    old_fill = re.search(r"(?ms)^\[fill\].*?(?=^\[|\Z)", base_text)
+    material = re.search(r'(?m)^material\s*=\s*"([^"]+)"', old_fill.group(0)) if old_fill else None
+    if not material:
+        raise RuntimeError(f"{base}: no [fill] material to settle")
+    fill = (f'[fill]\ntype = "file"\nfile = "{packing.parent.name}/discs.csv"\nmaterial = "{material.group(1)}"\n'
             f"max_initial_overlap = 0.3\n\n")
-    text = re.sub(r"(?ms)^\[fill\].*?(?=^\[|\Z)", lambda m: fill, base.read_text())
+    text = base_text[:old_fill.start()] + fill + base_text[old_fill.end():]
     scene.write_text(text)
     return scene
 
