@@ -503,12 +503,12 @@ bool World::compute_forces(Then then, double h) {
       if (record) {  // the same branch on every thread
         touching_[t].value = touching_pairs(p0, p1);
 #pragma omp barrier
-#pragma omp single
-        {
+        if (t == 0) {  // the main thread: its malloc arena, where the list is freed again
           std::size_t total = 0;
           for (int u = 0; u < nt; ++u) total += touching_[u].value;
           size_pair_forces(total);
-        }  // (the end of single waits for every thread)
+        }
+#pragma omp barrier
         std::size_t offset = 0;
         for (int u = 0; u < t; ++u) offset += touching_[u].value;
         mine = pair_forces.data() + offset;
