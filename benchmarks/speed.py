@@ -57,6 +57,13 @@ SIZES = {
 }
 
 
+def without_sections(text: str, *names: str) -> str:
+    """A scene's TOML text without the tables [name] (each up to the next table)."""
+    for name in names:
+        text = re.sub(rf"(?ms)^\[{name}\].*?(?=^\[|\Z)", "", text)
+    return text
+
+
 SETTLE_TIME = 0.25  # s: the lattice columns (up to 1667 rows) close their gaps and rest
 
 
@@ -67,8 +74,7 @@ def settled_scene(base: Path, dem: str, out: Path) -> Path:
     packing = out / f"{base.stem}_settled" / "discs.csv"
     if scene.exists() and packing.exists():
         return scene
-    text = re.sub(r"(?ms)^\[discharge\].*?(?=^\[|\Z)", "", base.read_text())
-    text = re.sub(r"(?ms)^\[end\].*?(?=^\[|\Z)", "", text)
+    text = without_sections(base.read_text(), "discharge", "end")
     settle = out / f"{base.stem}_settle.toml"
     settle.write_text(text + f"\n[end]\ntime = {SETTLE_TIME!r}\nstop_at_rest = false\n")
     t0 = time.monotonic()
@@ -93,9 +99,7 @@ def settled_scene(base: Path, dem: str, out: Path) -> Path:
 
 def scene_with_phases(base: Path, settle_steps: int, discharge_steps: int, dt: float, out: Path) -> Path:
     """The base scene with [end] = settle for S steps and [discharge] = D steps (no snapshots)."""
-    text = base.read_text()
-    text = re.sub(r"(?ms)^\[discharge\].*?(?=^\[|\Z)", "", text)
-    text = re.sub(r"(?ms)^\[end\].*?(?=^\[|\Z)", "", text)
+    text = without_sections(base.read_text(), "discharge", "end")
     settle, dis = settle_steps * dt, discharge_steps * dt
     text += (f"\n[end]\ntime = {settle!r}\nstop_at_rest = false\n\n"
              f"[discharge]\ntime = {dis!r}\ngate = \"gate\"\noutlet_depth = 4.0\njam_time = {dis + 1.0!r}\n"

@@ -289,10 +289,6 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
 // The block's law compiled twice: for any x86-64 (two pairs a vector) and, chosen at run time on
 // a processor that has it, for AVX2 (four). IEEE operations give the same bits at any width, and
 // no contraction into FMA (-ffp-contract=off, and the AVX2 version does not enable FMA).
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
-static void pair_block_law_sse2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt) {
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
-}
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
 __attribute__((target("avx2"))) static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props,
@@ -305,7 +301,7 @@ static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict
 #if defined(__x86_64__) && defined(__GNUC__)
   if (World::wide_law) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
 #endif
-  pair_block_law_sse2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
 }
 
 // Disc-disc contacts [p0, p1) of the sorted pair list, a block of touching pairs at a time: the
