@@ -13,7 +13,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '3'};  // 2: pair totals out of the pair list; 3: disc kinds
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '4'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: float reference positions
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -123,7 +123,8 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
     write_world(o, w);
     o.put(w.particle_steps);
     o.put(w.neighbors.rebuilds);
-    o.put(w.neighbors.cell_size());
+    const Neighbors::Reference ref = w.neighbors.reference();
+    o.put(ref.cell); o.put(ref.ox); o.put(ref.oy); o.put(ref.limit2);
     o.vec(w.neighbors.reference_x());
     o.vec(w.neighbors.reference_y());
     if (discharge) discharge->save(o);
@@ -184,8 +185,12 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   read_world(r, w);
   w.particle_steps = r.get<double>();
   const long rebuilds = r.get<long>();
-  const double cell = r.get<double>();
-  std::vector<double> x0, y0;
+  Neighbors::Reference ref{};
+  ref.cell = r.get<double>();
+  ref.ox = r.get<double>();
+  ref.oy = r.get<double>();
+  ref.limit2 = r.get<double>();
+  std::vector<float> x0, y0;
   r.vec(x0);
   r.vec(y0);
   if (x0.size() != y0.size() || (!x0.empty() && x0.size() != w.discs.size()))
@@ -200,7 +205,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   // beside them: the pair list is the largest array).
   w.prepare(false);
   w.neighbors.rebuilds = rebuilds;
-  w.neighbors.restore_reference(std::move(x0), std::move(y0), cell);
+  w.neighbors.restore_reference(std::move(x0), std::move(y0), ref);
 }
 
 }  // namespace dem

@@ -55,13 +55,6 @@ long long wall_key(const WallContact& w) { return (static_cast<long long>(w.i) <
 void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const int n = static_cast<int>(d.size());
   ++rebuilds;
-  x0_.resize(n);
-  y0_.resize(n);
-  parallel_for(n, nt, [&](long i) {
-    x0_[i] = d.x[i];
-    y0_[i] = d.y[i];
-  });
-
   // Cells: at least one diameter plus skin, so neighbours are in the 3 x 3 block. Extents in long
   // double, where no difference of finite coordinates overflows (cell indices clamped); discs at
   // non-finite positions (a run blowing up, stopped after this step) are in no cell and get no
@@ -86,6 +79,21 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     for (int i = 0; i < n; ++i) extend(i, rmax, dxmin, dxmax, dymin, dymax);
   }
   if (!(dxmin <= dxmax)) dxmin = dxmax = dymin = dymax = 0;  // no finite disc
+  // Reference positions relative to the corner, as floats: each off by at most 2^-24 of the
+  // extent (round to nearest), so a disc's displacement by at most sqrt(2) of that; the limit
+  // is skin/2 less twice that (the double differences round too), at least 0: every step
+  // rebuilds if the skin is below float precision at this extent.
+  ox_ = dxmin;
+  oy_ = dymin;
+  x0_.resize(n);
+  y0_.resize(n);
+  parallel_for(n, nt, [&](long i) {
+    x0_[i] = static_cast<float>(d.x[i] - ox_);
+    y0_[i] = static_cast<float>(d.y[i] - oy_);
+  });
+  const double rounding = std::sqrt(2.0) * std::ldexp(std::max(dxmax - dxmin, dymax - dymin), -23);
+  const double allowed = std::max(0.0, 0.5 * skin - rounding);
+  limit2_ = allowed * allowed;
   const long double xmin = dxmin, xmax = dxmax, ymin = dymin, ymax = dymax;
   long double cell = std::max(min_cell, 2 * rmax + skin);
   if (!std::isfinite(cell)) cell = std::numeric_limits<long double>::max();  // one cell for all

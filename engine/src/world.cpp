@@ -161,11 +161,11 @@ void World::kick_drift_block(double h, int i0, int i1) {
 bool World::moved_far(int i0, int i1) const {
   if (neighbors.stale(discs)) return true;
   const double* x = discs.x.data(); const double* y = discs.y.data();
-  const double* x0 = neighbors.reference_x().data(); const double* y0 = neighbors.reference_y().data();
-  const double lim2 = neighbors.moved_far_limit2();
+  const float* x0 = neighbors.reference_x().data(); const float* y0 = neighbors.reference_y().data();
+  const double lim2 = neighbors.moved_far_limit2(), ox = neighbors.origin_x(), oy = neighbors.origin_y();
   unsigned far = 0;
   for (int i = i0; i < i1; ++i) {
-    const double dx = x[i] - x0[i], dy = y[i] - y0[i];
+    const double dx = (x[i] - ox) - x0[i], dy = (y[i] - oy) - y0[i];
     far |= dx * dx + dy * dy > lim2;
   }
   return far != 0;

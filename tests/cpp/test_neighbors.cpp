@@ -92,5 +92,43 @@ TEST(Neighbors, ScratchDoesNotGrowWithTheDiscs) {
   EXPECT_LT(scratch[1], list[1] / 4);
 }
 
+// The reference positions are floats relative to the grid's corner (8 bytes a disc less): the
+// limit must still catch every disc that has truly moved more than skin/2 from where it was at
+// the build. The worst case for each disc: moved straight along its own rounding error, which
+// shortens the displacement the test computes by the whole error. Discs far from the origin (a
+// silo 3000 cm tall, offset by 1e4 cm) make the errors as large as this scene allows.
+TEST(Neighbors, FloatReferencesCatchEveryDiscPastHalfTheSkin) {
+  Discs d;
+  const int n = 4000;
+  unsigned s = 12345;
+  const auto uniform = [&] { s = s * 1664525u + 1013904223u; return (s >> 8) / 16777216.0; };
+  for (int k = 0; k < n; ++k) d.add(1e4 + 1264 * uniform(), -5e3 + 3000 * uniform(), 0.5, 1.0, 0);
+  Neighbors nb;
+  nb.skin = 0.2;
+  nb.rebuild(d, Geometry{}, 1);
+  const double lim = std::sqrt(nb.moved_far_limit2());
+  EXPECT_GT(lim, 0.5 * nb.skin * (1 - 1e-2)) << "the allowance for rounding is under 1 % of skin/2 here";
+  EXPECT_LE(lim, 0.5 * nb.skin);
+  int worst_cases = 0;
+  for (int i = 0; i < n; ++i) {
+    const double ex = (nb.origin_x() + nb.reference_x()[i]) - d.x[i];  // the float's error
+    const double ey = (nb.origin_y() + nb.reference_y()[i]) - d.y[i];
+    const double e = std::hypot(ex, ey);
+    if (e == 0) continue;
+    worst_cases += e > 1e-5;
+    const double step = 0.5 * nb.skin * (1 + 1e-9);  // just past skin/2, along the error
+    const double x = d.x[i] + step * ex / e, y = d.y[i] + step * ey / e;
+    ASSERT_GT(std::hypot(x - d.x[i], y - d.y[i]), 0.5 * nb.skin) << "the move itself is past skin/2";
+    const double dx = (x - nb.origin_x()) - nb.reference_x()[i], dy = (y - nb.origin_y()) - nb.reference_y()[i];
+    EXPECT_GT(dx * dx + dy * dy, nb.moved_far_limit2()) << "disc " << i << " moved skin/2 and is not caught";
+    // And half the skin less the allowance is not far: the test is not simply always true.
+    const double near = 0.5 * (lim - 2 * e);
+    const double xn = d.x[i] + near * ex / e, yn = d.y[i] + near * ey / e;
+    const double ndx = (xn - nb.origin_x()) - nb.reference_x()[i], ndy = (yn - nb.origin_y()) - nb.reference_y()[i];
+    EXPECT_LE(ndx * ndx + ndy * ndy, nb.moved_far_limit2()) << i;
+  }
+  EXPECT_GT(worst_cases, n / 2) << "most references carry a rounding error (floats of numbers near 1e3)";
+}
+
 }  // namespace
 }  // namespace dem
