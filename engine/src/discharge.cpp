@@ -56,61 +56,97 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   if (n == 0) return {};
   double rmax = 0;
   for (std::size_t i = 0; i < d.size(); ++i) rmax = std::max(rmax, d.r(i));
-  // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it.
-  // One byte a disc: bit 1 a left foot, bit 2 a right foot.
+  // Nothing here is sized by the number of discs: a loose packing (a silo started from its
+  // lattice) has few contacts, and arrays of all discs (9 bytes a disc) set the peak of such a
+  // run at 1M discs. Everything below is sized by the compressive pairs and the feet.
+  // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it; bit 1 a
+  // left foot, bit 2 a right foot. A short list, sorted by disc.
   constexpr char kLeft = 1, kRight = 2;
-  std::vector<char> foot(n, 0);
+  std::vector<std::pair<int, char>> feet;
   const int nw = static_cast<int>(w.geometry.walls.size());
   for (const WallContact& c : w.neighbors.walls) {
     if (!c.touching) continue;
     const bool near_floor = std::abs(c.py - floor_y) < 1e-9 * (1 + std::abs(floor_y));
     if (c.k >= nw || near_floor) {
-      if (std::abs(c.px - slit_left) <= 2 * rmax) foot[c.i] |= kLeft;
-      if (std::abs(c.px - slit_right) <= 2 * rmax) foot[c.i] |= kRight;
+      const char bits = static_cast<char>((std::abs(c.px - slit_left) <= 2 * rmax ? kLeft : 0) |
+                                          (std::abs(c.px - slit_right) <= 2 * rmax ? kRight : 0));
+      if (bits) feet.emplace_back(c.i, bits);
     }
   }
-  // Breadth-first search over touching pairs from the left feet to the right feet. The touching
-  // pairs of each disc in one flat array (offsets by disc), in the pair list's order: one
-  // allocation, not a small vector a disc (at 1M discs that was ~100 bytes a disc every sample).
-  // The pairs with a compressive total force in the last force pass (recorded for this step).
+  std::sort(feet.begin(), feet.end());
+  std::size_t nf = 0;
+  for (const auto& f : feet) {  // one entry a disc, its bits or-ed
+    if (nf > 0 && feet[nf - 1].first == f.first) feet[nf - 1].second |= f.second;
+    else feet[nf++] = f;
+  }
+  feet.resize(nf);
+  const auto foot = [&](int i) -> char {
+    const auto it = std::lower_bound(feet.begin(), feet.end(), std::make_pair(i, char(0)));
+    return it != feet.end() && it->first == i ? it->second : 0;
+  };
+  // Breadth-first search over the pairs with a compressive total force in the last force pass
+  // (recorded for this step). A disc's partners, in the order of the record list (sorted by
+  // (i, j)): first those below it (their records come first), by increasing index, from `below`
+  // (the (j, i) of each compressive pair, sorted); then those above it, from its own run of
+  // records.
   if (!w.pair_forces_current()) throw std::logic_error("find_arch: the pair forces of this step were not recorded");
-  std::vector<int> start(n + 1, 0);
-  for (const PairForce& p : w.pair_forces)
-    if (p.fn > 0) {
-      ++start[p.i + 1];
-      ++start[p.j + 1];
+  const std::vector<PairForce>& rec = w.pair_forces;
+  std::size_t m = 0;
+  for (const PairForce& p : rec) m += p.fn > 0;
+  std::vector<std::pair<int, int>> below;
+  below.reserve(m);
+  for (const PairForce& p : rec)
+    if (p.fn > 0) below.emplace_back(p.j, p.i);
+  std::sort(below.begin(), below.end());
+  // The discs the search can reach or start from (those of the compressive pairs, and the
+  // feet), sorted: a disc's place here indexes its predecessor on the search.
+  std::vector<int> ids;
+  {
+    std::size_t a = 0, b = 0, f = 0;
+    const auto next_rec = [&] {  // the i of the next compressive record, or INT_MAX
+      while (a < rec.size() && !(rec[a].fn > 0)) ++a;
+      return a < rec.size() ? rec[a].i : std::numeric_limits<int>::max();
+    };
+    for (;;) {
+      const int r = next_rec();
+      const int q = b < below.size() ? below[b].first : std::numeric_limits<int>::max();
+      const int t = f < feet.size() ? feet[f].first : std::numeric_limits<int>::max();
+      const int k = std::min(r, std::min(q, t));
+      if (k == std::numeric_limits<int>::max()) break;
+      if (ids.empty() || ids.back() != k) ids.push_back(k);
+      if (k == r) ++a;
+      else if (k == q) ++b;
+      else ++f;
     }
-  for (int i = 0; i < n; ++i) start[i + 1] += start[i];
-  std::vector<int> adj(static_cast<std::size_t>(start[n]));
-  // start[i] as disc i's fill cursor (it ends at start[i + 1]); one shift back restores it.
-  for (const PairForce& p : w.pair_forces)
-    if (p.fn > 0) {
-      adj[start[p.i]++] = p.j;
-      adj[start[p.j]++] = p.i;
-    }
-  for (int i = n; i > 0; --i) start[i] = start[i - 1];
-  start[0] = 0;
-  std::vector<int> prev(n, -2);
+  }
+  const auto place = [&](int i) { return std::lower_bound(ids.begin(), ids.end(), i) - ids.begin(); };
+  std::vector<int> prev(ids.size(), -2);
   std::deque<int> q;
-  for (int i = 0; i < n; ++i)
-    if (foot[i] & kLeft) {
-      prev[i] = -1;
-      q.push_back(i);
+  for (const auto& f : feet)
+    if (f.second & kLeft) {
+      prev[place(f.first)] = -1;
+      q.push_back(f.first);
     }
+  const auto visit = [&](int i, int j) {
+    if (int& p = prev[place(j)]; p == -2 && d.y[j] > floor_y) {
+      p = i;
+      q.push_back(j);
+    }
+  };
   while (!q.empty()) {
     const int i = q.front();
     q.pop_front();
-    if (foot[i] & kRight) {
+    if (foot(i) & kRight) {
       std::vector<int> path;
-      for (int k = i; k >= 0; k = prev[k]) path.push_back(k);
+      for (int k = i; k >= 0; k = prev[place(k)]) path.push_back(k);
       if (path.size() < 2) return {};  // one disc on both ends is not an arch
       return path;
     }
-    for (int a = start[i]; a < start[i + 1]; ++a)
-      if (const int j = adj[a]; prev[j] == -2 && d.y[j] > floor_y) {
-        prev[j] = i;
-        q.push_back(j);
-      }
+    const auto lo = std::lower_bound(below.begin(), below.end(), std::make_pair(i, std::numeric_limits<int>::min()));
+    for (auto it = lo; it != below.end() && it->first == i; ++it) visit(i, it->second);
+    const auto first = std::lower_bound(rec.begin(), rec.end(), i, [](const PairForce& p, int k) { return p.i < k; });
+    for (auto it = first; it != rec.end() && it->i == i; ++it)
+      if (it->fn > 0) visit(i, it->j);
   }
   return {};
 }
@@ -307,7 +343,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   const std::string snapdir = out + "/snapshots";
   fs::create_directories(snapdir);
 
-  std::vector<char> dead;
+  RemovedDiscs dead;  // the discs leaving at a step: a few indices, not a mask of all discs
   const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
   const long sample_every = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
   const auto t0 = std::chrono::steady_clock::now();
@@ -352,10 +388,10 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
       const bool some_out = parallel_any(n_now, w.threads_for(static_cast<int>(n_now)),
                                          [&](long i) { return w.discs.y[i] < y_out; });
       bool any = false;
+      dead.sorted.clear();
       for (std::size_t i = 0; some_out && i < w.discs.size(); ++i)
         if (w.discs.y[i] < y_out) {
-          if (!any) dead.assign(w.discs.size(), 0);
-          dead[i] = 1;
+          dead.sorted.push_back(static_cast<int>(i));
           any = true;
           st.removals.push_back({t, w.discs.id[i], w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
           st.removed_mass += w.discs.mass(i);
@@ -392,8 +428,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
               st.status = "jammed";
             } else {
               st.removals.push_back({t, w.discs.id[pick], w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
-              dead.assign(w.discs.size(), 0);
-              dead[pick] = 1;
+              dead.sorted.assign(1, pick);
               w.remove_discs(dead);
               st.last_removal = t;
             }

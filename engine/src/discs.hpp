@@ -1,6 +1,7 @@
 // Disc state as flat arrays (structure of arrays): the step streams through these.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstring>
 #include <vector>
@@ -18,6 +19,18 @@ struct DiscKinds {
   std::vector<double> inv_inertia;  // 1/I, I = m r^2 / 2
   std::vector<int> material;        // index into the scene's materials
   std::size_t size() const { return r.size(); }
+};
+
+// Discs leaving the arrays (an outlet takes a few a step): their indices, sorted, with no mask
+// or map the size of all discs (a 4-byte map a disc made each removal step the peak of a
+// million-disc discharge). The new index of disc k is k less the removed discs below it.
+struct RemovedDiscs {
+  std::vector<int> sorted;  // increasing, no repeats, each in [0, number of discs)
+  bool gone(int k) const { return std::binary_search(sorted.begin(), sorted.end(), k); }
+  int new_index(int k) const {  // -1 for a removed disc
+    const auto it = std::lower_bound(sorted.begin(), sorted.end(), k);
+    return it != sorted.end() && *it == k ? -1 : k - static_cast<int>(it - sorted.begin());
+  }
 };
 
 struct Discs {

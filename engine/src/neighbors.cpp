@@ -105,34 +105,20 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const long nx = static_cast<long>(cells_along(xmax - xmin));
   const long ny = static_cast<long>(cells_along(ymax - ymin));
   const long ncell = nx * ny;
-  const double cell_d = cell_;
-  cell_of_.resize(n);
+  grid_ = Grid{dxmin, dymin, 1.0 / cell_, nx, ny};
+  // A counting sort by cell; each pass computes the discs' cells again (Grid::cell_of) rather
+  // than keeping them: 4 bytes a disc less at each build, the peak of a loose packing's run.
   cell_start_.assign(ncell + 1, 0);
-  parallel_for(n, nt, [&](long i) {  // each disc's cell on its own; the count below is serial
-    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i])) {
-      cell_of_[i] = -1;
-      return;
-    }
-    // In double (x87 long double here costs a control-word switch per conversion: 4x the
-    // rebuild); x >= xmin, and a quotient past the grid (or inf / NaN from extreme extents) is
-    // clamped before it is converted.
-    const double fx = (d.x[i] - dxmin) / cell_d, fy = (d.y[i] - dymin) / cell_d;
-    const long cx = fx < static_cast<double>(nx - 1) ? static_cast<long>(fx) : nx - 1;
-    const long cy = fy < static_cast<double>(ny - 1) ? static_cast<long>(fy) : ny - 1;
-    cell_of_[i] = static_cast<int>(cy * nx + cx);
-  });
   for (int i = 0; i < n; ++i)
-    if (cell_of_[i] >= 0) ++cell_start_[cell_of_[i] + 1];
+    if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) ++cell_start_[c + 1];
   for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
   order_.resize(n);
   // Each cell's start serves as its fill cursor, ending at the next cell's start; one shift back
   // restores the starts (no second array of cells).
   for (int i = 0; i < n; ++i)
-    if (cell_of_[i] >= 0) order_[cell_start_[cell_of_[i]]++] = i;
+    if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) order_[cell_start_[c]++] = i;
   for (long c = ncell; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
   cell_start_[0] = 0;
-
-  grid_ = Grid{static_cast<double>(xmin), static_cast<double>(ymin), nx, ny};
   // Each obstacle's box grown by the largest reach: a disc outside it cannot be a candidate, so
   // most discs skip the distance to most walls (the same lists, far fewer square roots).
   const double reach = rmax + skin;
@@ -151,9 +137,8 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     if (!std::isfinite(reach)) b = Box{-HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, b.live};
   }
   build_pairs(d, nt);
-  // The cells serve this build only: freed, not kept for the next (at a million discs 12 bytes
-  // a disc or more, which would add to the peak of the steps between builds).
-  std::vector<int>().swap(cell_of_);
+  // The cells serve this build only: freed, not kept for the next (at a million discs 8 bytes a
+  // disc or more, which would add to the peak of the steps between builds).
   std::vector<int>().swap(order_);
   std::vector<int>().swap(cell_start_);
   // Obstacle entries: a few per disc at a wall, a small list; built beside the old one.
@@ -302,9 +287,10 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
 
 template <class F>
 void Neighbors::candidates(const Discs& d, int i, F&& f) const {
-  if (cell_of_[i] < 0) return;
+  const long cell = grid_.cell_of(d.x[i], d.y[i]);
+  if (cell < 0) return;
   const long nx = grid_.nx, ny = grid_.ny;
-  const long ci = cell_of_[i] % nx, cj = cell_of_[i] / nx;
+  const long ci = cell % nx, cj = cell / nx;
   const long a0 = std::max(0L, ci - 1), a1 = std::min(nx - 1, ci + 1);
   const double xi = d.x[i], yi = d.y[i], ri = d.r(i);
   // The 3 cells of a row are consecutive in the sorted order: one run of discs per row.
@@ -361,10 +347,10 @@ void Neighbors::search_walls(const Discs& d, const Geometry& g, int i0, int i1, 
 
 namespace dem {
 
-void Neighbors::compact(const std::vector<int>& new_index) {
+void Neighbors::compact(const RemovedDiscs& removed) {
   std::size_t o = 0;
   for (const PairContact& p : pairs) {
-    const int i = new_index[p.i], j = new_index[p.j];
+    const int i = removed.new_index(p.i), j = removed.new_index(p.j);
     if (i < 0 || j < 0) continue;
     PairContact q = p;
     q.i = i;
@@ -374,7 +360,7 @@ void Neighbors::compact(const std::vector<int>& new_index) {
   pairs.resize(o);
   o = 0;
   for (const WallContact& w : walls) {
-    const int i = new_index[w.i];
+    const int i = removed.new_index(w.i);
     if (i < 0) continue;
     WallContact q = w;
     q.i = i;
@@ -382,12 +368,16 @@ void Neighbors::compact(const std::vector<int>& new_index) {
   }
   walls.resize(o);
   o = 0;
-  for (std::size_t k = 0; k < new_index.size() && k < x0_.size(); ++k)
-    if (new_index[k] >= 0) {
-      x0_[o] = x0_[k];
-      y0_[o] = y0_[k];
-      ++o;
+  std::size_t g = 0;  // the next removed disc (both in increasing order)
+  for (std::size_t k = 0; k < x0_.size(); ++k) {
+    if (g < removed.sorted.size() && static_cast<std::size_t>(removed.sorted[g]) == k) {
+      ++g;
+      continue;
     }
+    x0_[o] = x0_[k];
+    y0_[o] = y0_[k];
+    ++o;
+  }
   x0_.resize(o);
   y0_.resize(o);
 }

@@ -601,18 +601,23 @@ void World::select_kernel() {
 #undef DEM_KB
 }
 
-void World::remove_discs(const std::vector<char>& dead) {
+void World::remove_discs(const RemovedDiscs& removed) {
   Discs& d = discs;
   const std::size_t n = d.size();
-  std::vector<int> new_index(n, -1);
-  int o = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (!dead[i]) new_index[i] = o++;
-  if (static_cast<std::size_t>(o) == n) return;
+  const std::vector<int>& gone = removed.sorted;
+  for (std::size_t k = 0; k < gone.size(); ++k)
+    if (gone[k] < 0 || static_cast<std::size_t>(gone[k]) >= n || (k > 0 && gone[k] <= gone[k - 1]))
+      throw std::logic_error("remove_discs: the removed indices are not sorted, distinct discs");
+  if (gone.empty()) return;
   auto keep = [&](auto& v) {
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < n; ++i)
-      if (!dead[i]) v[k++] = v[i];
+    std::size_t k = 0, g = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (g < gone.size() && static_cast<std::size_t>(gone[g]) == i) {
+        ++g;
+        continue;
+      }
+      v[k++] = v[i];
+    }
     v.resize(k);
   };
   keep(d.kind); keep(d.id);  // the kinds table stays (a kind without discs costs its entry only)
@@ -620,20 +625,21 @@ void World::remove_discs(const std::vector<char>& dead) {
   if (!d.phi.empty()) keep(d.phi);  // output.rotation_angle only
   if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
   keep(d.fx); keep(d.fy); keep(d.torque);
-  neighbors.compact(new_index);
+  neighbors.compact(removed);
   std::size_t r = 0;  // the recorded totals follow their discs
   for (const PairForce& f : pair_forces) {
-    const int i = new_index[f.i], j = new_index[f.j];
+    const int i = removed.new_index(f.i), j = removed.new_index(f.j);
     if (i >= 0 && j >= 0) pair_forces[r++] = PairForce{i, j, f.fn, f.fs};
   }
   pair_forces.resize(r);
   if (!bonds.empty()) {  // a bond goes with either of its discs; order (i, j) is kept
     std::size_t k = 0;
     for (const Bond& b : bonds) {
-      if (new_index[b.i] < 0 || new_index[b.j] < 0) continue;
+      const int i = removed.new_index(b.i), j = removed.new_index(b.j);
+      if (i < 0 || j < 0) continue;
       Bond q = b;
-      q.i = new_index[b.i];
-      q.j = new_index[b.j];
+      q.i = i;
+      q.j = j;
       bonds[k++] = q;
     }
     bonds.resize(k);

@@ -109,8 +109,8 @@ class World {
   bool kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
   bool kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
 
-  // Removes the discs with dead[i] != 0 from every array (order kept; lists remapped).
-  void remove_discs(const std::vector<char>& dead);
+  // Removes the discs of `removed` from every array (order kept; lists remapped).
+  void remove_discs(const RemovedDiscs& removed);
   // Removes a wall (the slit's gate) from the computation; false if there is no such wall.
   bool deactivate_wall(const std::string& name);
 

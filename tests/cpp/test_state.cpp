@@ -17,9 +17,10 @@ std::string scene_path() { return std::string(DEM_SOURCE_DIR) + "/reference_inpu
 
 void outlet_step(World& w) {
   w.step();
-  std::vector<char> dead(w.discs.size(), 0);
-  for (std::size_t i = 0; i < w.discs.size(); ++i) dead[i] = w.discs.y[i] < -4.0;
-  w.remove_discs(dead);
+  RemovedDiscs out;
+  for (std::size_t i = 0; i < w.discs.size(); ++i)
+    if (w.discs.y[i] < -4.0) out.sorted.push_back(static_cast<int>(i));
+  w.remove_discs(out);
 }
 }  // namespace
 
@@ -112,4 +113,31 @@ TEST(State, SplitRunWithTwoThreadsIsBitIdentical) {
       ASSERT_EQ(b.discs.omega[i], d.discs.omega[i]) << scheme << " disc " << i;
     }
   }
+}
+
+// Removed discs as a sorted list of indices (no map of all discs): each survivor's new index is
+// its old one less the removed discs below it, the count a mask would give.
+TEST(RemovedDiscs, NewIndexIsTheCountOfSurvivorsBelow) {
+  std::vector<char> mask(1000, 0);
+  RemovedDiscs r;
+  for (int k = 0; k < 1000; ++k)
+    if ((k * 7919) % 13 == 0 || k == 0 || k == 999) {
+      mask[k] = 1;
+      r.sorted.push_back(k);
+    }
+  int survivors = 0;
+  for (int k = 0; k < 1000; ++k) {
+    EXPECT_EQ(r.new_index(k), mask[k] ? -1 : survivors) << k;
+    EXPECT_EQ(r.gone(k), mask[k] != 0) << k;
+    survivors += !mask[k];
+  }
+  World w;
+  for (int k = 0; k < 10; ++k) w.discs.add(k, 0, 0.5, 1.0, 0);
+  RemovedDiscs unsorted;
+  unsorted.sorted = {3, 2};
+  EXPECT_THROW(w.remove_discs(unsorted), std::logic_error);
+  RemovedDiscs outside;
+  outside.sorted = {10};
+  EXPECT_THROW(w.remove_discs(outside), std::logic_error);
+  EXPECT_EQ(w.discs.size(), 10u) << "a refused removal removes nothing";
 }
