@@ -26,7 +26,6 @@ struct DiscKinds {
 // million-disc discharge). The new index of disc k is k less the removed discs below it.
 struct RemovedDiscs {
   std::vector<int> sorted;  // increasing, no repeats, each in [0, number of discs)
-  bool gone(int k) const { return std::binary_search(sorted.begin(), sorted.end(), k); }
   int new_index(int k) const {  // -1 for a removed disc
     const auto it = std::lower_bound(sorted.begin(), sorted.end(), k);
     return it != sorted.end() && *it == k ? -1 : k - static_cast<int>(it - sorted.begin());

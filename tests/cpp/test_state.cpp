@@ -128,7 +128,6 @@ TEST(RemovedDiscs, NewIndexIsTheCountOfSurvivorsBelow) {
   int survivors = 0;
   for (int k = 0; k < 1000; ++k) {
     EXPECT_EQ(r.new_index(k), mask[k] ? -1 : survivors) << k;
-    EXPECT_EQ(r.gone(k), mask[k] != 0) << k;
     survivors += !mask[k];
   }
   World w;
