@@ -30,6 +30,19 @@ struct RemovedDiscs {
     const auto it = std::lower_bound(sorted.begin(), sorted.end(), k);
     return it != sorted.end() && *it == k ? -1 : k - static_cast<int>(it - sorted.begin());
   }
+  // Drops the entries of the removed discs from a per-disc array (order kept).
+  template <class V>
+  void compact(V& v) const {
+    std::size_t k = 0, g = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      if (g < sorted.size() && static_cast<std::size_t>(sorted[g]) == i) {
+        ++g;
+        continue;
+      }
+      v[k++] = v[i];
+    }
+    v.resize(k);
+  }
 };
 
 struct Discs {

@@ -79,21 +79,6 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     for (int i = 0; i < n; ++i) extend(i, rmax, dxmin, dxmax, dymin, dymax);
   }
   if (!(dxmin <= dxmax)) dxmin = dxmax = dymin = dymax = 0;  // no finite disc
-  // Reference positions relative to the corner, as floats: each off by at most 2^-24 of the
-  // extent (round to nearest), so a disc's displacement by at most sqrt(2) of that; the limit
-  // is skin/2 less twice that (the double differences round too), at least 0: every step
-  // rebuilds if the skin is below float precision at this extent.
-  ox_ = dxmin;
-  oy_ = dymin;
-  x0_.resize(n);
-  y0_.resize(n);
-  parallel_for(n, nt, [&](long i) {
-    x0_[i] = static_cast<float>(d.x[i] - ox_);
-    y0_[i] = static_cast<float>(d.y[i] - oy_);
-  });
-  const double rounding = std::sqrt(2.0) * std::ldexp(std::max(dxmax - dxmin, dymax - dymin), -23);
-  const double allowed = std::max(0.0, 0.5 * skin - rounding);
-  limit2_ = allowed * allowed;
   const long double xmin = dxmin, xmax = dxmax, ymin = dymin, ymax = dymax;
   long double cell = std::max(min_cell, 2 * rmax + skin);
   if (!std::isfinite(cell)) cell = std::numeric_limits<long double>::max();  // one cell for all
@@ -106,6 +91,19 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const long ny = static_cast<long>(cells_along(ymax - ymin));
   const long ncell = nx * ny;
   grid_ = Grid{dxmin, dymin, 1.0 / cell_, nx, ny};
+  // Reference positions relative to the grid's corner, as floats: each off by at most 2^-24 of
+  // the extent (round to nearest), so a disc's displacement by at most sqrt(2) of that; the limit
+  // is skin/2 less twice that (the double differences round too), at least 0: every step
+  // rebuilds if the skin is below float precision at this extent.
+  x0_.resize(n);
+  y0_.resize(n);
+  parallel_for(n, nt, [&](long i) {
+    x0_[i] = static_cast<float>(d.x[i] - dxmin);
+    y0_[i] = static_cast<float>(d.y[i] - dymin);
+  });
+  const double rounding = std::sqrt(2.0) * std::ldexp(std::max(dxmax - dxmin, dymax - dymin), -23);
+  const double allowed = std::max(0.0, 0.5 * skin - rounding);
+  limit2_ = allowed * allowed;
   // A counting sort by cell; each pass computes the discs' cells again (Grid::cell_of) rather
   // than keeping them: 4 bytes a disc less at each build, the peak of a loose packing's run.
   cell_start_.assign(ncell + 1, 0);
@@ -367,19 +365,10 @@ void Neighbors::compact(const RemovedDiscs& removed) {
     walls[o++] = q;
   }
   walls.resize(o);
-  o = 0;
-  std::size_t g = 0;  // the next removed disc (both in increasing order)
-  for (std::size_t k = 0; k < x0_.size(); ++k) {
-    if (g < removed.sorted.size() && static_cast<std::size_t>(removed.sorted[g]) == k) {
-      ++g;
-      continue;
-    }
-    x0_[o] = x0_[k];
-    y0_[o] = y0_[k];
-    ++o;
+  if (!x0_.empty()) {  // empty: invalidated, rebuilt at the next step
+    removed.compact(x0_);
+    removed.compact(y0_);
   }
-  x0_.resize(o);
-  y0_.resize(o);
 }
 
 }  // namespace dem

@@ -51,8 +51,8 @@ class Neighbors {
   // rounding, so every disc that has really moved skin/2 is caught (a rebuild may come a little
   // earlier, which changes no force: apart pairs contribute nothing).
   double moved_far_limit2() const { return limit2_; }
-  double origin_x() const { return ox_; }
-  double origin_y() const { return oy_; }
+  double origin_x() const { return grid_.xmin; }
+  double origin_y() const { return grid_.ymin; }
   // New lists with the history of the old ones carried over; nt threads give the same lists.
   void rebuild(const Discs& d, const Geometry& g, int nt = 1);
   double cell_size() const { return cell_; }
@@ -70,19 +70,18 @@ class Neighbors {
   struct Reference {  // what moved_far reads besides the floats
     double cell, ox, oy, limit2;
   };
-  Reference reference() const { return {cell_, ox_, oy_, limit2_}; }
+  Reference reference() const { return {cell_, grid_.xmin, grid_.ymin, limit2_}; }
   void restore_reference(std::vector<float> x0, std::vector<float> y0, const Reference& r) {
     x0_ = std::move(x0);
     y0_ = std::move(y0);
     cell_ = r.cell;
-    ox_ = r.ox;
-    oy_ = r.oy;
+    grid_.xmin = r.ox;  // the rest of the grid serves builds only
+    grid_.ymin = r.oy;
     limit2_ = r.limit2;
   }
 
  private:
-  std::vector<float> x0_, y0_;  // positions at the last rebuild, less (ox_, oy_)
-  double ox_ = 0, oy_ = 0;      // the grid's corner at the last rebuild
+  std::vector<float> x0_, y0_;  // positions at the last rebuild, less the grid's corner
   double limit2_ = 0;           // see moved_far_limit2
   double cell_ = 0;
   // Scratch kept between rebuilds to avoid reallocation.

@@ -609,17 +609,7 @@ void World::remove_discs(const RemovedDiscs& removed) {
     if (gone[k] < 0 || static_cast<std::size_t>(gone[k]) >= n || (k > 0 && gone[k] <= gone[k - 1]))
       throw std::logic_error("remove_discs: the removed indices are not sorted, distinct discs");
   if (gone.empty()) return;
-  auto keep = [&](auto& v) {
-    std::size_t k = 0, g = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (g < gone.size() && static_cast<std::size_t>(gone[g]) == i) {
-        ++g;
-        continue;
-      }
-      v[k++] = v[i];
-    }
-    v.resize(k);
-  };
+  auto keep = [&](auto& v) { removed.compact(v); };
   keep(d.kind); keep(d.id);  // the kinds table stays (a kind without discs costs its entry only)
   keep(d.x); keep(d.y); keep(d.vx); keep(d.vy); keep(d.omega);
   if (!d.phi.empty()) keep(d.phi);  // output.rotation_angle only
