@@ -121,17 +121,20 @@ bool World::force_pass(Then then, double h) {
 // as a kick pass followed by a drift pass: one sweep of memory instead of two).
 namespace {
 
-// The loops of kick_drift_block and moved_far, with every array a restrict parameter: GCC keeps
+// The loop of kick_drift_block, with every array a restrict parameter: GCC keeps
 // restrict on parameters, not on local pointers, and without it checked the arrays' overlap at
 // run time, found more pairs to check than it will (10), and ran the loops one disc at a time.
 // Now they run two discs a vector: the same operations on each disc, the same bits.
-template <int D, bool ONE_KIND, bool PHI>  // D: 0 none, 1 eq. (18), 2 eq. (19)
-inline __attribute__((always_inline)) void kick_drift_kernel(int n, double h, double step, const double* __restrict fx, const double* __restrict fy,
-                       const double* __restrict tq, const int* __restrict kd, const double* __restrict im,
-                       const double* __restrict ii, double* __restrict vx, double* __restrict vy,
-                       double* __restrict om, double* __restrict ux, double* __restrict uy, double* __restrict up,
-                       double* __restrict x, double* __restrict y, double* __restrict phi) {
+template <int D, bool ONE_KIND, bool PHI, bool FAR>  // D: 0 none, 1 eq. (18), 2 eq. (19)
+inline __attribute__((always_inline)) long kick_drift_kernel(
+    int n, double h, double step, const double* __restrict fx, const double* __restrict fy,
+    const double* __restrict tq, const int* __restrict kd, const double* __restrict im, const double* __restrict ii,
+    double* __restrict vx, double* __restrict vy, double* __restrict om, double* __restrict ux,
+    double* __restrict uy, double* __restrict up, double* __restrict x, double* __restrict y,
+    double* __restrict phi, const float* __restrict x0, const float* __restrict y0, double ox, double oy,
+    double lim2) {
   const double im0 = ONE_KIND ? im[0] : 0, ii0 = ONE_KIND ? ii[0] : 0;  // one kind: its constants, loaded once
+  long far = 0;
   for (int i = 0; i < n; ++i) {
     const double mi = ONE_KIND ? im0 : im[kd[i]], ji = ONE_KIND ? ii0 : ii[kd[i]];
     const double v = vx[i] + fx[i] * mi * h;  // (16), (17)
@@ -150,84 +153,67 @@ inline __attribute__((always_inline)) void kick_drift_kernel(int n, double h, do
       c = o * step;
     }
     if constexpr (D == 2) { ux[i] = a; uy[i] = b; up[i] = c; }  // (18): v dt, read from v (increments())
-    x[i] += a;
-    y[i] += b;
+    const double xn = x[i] + a, yn = y[i] + b;
+    x[i] = xn;
+    y[i] = yn;
     if constexpr (PHI) phi[i] += c;
-  }
-}
-
-// Discs of n more than sqrt(lim2) from their list positions (a count: an integer sum
-// vectorises, an |= of comparisons does not). NaN counts as not far, as before.
-inline __attribute__((always_inline)) long count_far(int n, const double* __restrict x, const double* __restrict y,
-                                                     const float* __restrict x0, const float* __restrict y0,
-                                                     double ox, double oy, double lim2) {
-  long far = 0;
-  for (int i = 0; i < n; ++i) {
-    const double dx = (x[i] - ox) - x0[i], dy = (y[i] - oy) - y0[i];
-    far += dx * dx + dy * dy > lim2 ? 1 : 0;
+    if constexpr (FAR) {  // the skin/2 test on the position just computed (a count: see above)
+      const double dx = (xn - ox) - x0[i], dy = (yn - oy) - y0[i];
+      far += dx * dx + dy * dy > lim2 ? 1 : 0;
+    }
   }
   return far;
 }
 
 // Both compiled twice, as the pair law: for any x86-64 and, chosen at run time where the
 // processor has it (World::wide_law), for AVX2 (four discs a vector; without AVX2 GCC does not
-// vectorise count_far, whose floats widen to doubles and whose count is 64-bit).
+// vectorise the count of far discs, whose floats widen to doubles and whose count is 64-bit).
 #if defined(__x86_64__) && defined(__GNUC__)
-template <int D, bool ONE_KIND, bool PHI, class... A>
-__attribute__((target("avx2"))) void kick_drift_kernel_avx2(A... a) {
-  kick_drift_kernel<D, ONE_KIND, PHI>(a...);
-}
-template <class... A>
-__attribute__((target("avx2"))) long count_far_avx2(A... a) {
-  return count_far(a...);
+template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
+__attribute__((target("avx2"))) long kick_drift_kernel_avx2(A... a) {
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
 }
 #endif
-template <int D, bool ONE_KIND, bool PHI, class... A>
-void kick_drift_best(A... a) {
+template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
+long kick_drift_best(A... a) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::wide_law) return kick_drift_kernel_avx2<D, ONE_KIND, PHI>(a...);
+  if (World::wide_law) return kick_drift_kernel_avx2<D, ONE_KIND, PHI, FAR>(a...);
 #endif
-  kick_drift_kernel<D, ONE_KIND, PHI>(a...);
-}
-template <class... A>
-long count_far_best(A... a) {
-#if defined(__x86_64__) && defined(__GNUC__)
-  if (World::wide_law) return count_far_avx2(a...);
-#endif
-  return count_far(a...);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
 }
 
 }  // namespace
 
 template <World::Drift D, bool ONE_KIND, bool PHI>
-void World::kick_drift_block(double h, int i0, int i1) {
+bool World::kick_drift_block(double h, int i0, int i1) {
   Discs& d = discs;
   const auto at = [i0](auto& v) { return v.empty() ? nullptr : v.data() + i0; };  // eq. 19's and the angle's may be empty
   constexpr int k = D == Drift::none ? 0 : D == Drift::eq18 ? 1 : 2;
-  kick_drift_best<k, ONE_KIND, PHI>(i1 - i0, h, dt, at(d.fx), at(d.fy), at(d.torque), at(d.kind),
-                                      d.kinds.inv_mass.data(), d.kinds.inv_inertia.data(), at(d.vx), at(d.vy),
-                                      at(d.omega), at(d.dux), at(d.duy), at(d.dphi), at(d.x), at(d.y), at(d.phi));
-}
-
-// Its own loop, right after the drift of the same discs (the same test inside the drift loop
-// made a 1-thread run 3 % slower than this pass, whose x and y the drift has just written).
-bool World::moved_far(int i0, int i1) const {
-  if (neighbors.stale(discs)) return true;
-  if (i1 <= i0) return false;
-  return count_far_best(i1 - i0, discs.x.data() + i0, discs.y.data() + i0, neighbors.reference_x().data() + i0,
-                   neighbors.reference_y().data() + i0, neighbors.origin_x(), neighbors.origin_y(),
-                   neighbors.moved_far_limit2()) != 0;
+  // Stale lists (a restart, a wall removed): rebuilt before the next forces, nothing to test.
+  const bool stale = D != Drift::none && neighbors.stale(discs);
+  const auto run = [&](auto far) {
+    return kick_drift_best<k, ONE_KIND, PHI, decltype(far)::value>(
+        i1 - i0, h, dt, at(d.fx), at(d.fy), at(d.torque), at(d.kind), d.kinds.inv_mass.data(),
+        d.kinds.inv_inertia.data(), at(d.vx), at(d.vy), at(d.omega), at(d.dux), at(d.duy), at(d.dphi), at(d.x),
+        at(d.y), at(d.phi), far ? neighbors.reference_x().data() + i0 : nullptr,
+        far ? neighbors.reference_y().data() + i0 : nullptr, neighbors.origin_x(), neighbors.origin_y(),
+        neighbors.moved_far_limit2());
+  };
+  if (D == Drift::none || stale) {
+    run(std::false_type{});
+    return stale;
+  }
+  return run(std::true_type{}) != 0;
 }
 
 // kick_drift_block for this pass: one disc kind or several, the rotation angle kept or not.
 template <World::Drift D>
-void World::kick_drift_for(double h, int i0, int i1) {
+bool World::kick_drift_for(double h, int i0, int i1) {
   const bool phi = !discs.phi.empty();
   if (one_kind()) {
-    phi ? kick_drift_block<D, true, true>(h, i0, i1) : kick_drift_block<D, true, false>(h, i0, i1);
-  } else {
-    phi ? kick_drift_block<D, false, true>(h, i0, i1) : kick_drift_block<D, false, false>(h, i0, i1);
+    return phi ? kick_drift_block<D, true, true>(h, i0, i1) : kick_drift_block<D, true, false>(h, i0, i1);
   }
+  return phi ? kick_drift_block<D, false, true>(h, i0, i1) : kick_drift_block<D, false, false>(h, i0, i1);
 }
 
 bool World::then_block(Then then, double h, int i0, int i1) {
@@ -237,8 +223,8 @@ bool World::then_block(Then then, double h, int i0, int i1) {
       if (measure_increments) measure_block(i0, i1);
       kick_drift_for<Drift::none>(h, i0, i1);
       return false;
-    case Then::kick_drift_eq18: kick_drift_for<Drift::eq18>(h, i0, i1); return moved_far(i0, i1);
-    case Then::kick_drift_eq19: kick_drift_for<Drift::eq19>(h, i0, i1); return moved_far(i0, i1);
+    case Then::kick_drift_eq18: return kick_drift_for<Drift::eq18>(h, i0, i1);
+    case Then::kick_drift_eq19: return kick_drift_for<Drift::eq19>(h, i0, i1);
   }
   return false;
 }

@@ -167,11 +167,12 @@ class World {
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
   bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region
+  // Eq. 17 kick, then the drift D, for discs [i0, i1); with a drift, returns whether some disc
+  // of them is now more than skin/2 from its list position (or the lists are stale).
   template <Drift D, bool ONE_KIND, bool PHI>
-  void kick_drift_block(double h, int i0, int i1);  // eq. 17 kick, then the drift D, for discs [i0, i1)
+  bool kick_drift_block(double h, int i0, int i1);
   template <Drift D>
-  void kick_drift_for(double h, int i0, int i1);  // kick_drift_block for this pass's kinds and angle
-  bool moved_far(int i0, int i1) const;  // some disc of [i0, i1) is more than skin/2 from its list position
+  bool kick_drift_for(double h, int i0, int i1);  // kick_drift_block for this pass's kinds and angle
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
   void measure_block(int i0, int i1);  // Verlet: sums of |v dt| of discs [i0, i1) before the closing kick
   std::vector<Padded<std::array<double, 2>>> increment_sums_;  // by parallel_sum's blocks

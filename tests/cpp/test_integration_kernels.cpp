@@ -1,8 +1,8 @@
-// The integration loops (World::kick_drift_block, moved_far) run several discs a vector, two
-// (SSE2) or four (AVX2, chosen at run time): each disc must still get exactly eqs. (17)-(19)
-// as written, whatever its place in a vector (the loop's remainder included), with one kind of
-// disc or several; the skin/2 test must catch a single far disc anywhere; and both vector widths
-// must give the same bits over whole runs.
+// The integration loop (World::kick_drift_block: kick, drift and the skin/2 test) runs several
+// discs a vector, two (SSE2) or four (AVX2, chosen at run time): each disc must still get
+// exactly eqs. (17)-(19) as written, whatever its place in a vector (the loop's remainder
+// included), with one kind of disc or several; the skin/2 test must catch a single far disc
+// anywhere; and both vector widths must give the same bits over whole runs.
 #include <gtest/gtest.h>
 
 #include <cmath>
