@@ -121,10 +121,10 @@ bool World::force_pass(Then then, double h) {
 // as a kick pass followed by a drift pass: one sweep of memory instead of two).
 namespace {
 
-// The loop of kick_drift_block, with every array a restrict parameter: GCC keeps
-// restrict on parameters, not on local pointers, and without it checked the arrays' overlap at
-// run time, found more pairs to check than it will (10), and ran the loops one disc at a time.
-// Now they run two discs a vector: the same operations on each disc, the same bits.
+// The loop of kick_drift_block, with every array a restrict parameter: GCC keeps restrict on
+// parameters, not on local pointers; without it, it checked the arrays' overlap at run time,
+// found more pairs to check than it will (10), and ran the loop one disc at a time. Now it runs
+// two discs a vector (four with AVX2, below): the same operations on each disc, the same bits.
 template <int D, bool ONE_KIND, bool PHI, bool FAR>  // D: 0 none, 1 eq. (18), 2 eq. (19)
 inline __attribute__((always_inline)) long kick_drift_kernel(
     int n, double h, double step, const double* __restrict fx, const double* __restrict fy,
@@ -157,7 +157,9 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
     x[i] = xn;
     y[i] = yn;
     if constexpr (PHI) phi[i] += c;
-    if constexpr (FAR) {  // the skin/2 test on the position just computed (a count: see above)
+    // The skin/2 test on the position just computed. A count, because an integer sum vectorises
+    // and an |= of comparisons does not; a NaN position counts as not far, as it always did.
+    if constexpr (FAR) {
       const double dx = (xn - ox) - x0[i], dy = (yn - oy) - y0[i];
       far += dx * dx + dy * dy > lim2 ? 1 : 0;
     }
