@@ -11,7 +11,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '3'};  // 2: pair totals out of the pair list; 3: disc kinds
+constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '4'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: the threads' blocks
 
 // The wall contacts in their memory layout with the padding after `touching` zeroed, so that
 // equal states give equal files.
@@ -70,6 +70,7 @@ void write_world(BinaryOut& o, const World& w) {
   o.vec(zero_padded(w.neighbors.walls));
   o.put(w.pair_forces_step);  // the recorded totals (outputs), so a state saved at its end writes them again
   o.vec(w.pair_forces);
+  o.vec(w.force_blocks);
 }
 
 void read_world(BinaryIn& r, World& w) {
@@ -99,6 +100,11 @@ void read_world(BinaryIn& r, World& w) {
   r.vec(w.pair_forces);
   for (const auto& p : w.pair_forces)
     if (p.i < 0 || p.j < 0 || static_cast<std::size_t>(p.j) >= n || p.i >= p.j) r.fail("corrupt pair-force record");
+  r.vec(w.force_blocks);
+  for (std::size_t t = 0; t < w.force_blocks.size(); ++t)
+    if ((t == 0 && w.force_blocks[t] != 0) || (t > 0 && w.force_blocks[t] < w.force_blocks[t - 1]) ||
+        (t + 1 == w.force_blocks.size() && static_cast<std::size_t>(w.force_blocks[t]) != n))
+      r.fail("corrupt thread blocks");
 }
 
 void save_state(const World& w, const std::string& path) {

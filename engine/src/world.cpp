@@ -35,6 +35,7 @@ void World::step() {
   }
   if (walls_move && walls_moved_far()) neighbors.invalidate();
   if (far || neighbors.stale(discs)) rebuild_lists();
+  if (steps % kRebalanceEvery == 0 || !blocks_fit()) balance_blocks();
   // Eqs. (3)-(15) from the increments of the last move; then, for each thread's discs:
   switch (scheme) {
     case Scheme::paper_eq18: far = force_pass(Then::kick_drift_eq18, dt); break;  // (17), (18)
@@ -83,6 +84,37 @@ void World::prepare(bool build_lists) {
   if (build_lists) rebuild_lists();  // keeps the history already in the lists
 }
 
+bool World::blocks_fit() const {
+  const int n = static_cast<int>(discs.size()), nt = threads_for(n);
+  return nt <= 1 ? force_blocks.empty()
+                 : force_blocks.size() == static_cast<std::size_t>(nt) + 1 && force_blocks.back() == n;
+}
+
+void World::balance_blocks() {
+  const int n = static_cast<int>(discs.size());
+  const int nt = threads_for(n);
+  force_blocks.clear();
+  if (nt <= 1) return;
+  // Only what a run resumed from a state file has too (its lists are built again at the restart,
+  // with other candidates than the run in one piece, but the same history): the discs and the
+  // pairs that touched.
+  constexpr long kDisc = 4, kTouched = 12;  // relative costs (see force_blocks)
+  const auto& pairs = neighbors.pairs;
+  const auto work = [](const PairContact& c) { return c.en != 0 || c.es != 0 ? kTouched : 0; };
+  long total = kDisc * n;
+  for (const PairContact& c : pairs) total += work(c);
+  force_blocks.assign(nt + 1, n);
+  force_blocks[0] = 0;
+  long done = 0;
+  std::size_t p = 0;
+  int t = 1;
+  for (int i = 0; i < n && t < nt; ++i) {
+    done += kDisc;
+    for (; p < pairs.size() && pairs[p].i <= i; ++p) done += work(pairs[p]);
+    while (t < nt && done * nt >= total * t) force_blocks[t++] = i + 1;
+  }
+}
+
 void World::rebuild_lists() {
   neighbors.rebuild(discs, geometry, threads_for(static_cast<int>(discs.size())));
   if (!moving.empty()) walls_listed();
@@ -110,6 +142,9 @@ void World::size_pair_forces(std::size_t count) {
 }
 
 bool World::force_pass(Then then, double h) {
+  // Verlet's rest measure: the |v dt| of the move, before the closing kick overwrites v (the
+  // force pass reads v, never writes it); parallel_sum's blocks, whatever the force blocks are.
+  if (then == Then::kick && measure_increments) measure_block(0, static_cast<int>(discs.size()));
   const bool record = record_pair_forces;
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
@@ -221,8 +256,7 @@ bool World::kick_drift_for(double h, int i0, int i1) {
 bool World::then_block(Then then, double h, int i0, int i1) {
   switch (then) {
     case Then::nothing: return false;
-    case Then::kick:
-      if (measure_increments) measure_block(i0, i1);
+    case Then::kick:  // Verlet's closing half kick (its rest measure was taken before: force_pass)
       kick_drift_for<Drift::none>(h, i0, i1);
       return false;
     case Then::kick_drift_eq18: return kick_drift_for<Drift::eq18>(h, i0, i1);
@@ -509,10 +543,12 @@ bool World::compute_forces(Then then, double h) {
     if (record) size_pair_forces(touching_pairs(0, np));
     worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? pair_forces.data() : nullptr);
   } else {
-    // Threads own contiguous blocks of discs, fixed by n and the thread count; a pair is
-    // computed by the owner of its i. What a thread adds to a later block's discs is added by
-    // that block's owner once all are done, in thread order: a given thread count always sums in
-    // the same order (bit-identical runs). Then each thread integrates its own discs.
+    // Threads own contiguous blocks of discs (force_blocks: of equal work, set at each list
+    // build); a pair is computed by the owner of its i. What a thread adds to a later block's
+    // discs is added by that block's owner once all are done, in thread order: a given thread
+    // count always sums in the same order (bit-identical runs). Then each thread integrates its
+    // own discs.
+    if (!blocks_fit()) balance_blocks();  // a pass outside step() (tests, benchmarks)
     std::vector<double>& part = thread_overlap_;
     part.assign(nt, 0.0);
     unsigned far = 0;
@@ -521,7 +557,7 @@ bool World::compute_forces(Then then, double h) {
 #pragma omp parallel num_threads(nt) reduction(| : far)
     {
       const int t = omp_thread_index();
-      const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
+      const int i0 = force_blocks[t], i1 = force_blocks[t + 1];
       const auto by_i = [](const auto& c, int i) { return c.i < i; };
       const std::size_t p0 = std::lower_bound(pairs.begin(), pairs.end(), i0, by_i) - pairs.begin();
       const std::size_t p1 = std::lower_bound(pairs.begin(), pairs.end(), i1, by_i) - pairs.begin();
@@ -652,6 +688,8 @@ void World::remove_discs(const RemovedDiscs& removed) {
   if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
   keep(d.fx); keep(d.fy); keep(d.torque);
   neighbors.compact(removed);
+  for (int& b : force_blocks)  // the same block edges, less the discs gone below them
+    b -= static_cast<int>(std::lower_bound(gone.begin(), gone.end(), b) - gone.begin());
   std::size_t r = 0;  // the recorded totals follow their discs
   for (const PairForce& f : pair_forces) {
     const int i = removed.new_index(f.i), j = removed.new_index(f.j);
