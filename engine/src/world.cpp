@@ -543,8 +543,8 @@ bool World::compute_forces(Then then, double h) {
     if (record) size_pair_forces(touching_pairs(0, np));
     worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? pair_forces.data() : nullptr);
   } else {
-    // Threads own contiguous blocks of discs (force_blocks: of equal work, set at each list
-    // build); a pair is computed by the owner of its i. What a thread adds to a later block's
+    // Threads own contiguous blocks of discs (force_blocks: of equal work, set every
+    // kRebalanceEvery steps); a pair is computed by the owner of its i. What a thread adds to a later block's
     // discs is added by that block's owner once all are done, in thread order: a given thread
     // count always sums in the same order (bit-identical runs). Then each thread integrates its
     // own discs.
