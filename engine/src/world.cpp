@@ -35,7 +35,7 @@ void World::step() {
   }
   if (walls_move && walls_moved_far()) neighbors.invalidate();
   if (far || neighbors.stale(discs)) rebuild_lists();
-  if (steps % kRebalanceEvery == 0 || !blocks_fit()) balance_blocks();
+  if (steps % kRebalanceEvery == 0) balance_blocks();  // and whenever they do not fit (compute_forces)
   // Eqs. (3)-(15) from the increments of the last move; then, for each thread's discs:
   switch (scheme) {
     case Scheme::paper_eq18: far = force_pass(Then::kick_drift_eq18, dt); break;  // (17), (18)
@@ -144,7 +144,7 @@ void World::size_pair_forces(std::size_t count) {
 bool World::force_pass(Then then, double h) {
   // Verlet's rest measure: the |v dt| of the move, before the closing kick overwrites v (the
   // force pass reads v, never writes it); parallel_sum's blocks, whatever the force blocks are.
-  if (then == Then::kick && measure_increments) measure_block(0, static_cast<int>(discs.size()));
+  if (then == Then::kick && measure_increments) measure_increment_sums();
   const bool record = record_pair_forces;
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
@@ -548,7 +548,7 @@ bool World::compute_forces(Then then, double h) {
     // discs is added by that block's owner once all are done, in thread order: a given thread
     // count always sums in the same order (bit-identical runs). Then each thread integrates its
     // own discs.
-    if (!blocks_fit()) balance_blocks();  // a pass outside step() (tests, benchmarks)
+    if (!blocks_fit()) balance_blocks();  // other threads or discs than at the last balance
     std::vector<double>& part = thread_overlap_;
     part.assign(nt, 0.0);
     unsigned far = 0;
@@ -729,16 +729,15 @@ World::Increments World::increments() const {
 }
 
 // The sums of parallel_sum (its blocks, each summed in order): the same bits as summing stored
-// increments with it, whichever threads run this step's passes.
-void World::measure_block(int i0, int i1) {
+// increments with it, whichever threads run this step's passes. One block a thread.
+void World::measure_increment_sums() {
   const int n = static_cast<int>(discs.size());
   const int nb = threads_for(n);
   const double* vx = discs.vx.data(); const double* vy = discs.vy.data();
+#pragma omp parallel for schedule(static) num_threads(nb)
   for (int b = 0; b < nb; ++b) {
-    const int a = std::max(i0, block_start(n, nb, b)), e = std::min(i1, block_start(n, nb, b + 1));
-    if (a >= e) continue;
     double sx = 0, sy = 0;
-    for (int i = a; i < e; ++i) {
+    for (int i = block_start(n, nb, b); i < block_start(n, nb, b + 1); ++i) {
       sx += std::abs(vx[i] * dt);
       sy += std::abs(vy[i] * dt);
     }

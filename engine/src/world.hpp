@@ -187,7 +187,7 @@ class World {
   template <Drift D>
   bool kick_drift_for(double h, int i0, int i1);  // kick_drift_block for this pass's kinds and angle
   bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
-  void measure_block(int i0, int i1);  // Verlet: sums of |v dt| of discs [i0, i1) before the closing kick
+  void measure_increment_sums();  // Verlet: sums of |v dt| of parallel_sum's blocks, before the closing kick
   std::vector<Padded<std::array<double, 2>>> increment_sums_;  // by parallel_sum's blocks
   long increments_measured_step_ = -1;
   void start_resultants(int i0, int i1);
