@@ -265,7 +265,8 @@ bool World::then_block(Then then, double h, int i0, int i1) {
   return false;
 }
 
-// One parallel region: each thread its block of discs (block_start, as the force pass).
+// One parallel region: each thread an equal block of discs (block_start; the force pass balances
+// its blocks by work, force_blocks: here every disc costs the same).
 bool World::integrate(Then then, double h) {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
