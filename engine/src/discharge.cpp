@@ -50,53 +50,31 @@ double surface(const Discs& d, double x0, double x1, double floor) {
 
 }  // namespace
 
-std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y) {
-  const Discs& d = w.discs;
-  const int n = static_cast<int>(d.size());
-  if (n == 0) return {};
-  double rmax = 0;
-  for (std::size_t i = 0; i < d.size(); ++i) rmax = std::max(rmax, d.r(i));
-  // Nothing here is sized by the number of discs: a loose packing (a silo started from its
-  // lattice) has few contacts, and arrays of all discs (9 bytes a disc) set the peak of such a
-  // run at 1M discs. Everything below is sized by the compressive pairs and the feet.
-  // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it; bit 1 a
-  // left foot, bit 2 a right foot. A short list, sorted by disc.
-  constexpr char kLeft = 1, kRight = 2;
-  std::vector<std::pair<int, char>> feet;
-  const int nw = static_cast<int>(w.geometry.walls.size());
-  for (const WallContact& c : w.neighbors.walls) {
-    if (!c.touching) continue;
-    const bool near_floor = std::abs(c.py - floor_y) < 1e-9 * (1 + std::abs(floor_y));
-    if (c.k >= nw || near_floor) {
-      const char bits = static_cast<char>((std::abs(c.px - slit_left) <= 2 * rmax ? kLeft : 0) |
-                                          (std::abs(c.px - slit_right) <= 2 * rmax ? kRight : 0));
-      if (bits) feet.emplace_back(c.i, bits);
-    }
-  }
-  std::sort(feet.begin(), feet.end());
-  std::size_t nf = 0;
-  for (const auto& f : feet) {  // one entry a disc, its bits or-ed
-    if (nf > 0 && feet[nf - 1].first == f.first) feet[nf - 1].second |= f.second;
-    else feet[nf++] = f;
-  }
-  feet.resize(nf);
+namespace {
+
+using Feet = std::vector<std::pair<int, char>>;  // (disc, bits): sorted by disc, one entry a disc
+constexpr char kLeftFoot = 1, kRightFoot = 2;
+
+enum class ArchSearch { found, none, too_far };
+
+// One breadth-first search for the arch over the records rec[0, nrec) (sorted by (i, j); those
+// not compressive are skipped). A disc's partners, in the order of the record list: first those
+// below it (their records come first), by increasing index, from `below` (the (j, i) of each
+// compressive pair, sorted); then those above it, from its own run of records. `reach2`: the
+// records hold every partner of the discs within sqrt(reach2) of (ax, ay) only; popping a disc
+// farther out gives too_far (the search may differ from one over all records from there).
+ArchSearch arch_bfs(const Discs& d, const PairForce* rec, std::size_t nrec, const Feet& feet, double floor_y,
+                    double ax, double ay, double reach2, std::vector<int>& path) {
   const auto foot = [&](int i) -> char {
     const auto it = std::lower_bound(feet.begin(), feet.end(), std::make_pair(i, char(0)));
     return it != feet.end() && it->first == i ? it->second : 0;
   };
-  // Breadth-first search over the pairs with a compressive total force in the last force pass
-  // (recorded for this step). A disc's partners, in the order of the record list (sorted by
-  // (i, j)): first those below it (their records come first), by increasing index, from `below`
-  // (the (j, i) of each compressive pair, sorted); then those above it, from its own run of
-  // records.
-  if (!w.pair_forces_current()) throw std::logic_error("find_arch: the pair forces of this step were not recorded");
-  const std::vector<PairForce>& rec = w.pair_forces;
   std::size_t m = 0;
-  for (const PairForce& p : rec) m += p.fn > 0;
+  for (std::size_t a = 0; a < nrec; ++a) m += rec[a].fn > 0;
   std::vector<std::pair<int, int>> below;
   below.reserve(m);
-  for (const PairForce& p : rec)
-    if (p.fn > 0) below.emplace_back(p.j, p.i);
+  for (std::size_t a = 0; a < nrec; ++a)
+    if (rec[a].fn > 0) below.emplace_back(rec[a].j, rec[a].i);
   std::sort(below.begin(), below.end());
   // The discs the search can reach or start from (those of the compressive pairs, and the
   // feet), sorted: a disc's place here indexes its predecessor on the search.
@@ -104,8 +82,8 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   {
     std::size_t a = 0, b = 0, f = 0;
     const auto next_rec = [&] {  // the i of the next compressive record, or INT_MAX
-      while (a < rec.size() && !(rec[a].fn > 0)) ++a;
-      return a < rec.size() ? rec[a].i : std::numeric_limits<int>::max();
+      while (a < nrec && !(rec[a].fn > 0)) ++a;
+      return a < nrec ? rec[a].i : std::numeric_limits<int>::max();
     };
     for (;;) {
       const int r = next_rec();
@@ -123,7 +101,7 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   std::vector<int> prev(ids.size(), -2);
   std::deque<int> q;
   for (const auto& f : feet)
-    if (f.second & kLeft) {
+    if (f.second & kLeftFoot) {
       prev[place(f.first)] = -1;
       q.push_back(f.first);
     }
@@ -133,22 +111,102 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
       q.push_back(j);
     }
   };
+  const PairForce* end = rec + nrec;
   while (!q.empty()) {
     const int i = q.front();
     q.pop_front();
-    if (foot(i) & kRight) {
-      std::vector<int> path;
+    if (foot(i) & kRightFoot) {
+      path.clear();
       for (int k = i; k >= 0; k = prev[place(k)]) path.push_back(k);
-      if (path.size() < 2) return {};  // one disc on both ends is not an arch
-      return path;
+      if (path.size() < 2) path.clear();  // one disc on both ends is not an arch
+      return path.empty() ? ArchSearch::none : ArchSearch::found;
     }
+    const double ex = d.x[i] - ax, ey = d.y[i] - ay;
+    if (!(ex * ex + ey * ey <= reach2)) return ArchSearch::too_far;  // its partners may be missing
     const auto lo = std::lower_bound(below.begin(), below.end(), std::make_pair(i, std::numeric_limits<int>::min()));
     for (auto it = lo; it != below.end() && it->first == i; ++it) visit(i, it->second);
-    const auto first = std::lower_bound(rec.begin(), rec.end(), i, [](const PairForce& p, int k) { return p.i < k; });
-    for (auto it = first; it != rec.end() && it->i == i; ++it)
+    const PairForce* first = std::lower_bound(rec, end, i, [](const PairForce& p, int k) { return p.i < k; });
+    for (const PairForce* it = first; it != end && it->i == i; ++it)
       if (it->fn > 0) visit(i, it->j);
   }
-  return {};
+  return ArchSearch::none;
+}
+
+}  // namespace
+
+std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y, ArchStats* stats) {
+  const Discs& d = w.discs;
+  if (stats) *stats = ArchStats{};
+  if (d.size() == 0) return {};
+  double rmax = 0;
+  for (std::size_t i = 0; i < d.size(); ++i) rmax = std::max(rmax, d.r(i));
+  // Nothing here is sized by the number of discs: a loose packing (a silo started from its
+  // lattice) has few contacts, and arrays of all discs (9 bytes a disc) set the peak of such a
+  // run at 1M discs. Everything below is sized by the compressive pairs near the slit and the feet.
+  // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it; bit 1 a
+  // left foot, bit 2 a right foot. A short list, sorted by disc.
+  Feet feet;
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  for (const WallContact& c : w.neighbors.walls) {
+    if (!c.touching) continue;
+    const bool near_floor = std::abs(c.py - floor_y) < 1e-9 * (1 + std::abs(floor_y));
+    if (c.k >= nw || near_floor) {
+      const char bits = static_cast<char>((std::abs(c.px - slit_left) <= 2 * rmax ? kLeftFoot : 0) |
+                                          (std::abs(c.px - slit_right) <= 2 * rmax ? kRightFoot : 0));
+      if (bits) feet.emplace_back(c.i, bits);
+    }
+  }
+  std::sort(feet.begin(), feet.end());
+  std::size_t nf = 0;
+  for (const auto& f : feet) {  // one entry a disc, its bits or-ed
+    if (nf > 0 && feet[nf - 1].first == f.first) feet[nf - 1].second |= f.second;
+    else feet[nf++] = f;
+  }
+  feet.resize(nf);
+  if (!w.pair_forces_current()) throw std::logic_error("find_arch: the pair forces of this step were not recorded");
+  const std::vector<PairForce>& rec = w.pair_forces;
+  // The search in a disc of radius rho around the slit's centre first, over the compressive
+  // records whose disc i lies in it (a copy sized by the slit's neighbourhood, not by the silo):
+  // the whole packing's records sorted cost a serial sort of every compressive pair at each
+  // sample. A partner is at most `hop` (the longest compressive pair) from its disc, so every
+  // partner of a disc within rho - hop of the centre is among those records (its own pairs
+  // through i, the others through their partner's i, within rho). A search that pops only such
+  // discs runs exactly as over all records: the same chain. One that pops a disc farther out is
+  // given up and run again in twice the radius, at last over all records.
+  const double ax = 0.5 * (slit_left + slit_right), ay = floor_y;
+  const auto dist2 = [&](int i) {
+    const double ex = d.x[i] - ax, ey = d.y[i] - ay;
+    return ex * ex + ey * ey;
+  };
+  double far2 = 0, hop2 = 0;  // the farthest compressive disc i, the longest compressive pair
+  for (const PairForce& p : rec)
+    if (p.fn > 0) {
+      far2 = std::max(far2, dist2(p.i));
+      const double ex = d.x[p.j] - d.x[p.i], ey = d.y[p.j] - d.y[p.i];
+      hop2 = std::max(hop2, ex * ex + ey * ey);
+    }
+  const double hop = std::sqrt(hop2);
+  double feet_far = 0;
+  for (const auto& f : feet) feet_far = std::max(feet_far, std::sqrt(dist2(f.first)));
+  std::vector<int> path;
+  std::vector<PairForce> near;
+  for (double rho = feet_far + 8 * hop + rmax;; rho *= 2) {
+    if (stats) ++stats->searches;
+    if (!(rho * rho < far2)) {  // every record: the search as over the whole packing
+      if (stats) stats->records += rec.size();
+      arch_bfs(d, rec.data(), rec.size(), feet, floor_y, ax, ay, std::numeric_limits<double>::infinity(), path);
+      return path;
+    }
+    near.clear();
+    for (const PairForce& p : rec)
+      if (p.fn > 0 && !(dist2(p.i) > rho * rho)) near.push_back(p);  // NaN: kept
+    if (stats) stats->records += near.size();
+    // Margins of 1e-9: rounding in the distances never admits a disc whose partner is outside.
+    const double reach = rho * (1 - 1e-9) - hop * (1 + 1e-9);
+    const ArchSearch r = arch_bfs(d, near.data(), near.size(), feet, floor_y, ax, ay,
+                                  reach > 0 ? reach * reach : -1.0, path);
+    if (r != ArchSearch::too_far) return path;
+  }
 }
 
 double flow_rate(const std::vector<Removal>& removals) {

@@ -85,9 +85,18 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st);
 DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out_dir,
                                    bool progress, const RunControl* ctl, LastGood* good = nullptr);
 
-// Disc ids of the arch over the slit: the shortest chain of touching discs from one slit end
-// (point L or the bottom wall within 2 r of it) to the other. Empty when there is none.
-std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y);
+// What one find_arch call searched: the searches run (each in a wider disc around the slit than
+// the last, the last over all records) and the records they read, summed.
+struct ArchStats {
+  int searches = 0;
+  std::size_t records = 0;
+};
+
+// Disc indices of the arch over the slit: the shortest chain of touching discs from one slit end
+// (point L or the bottom wall within 2 r of it) to the other, over the pairs with a compressive
+// total force in this step's recorded pass. Empty when there is none.
+std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y,
+                           ArchStats* stats = nullptr);
 
 // Least-squares slope of cumulative removed mass against time, after the start transient
 // (from the 5th removal on); NaN with fewer than 10 removals.

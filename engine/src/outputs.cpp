@@ -165,42 +165,62 @@ json pair_json(const PairReport& r) {
 }  // namespace
 
 
+namespace {
+
+// The k-th index of a list that `keep` accepts, asked for in increasing k: a k below the last one
+// asked starts the scan again from the list's start. The contact files read their contacts in
+// order, once a section of the VTU, so no list of the accepted indices is kept (at the end of a
+// dense 1M-disc run such lists, 8 bytes a touching pair, set the run's peak memory).
+class NthKept {
+ public:
+  template <class Keep>
+  std::size_t find(std::size_t k, Keep&& keep) {  // k below the number of accepted entries
+    if (!started_ || k < k_) {
+      started_ = true;
+      k_ = 0;
+      at_ = 0;
+      while (!keep(at_)) ++at_;
+    }
+    for (; k_ < k; ++k_)
+      for (++at_; !keep(at_);) ++at_;
+    return at_;
+  }
+
+ private:
+  bool started_ = false;
+  std::size_t k_ = 0, at_ = 0;
+};
+
+}  // namespace
+
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
   const Discs& d = w.discs;
-  // Which entries are written, by index (4 bytes a contact; the columns are read from the lists).
-  std::vector<std::uint32_t> pairs, bonds, walls;
-  // A pair's totals: its entry in the recorded forces of this step (an index, 4 bytes), or none for
-  // a pair that pass found apart (0, 0); NaN when this step's forces were not recorded (the run
-  // loops record them). Both lists are sized exactly first: at the end of a dense run they are
-  // the largest arrays made here.
-  constexpr std::uint32_t kNone = UINT32_MAX;
-  std::vector<std::uint32_t> totals;
+  // The contacts written, in this order: the touching disc-disc pairs (list order), the bonds
+  // between distinct places, the touching obstacle contacts. Counted first, then read in order.
   const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
   const auto touching = [&](std::size_t p) {
     const PairContact& c = w.neighbors.pairs[p];
     const double R = dist(c.i, c.j);
     return R <= d.r(c.i) + d.r(c.j) && R != 0;
   };
+  const auto bonded = [&](std::size_t p) { return dist(w.bonds[p].i, w.bonds[p].j) != 0; };
+  const auto wall_touching = [&](std::size_t p) { return w.neighbors.walls[p].touching; };
+  std::size_t np = 0, nb = 0, nwc = 0;
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) np += touching(p);
+  for (std::size_t p = 0; p < w.bonds.size(); ++p) nb += bonded(p);
+  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) nwc += wall_touching(p);
+  const std::size_t n = np + nb + nwc;
+  // A pair's totals: its entry in the recorded forces of this step, found by walking the record
+  // list (sorted by (i, j), as the pair list) beside the pairs; (0, 0) for a pair that pass found
+  // apart, NaN when this step's forces were not recorded (the run loops record them).
   const bool recorded = w.pair_forces_current();
-  std::size_t count = 0;
-  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) count += touching(p);
-  pairs.reserve(count);
-  totals.reserve(count);
-  w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
-    if (!touching(p)) return;
-    pairs.push_back(static_cast<std::uint32_t>(p));
-    totals.push_back(rec ? static_cast<std::uint32_t>(rec - w.pair_forces.data()) : kNone);
-  });
-  const auto total = [&](std::size_t c, double& fn, double& fs) {  // c: index into pairs
-    const std::uint32_t k = totals[c];
-    fn = !recorded ? NAN : k != kNone ? w.pair_forces[k].fn : 0.0;
-    fs = !recorded ? NAN : k != kNone ? w.pair_forces[k].fs : 0.0;
+  const std::vector<PairForce>& rec = w.pair_forces;
+  const auto totals = [&](const PairContact& c, std::size_t& r, double& fn, double& fs) {
+    while (r < rec.size() && (rec[r].i < c.i || (rec[r].i == c.i && rec[r].j < c.j))) ++r;
+    const bool has = r < rec.size() && rec[r].i == c.i && rec[r].j == c.j;
+    fn = !recorded ? NAN : has ? rec[r].fn : 0.0;
+    fs = !recorded ? NAN : has ? rec[r].fs : 0.0;
   };
-  for (std::size_t p = 0; p < w.bonds.size(); ++p)
-    if (dist(w.bonds[p].i, w.bonds[p].j) != 0) bonds.push_back(static_cast<std::uint32_t>(p));
-  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p)
-    if (w.neighbors.walls[p].touching) walls.push_back(static_cast<std::uint32_t>(p));
-  const std::size_t np = pairs.size(), nb = bonds.size(), n = np + nb + walls.size();
   // Contact c of the VTU: its forces, its disc i and its other end (disc j, or the obstacle point).
   struct Entry {
     double en, es, fn, fs;
@@ -209,18 +229,23 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     double px, py;
   };
   const int nw = static_cast<int>(w.geometry.walls.size());
+  NthKept pair_at, bond_at, wall_at;
+  std::size_t rec_at = 0, last_pair = 0;  // the record cursor, behind the pair last read
   const auto entry = [&](std::size_t c) -> Entry {
     if (c < np) {
-      const PairContact& q = w.neighbors.pairs[pairs[c]];
+      const std::size_t p = pair_at.find(c, touching);
+      if (p < last_pair) rec_at = 0;  // a section read from its start again
+      last_pair = p;
+      const PairContact& q = w.neighbors.pairs[p];
       double fn, fs;
-      total(c, fn, fs);
+      totals(q, rec_at, fn, fs);
       return {q.en, q.es, fn, fs, 0, q.i, q.j, 0, 0};
     }
     if (c < np + nb) {
-      const Bond& q = w.bonds[bonds[c - np]];
+      const Bond& q = w.bonds[bond_at.find(c - np, bonded)];
       return {q.en, q.es, q.fn, q.fs, 3, q.i, q.j, 0, 0};
     }
-    const WallContact& q = w.neighbors.walls[walls[c - np - nb]];
+    const WallContact& q = w.neighbors.walls[wall_at.find(c - np - nb, wall_touching)];
     return {q.en, q.es, q.fn, q.fs, q.k < nw ? 1 : 2, q.i, -1, q.px, q.py};
   };
   const auto point = [&](std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
@@ -234,10 +259,12 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
   o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
-  for (std::size_t e = 0; e < np; ++e) {
-    const PairContact& c = w.neighbors.pairs[pairs[e]];
+  std::size_t r = 0;
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
+    if (!touching(p)) continue;
+    const PairContact& c = w.neighbors.pairs[p];
     double fn, fs;
-    total(e, fn, fs);
+    totals(c, r, fn, fs);
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;
@@ -245,7 +272,8 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
       << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
   }
-  for (std::uint32_t p : bonds) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+  for (std::size_t p = 0; p < w.bonds.size(); ++p) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+    if (!bonded(p)) continue;
     const Bond& c = w.bonds[p];
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
@@ -254,7 +282,8 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
       << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
   }
-  for (std::uint32_t p : walls) {
+  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) {
+    if (!wall_touching(p)) continue;
     const WallContact& c = w.neighbors.walls[p];
     const bool is_wall = c.k < nw;
     const std::string& name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;

@@ -112,3 +112,58 @@ TEST(FindArch, SameChainAsThePlainSearchOnRandomContactGraphs) {
   EXPECT_GT(arches, 50);
   EXPECT_GT(none, 50);
 }
+
+// A packing as a run leaves it: discs on a jittered triangular lattice, pairs only between
+// touching discs. find_arch searches near the slit first and widens only when the search leaves
+// that neighbourhood; it must give the plain search's chain whether the arch is low over the slit,
+// forced high by a cut in the compressive network (the first neighbourhood too small), or absent.
+TEST(FindArch, LocalSearchGivesThePlainChainOnPackings) {
+  std::mt19937 rng(1983);
+  int local = 0, widened = 0, whole = 0, arches = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    PairProps p;
+    p.kn = 1;
+    World w = dem::testing::make_world(p, {}, Scheme::paper_eq19, 1e-4, -980.0);
+    const int cols = 70, rows = 45;
+    const double r = 0.5, s = 0.98;  // spacing under 2 r: neighbours overlap
+    std::uniform_real_distribution<double> jit(-0.004, 0.004);
+    for (int row = 0; row < rows; ++row)
+      for (int c = 0; c < cols; ++c)
+        w.discs.add(r + c * s + (row % 2) * 0.5 * s + jit(rng), r * 0.99 + row * s * std::sqrt(0.75) + jit(rng), r, 1.0, 0);
+    const int n = static_cast<int>(w.discs.size());
+    // A cut: no compressive pair crosses x = 12 below the height `cut` (0: no cut; past the top:
+    // no arch at all).
+    const double cut = trial % 4 == 0 ? 0.0 : trial % 4 == 1 ? 6.0 : trial % 4 == 2 ? 30.0 : 1e9;
+    std::vector<PairForce> rec;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) {
+        const double dx = w.discs.x[j] - w.discs.x[i], dy = w.discs.y[j] - w.discs.y[i];
+        if (dx * dx + dy * dy >= 4 * r * r) continue;
+        const bool crosses = (w.discs.x[i] - 12) * (w.discs.x[j] - 12) < 0 && w.discs.y[i] < cut;
+        rec.push_back(PairForce{i, j, crosses || rng() % 6 == 0 ? -1.0 : 1.0 + (rng() % 7), 0.0});
+      }
+    w.pair_forces = rec;
+    w.pair_forces_step = w.steps;
+    std::vector<WallContact> walls;  // the bottom row's floor contacts within reach of a slit end
+    for (int i = 0; i < cols; ++i)
+      if (std::abs(w.discs.x[i] - kLeftX) <= 2 * r || std::abs(w.discs.x[i] - kRightX) <= 2 * r) {
+        WallContact c{};
+        c.i = i; c.k = 0; c.px = w.discs.x[i]; c.py = kFloor; c.touching = true;
+        walls.push_back(c);
+      }
+    w.neighbors.walls = walls;
+    const std::vector<int> want = plain_arch(w);
+    ArchStats st;
+    const std::vector<int> got = find_arch(w, kLeftX, kRightX, kFloor, &st);
+    ASSERT_EQ(got, want) << "trial " << trial << " cut " << cut;
+    arches += !want.empty();
+    if (st.searches == 1 && st.records < rec.size() / 4) ++local;
+    else if (st.records < rec.size()) ++widened;
+    else ++whole;
+  }
+  // Each way through the search occurs: settled near the slit, widened, over all records.
+  EXPECT_GT(local, 5);
+  EXPECT_GT(widened, 5);
+  EXPECT_GT(whole, 5);
+  EXPECT_GT(arches, 20);
+}
