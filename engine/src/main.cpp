@@ -213,7 +213,10 @@ int cmd_run(int argc, char** argv) {
     build_world_releasing_discs(spec, world);  // the world has the discs: 56 B a disc less at the peak
     stab = stability_report(world, spec.material_names);
     key = checkpoint_key(scene, ov);
-    if (!resume && !spec.start_from.empty()) load_state(world, spec.start_from);
+    if (!resume && !spec.start_from.empty()) {
+      load_state(world, spec.start_from);
+      release_free_heap();  // the state file's read and the discs it replaced
+    }
   } catch (const SceneError& e) {
     return bad(e.what());
   } catch (const std::runtime_error& e) {

@@ -12,6 +12,9 @@
 #include <system_error>
 
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "fill.hpp"
 #include "neighbors.hpp"
@@ -843,6 +846,13 @@ void build_world_releasing_discs(SceneSpec& s, World& w) {
   set_up_world(s, w);
   std::vector<DiscInit>().swap(s.discs);
   w.init();
+  release_free_heap();
+}
+
+void release_free_heap() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
 }
 
 }  // namespace dem

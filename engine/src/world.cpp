@@ -146,6 +146,12 @@ bool World::force_pass(Then then, double h) {
   // force pass reads v, never writes it); parallel_sum's blocks, whatever the force blocks are.
   if (then == Then::kick && measure_increments) measure_increment_sums();
   const bool record = record_pair_forces;
+  // Totals recorded by an earlier pass are stale after this one (pair_forces_current is false):
+  // freed, so that they never sit beside a list build's scratch (one or the other at the peak).
+  if (!record && pair_forces.capacity() > 0) {
+    std::vector<PairForce>().swap(pair_forces);
+    pair_forces_step = -1;
+  }
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
   return far;

@@ -46,10 +46,12 @@ TEST(PairForces, RecordedOnlyWhenAskedAndWithoutChangingTheStep) {
       const PairForce &a = rec.pair_forces[k - 1], &b = rec.pair_forces[k];
       ASSERT_TRUE(a.i < b.i || (a.i == b.i && a.j < b.j)) << threads << " threads, entry " << k;
     }
-    // One more step without recording: the record is no longer this step's.
+    // One more step without recording: the record is no longer this step's, and its memory is
+    // given back (stale totals never sit beside a list build's scratch).
     rec.record_pair_forces = false;
     rec.step();
     EXPECT_FALSE(rec.pair_forces_current());
+    EXPECT_EQ(rec.pair_forces.capacity(), 0u);
   }
 }
 
