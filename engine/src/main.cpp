@@ -12,6 +12,7 @@
 #include "discharge.hpp"
 #include "elastic_params.hpp"
 #include "ensemble.hpp"
+#include "free_heap.hpp"
 #include "state.hpp"
 #include "outputs.hpp"
 #include "resolve.hpp"

@@ -12,11 +12,9 @@
 #include <system_error>
 
 #include <unistd.h>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include "fill.hpp"
+#include "free_heap.hpp"
 #include "neighbors.hpp"
 #include "shear_scene.hpp"
 #include "stability.hpp"
@@ -846,13 +844,8 @@ void build_world_releasing_discs(SceneSpec& s, World& w) {
   set_up_world(s, w);
   std::vector<DiscInit>().swap(s.discs);
   w.init();
-  release_free_heap();
+  release_free_heap();  // the setup's temporaries: the scene's parse, the fill's file, the first build's scratch
 }
 
-void release_free_heap() {
-#if defined(__GLIBC__)
-  malloc_trim(0);
-#endif
-}
 
 }  // namespace dem

@@ -108,12 +108,6 @@ void build_world(const SceneSpec& s, World& w);
 // builds its contact lists: at a million discs the list (56 bytes a disc) would otherwise add
 // to the peak memory of the run. For callers that no longer need s.discs.
 void build_world_releasing_discs(SceneSpec& s, World& w);
-// Gives the free pages inside the heap back to the system (glibc's malloc_trim; nothing
-// elsewhere). The setup's temporaries (the scene's parse, the fill's file, the first list
-// build's scratch) are freed inside the heap, where glibc keeps their pages: at a million discs
-// 23 MB of free heap stayed resident through the run, 12 % of its peak. Called once the world is
-// set up; the freed pages are taken again only as the run needs them.
-void release_free_heap();
 
 Scheme parse_scheme(const std::string& s, bool& ok);
 
