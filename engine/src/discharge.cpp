@@ -121,8 +121,10 @@ ArchSearch arch_bfs(const Discs& d, const PairForce* rec, std::size_t nrec, cons
       if (path.size() < 2) path.clear();  // one disc on both ends is not an arch
       return path.empty() ? ArchSearch::none : ArchSearch::found;
     }
-    const double ex = d.x[i] - ax, ey = d.y[i] - ay;
-    if (!(ex * ex + ey * ey <= reach2)) return ArchSearch::too_far;  // its partners may be missing
+    if (reach2 < std::numeric_limits<double>::infinity()) {  // all records (infinite reach): no test
+      const double ex = d.x[i] - ax, ey = d.y[i] - ay;
+      if (!(ex * ex + ey * ey <= reach2)) return ArchSearch::too_far;  // its partners may be missing
+    }
     const auto lo = std::lower_bound(below.begin(), below.end(), std::make_pair(i, std::numeric_limits<int>::min()));
     for (auto it = lo; it != below.end() && it->first == i; ++it) visit(i, it->second);
     const PairForce* first = std::lower_bound(rec, end, i, [](const PairForce& p, int k) { return p.i < k; });
@@ -192,7 +194,7 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   std::vector<PairForce> near;
   for (double rho = feet_far + 8 * hop + rmax;; rho *= 2) {
     if (stats) ++stats->searches;
-    if (!(rho * rho < far2)) {  // every record: the search as over the whole packing
+    if (!(rho > 0) || !(rho * rho < far2)) {  // every record: the search as over the whole packing
       if (stats) stats->records += rec.size();
       arch_bfs(d, rec.data(), rec.size(), feet, floor_y, ax, ay, std::numeric_limits<double>::infinity(), path);
       return path;
