@@ -7,8 +7,6 @@
 // list build (its cell sort, 7 MB at a million discs) it made the settled 1M loop 9 % slower.
 #pragma once
 
-#include <cstddef>
-
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif

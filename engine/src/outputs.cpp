@@ -214,12 +214,10 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   // list (sorted by (i, j), as the pair list) beside the pairs; (0, 0) for a pair that pass found
   // apart, NaN when this step's forces were not recorded (the run loops record them).
   const bool recorded = w.pair_forces_current();
-  const std::vector<PairForce>& rec = w.pair_forces;
   const auto totals = [&](const PairContact& c, std::size_t& r, double& fn, double& fs) {
-    while (r < rec.size() && (rec[r].i < c.i || (rec[r].i == c.i && rec[r].j < c.j))) ++r;
-    const bool has = r < rec.size() && rec[r].i == c.i && rec[r].j == c.j;
-    fn = !recorded ? NAN : has ? rec[r].fn : 0.0;
-    fs = !recorded ? NAN : has ? rec[r].fs : 0.0;
+    const PairForce* f = w.recorded_forces(c, r);
+    fn = !recorded ? NAN : f ? f->fn : 0.0;
+    fs = !recorded ? NAN : f ? f->fs : 0.0;
   };
   // Contact c of the VTU: its forces, its disc i and its other end (disc j, or the obstacle point).
   struct Entry {

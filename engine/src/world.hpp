@@ -92,18 +92,19 @@ class World {
   static constexpr long kRebalanceEvery = 64;
   bool blocks_fit() const;  // force_blocks fit the thread count and the discs
   void balance_blocks();  // force_blocks from the lists as they are
-  // f(p, rec) for each pair p of the list, in order, with its recorded totals rec (nullptr for a
-  // pair the recorded pass found apart or did not have). Both lists are sorted by (i, j).
+  // The recorded totals of pair c (nullptr for a pair the recorded pass found apart or did not
+  // have), found by a cursor r into pair_forces that only moves forward: ask for pairs in list
+  // order (both lists are sorted by (i, j)), starting from r = 0.
+  const PairForce* recorded_forces(const PairContact& c, std::size_t& r) const {
+    const std::size_t nr = pair_forces.size();
+    while (r < nr && (pair_forces[r].i < c.i || (pair_forces[r].i == c.i && pair_forces[r].j < c.j))) ++r;
+    return r < nr && pair_forces[r].i == c.i && pair_forces[r].j == c.j ? &pair_forces[r] : nullptr;
+  }
+  // f(p, rec) for each pair p of the list, in order, with its recorded totals rec (as above).
   template <class F>
   void each_pair_with_forces(F&& f) const {
     std::size_t r = 0;
-    const std::size_t nr = pair_forces.size();
-    for (std::size_t p = 0; p < neighbors.pairs.size(); ++p) {
-      const PairContact& c = neighbors.pairs[p];
-      while (r < nr && (pair_forces[r].i < c.i || (pair_forces[r].i == c.i && pair_forces[r].j < c.j))) ++r;
-      const bool has = r < nr && pair_forces[r].i == c.i && pair_forces[r].j == c.j;
-      f(p, has ? &pair_forces[r] : nullptr);
-    }
+    for (std::size_t p = 0; p < neighbors.pairs.size(); ++p) f(p, recorded_forces(neighbors.pairs[p], r));
   }
 
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
