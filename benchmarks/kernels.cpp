@@ -5,7 +5,7 @@
 // (shear, dashpots, walls, bonds), each variant its own compiled kernel, the pass that records
 // the pair totals (an output step's) against the one that does not, and a scene of one disc kind
 // (its constants in registers) against several (read through each disc's kind); and the pair
-// law four pairs a vector (AVX2, where the processor has it) against two (SSE2, `narrow_law`).
+// law eight or four pairs a vector (AVX-512 or AVX2, the widest the processor has) against two (SSE2, `narrow_law`).
 // DEM_KERNELS_SCENE=out/speed/bench_silo_100k_settled.toml (made by speed.py --start settled)
 // times them on a settled packing, where most candidate pairs touch.
 //
@@ -77,18 +77,20 @@ World variant(Variant v, int threads) {
 
 void BM_ContactForces(benchmark::State& st) {
   World w = variant(static_cast<Variant>(st.range(0)), static_cast<int>(st.range(1)));
-  const bool wide = World::wide_law;
-  if (st.range(0) == narrow_law) World::wide_law = false;  // the law two pairs a vector (SSE2), not four (AVX2)
+  const int widest = World::vector_width;
+  if (st.range(0) == narrow_law) World::vector_width = 2;  // the law two pairs a vector (SSE2), not four or eight
   for (auto _ : st) {
     w.compute_forces_now();
     benchmark::DoNotOptimize(w.discs.fx.data());
   }
-  World::wide_law = wide;
+  World::vector_width = widest;
   st.SetItemsProcessed(st.iterations() * static_cast<long>(w.neighbors.pairs.size()));
   st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
   static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond",
                                 "recorded", "several_kinds", "narrow_law"};
-  st.SetLabel(std::string(names[st.range(0)]) + (st.range(0) != narrow_law && World::wide_law ? " [AVX2 law]" : "") +
+  st.SetLabel(std::string(names[st.range(0)]) + (st.range(0) != narrow_law && World::vector_width > 2
+                                                          ? " [" + std::to_string(World::vector_width) + " a vector]"
+                                                          : "") +
               (w.kernel_shear ? "" : " [shear compiled out]") +
               (w.kernel_dashpots ? "" : " [dashpots compiled out]"));
 }

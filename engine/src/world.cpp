@@ -9,14 +9,19 @@
 
 namespace dem {
 
-bool World::cpu_has_wide_law() {
+// AVX-512 code: eight doubles a vector (512-bit, which GCC otherwise avoids), and the FMA that
+// AVX-512 brings is never used for a contraction (-ffp-contract=off).
+#define DEM_TARGET_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,prefer-vector-width=512")))
+
+int World::cpu_vector_width() {
 #if defined(__x86_64__) && defined(__GNUC__)
-  return __builtin_cpu_supports("avx2");
-#else
-  return false;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl"))
+    return 8;
+  if (__builtin_cpu_supports("avx2")) return 4;
 #endif
+  return 2;
 }
-bool World::wide_law = World::cpu_has_wide_law();
+int World::vector_width = World::cpu_vector_width();
 
 int World::threads_for(int n) const {
   return std::max(1, std::min(threads, n / kMinDiscsPerThread));
@@ -208,19 +213,24 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
   return far;
 }
 
-// Both compiled twice, as the pair law: for any x86-64 and, chosen at run time where the
-// processor has it (World::wide_law), for AVX2 (four discs a vector; without AVX2 GCC does not
-// vectorise the count of far discs, whose floats widen to doubles and whose count is 64-bit).
+// Compiled three times, as the pair law: for any x86-64 and, chosen at run time by
+// World::vector_width, for AVX2 (four discs a vector; without AVX2 GCC does not vectorise the
+// count of far discs, whose floats widen to doubles and whose count is 64-bit) and AVX-512 (eight).
 #if defined(__x86_64__) && defined(__GNUC__)
 template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
 __attribute__((target("avx2"))) long kick_drift_kernel_avx2(A... a) {
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
+}
+template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
+DEM_TARGET_AVX512 long kick_drift_kernel_avx512(A... a) {
   return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
 }
 #endif
 template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
 long kick_drift_best(A... a) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::wide_law) return kick_drift_kernel_avx2<D, ONE_KIND, PHI, FAR>(a...);
+  if (World::vector_width >= 8) return kick_drift_kernel_avx512<D, ONE_KIND, PHI, FAR>(a...);
+  if (World::vector_width >= 4) return kick_drift_kernel_avx2<D, ONE_KIND, PHI, FAR>(a...);
 #endif
   return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
 }
@@ -363,20 +373,27 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
   }
 }
 
-// The block's law compiled twice: for any x86-64 (two pairs a vector) and, chosen at run time on
-// a processor that has it, for AVX2 (four). IEEE operations give the same bits at any width, and
-// no contraction into FMA (-ffp-contract=off, and the AVX2 version does not enable FMA).
+// The block's law compiled three times: for any x86-64 (two pairs a vector) and, chosen at run
+// time by World::vector_width, for AVX2 (four) and AVX-512 (eight). IEEE operations give the
+// same bits at any width, and no contraction into FMA (-ffp-contract=off, and the AVX2 version
+// does not enable FMA).
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
 __attribute__((target("avx2"))) static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props,
                                                                  double inv_dt) {
   pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
 }
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const PairProps* __restrict props,
+                                                    double inv_dt) {
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+}
 #endif
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
 static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::wide_law) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+  if (World::vector_width >= 8) return pair_block_law_avx512<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+  if (World::vector_width >= 4) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
 #endif
   pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
 }

@@ -57,11 +57,11 @@ class World {
   // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
   int threads = 1;
   static constexpr int kMinDiscsPerThread = 2048;
-  // The pair law runs four pairs a vector (AVX2) where the processor has it, else two (SSE2):
-  // the same bits either way. Set at start from the processor; tests and benchmarks may clear it
-  // (and set it again only where cpu_has_wide_law()).
-  static bool wide_law;
-  static bool cpu_has_wide_law();
+  // Doubles a vector in the pair law and the integration loops: 8 (AVX-512), 4 (AVX2) or 2
+  // (SSE2), the widest the processor has (cpu_vector_width); the same bits at every width. Tests
+  // and benchmarks may set a narrower one (never wider than cpu_vector_width()).
+  static int vector_width;
+  static int cpu_vector_width();
   int threads_for(int n) const;  // the thread count used for n discs
   double gx = 0, gy = -980; // gravity [cm/s^2]
 

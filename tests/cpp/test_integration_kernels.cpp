@@ -1,8 +1,9 @@
 // The integration loop (World::kick_drift_block: kick, drift and the skin/2 test) runs several
-// discs a vector, two (SSE2) or four (AVX2, chosen at run time): each disc must still get
+// discs a vector, two (SSE2), four (AVX2) or eight (AVX-512; World::vector_width, the widest the
+// processor has unless set narrower): each disc must still get
 // exactly eqs. (17)-(19) as written, whatever its place in a vector (the loop's remainder
 // included), with one kind of disc or several; the skin/2 test must catch a single far disc
-// anywhere; and both vector widths must give the same bits over whole runs.
+// anywhere; and every vector width must give the bits of two over whole runs.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -42,14 +43,14 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
 
 // Eq. (17) and the drift of (18) or (19), disc by disc, as the paper writes them.
 TEST(IntegrationKernels, EveryDiscGetsTheSchemeAsWritten) {
-  const bool had = World::wide_law;
-  for (bool wide : {false, true}) {
-    if (wide && !World::cpu_has_wide_law()) continue;
-    World::wide_law = wide;
+  const int had = World::vector_width;
+  for (int width : {2, 4, 8}) {
+    if (width > World::cpu_vector_width()) continue;
+    World::vector_width = width;
     for (Scheme scheme : {Scheme::paper_eq18, Scheme::paper_eq19})
       for (bool kinds : {false, true})
         for (bool angle : {false, true})
-          for (int n : {1, 3, 4, 5, 37}) {  // remainders of two and four discs a vector
+          for (int n : {1, 3, 4, 5, 8, 9, 37}) {  // remainders of two, four and eight discs a vector
             World w = row_world(scheme, n, kinds, angle, 17u + static_cast<unsigned>(n));
             const Discs before = w.discs;
             const double h = 0.7e-4, dt = w.dt;
@@ -74,23 +75,23 @@ TEST(IntegrationKernels, EveryDiscGetsTheSchemeAsWritten) {
                 EXPECT_EQ(d.phi[i], b.phi[i] + e);
               }
               if (::testing::Test::HasFailure()) {
-                World::wide_law = had;
-                FAIL() << "disc " << i << " of " << n << (wide ? ", AVX2" : ", SSE2") << (kinds ? ", two kinds" : "")
+                World::vector_width = had;
+                FAIL() << "disc " << i << " of " << n << ", " << width << " doubles a vector" << (kinds ? ", two kinds" : "")
                        << (angle ? ", angle kept" : "");
               }
             }
           }
   }
-  World::wide_law = had;
+  World::vector_width = had;
 }
 
 // One disc past skin/2 from its list position, at any place (vector lanes and the remainder):
 // the drift reports it; the same disc just short of the limit: not reported.
 TEST(IntegrationKernels, OneFarDiscAnywhereIsCaught) {
-  const bool had = World::wide_law;
-  for (bool wide : {false, true}) {
-    if (wide && !World::cpu_has_wide_law()) continue;
-    World::wide_law = wide;
+  const int had = World::vector_width;
+  for (int width : {2, 4, 8}) {
+    if (width > World::cpu_vector_width()) continue;
+    World::vector_width = width;
     const int n = 23;
     for (int far_one = 0; far_one < n; ++far_one)
       for (bool past : {false, true}) {
@@ -101,24 +102,25 @@ TEST(IntegrationKernels, OneFarDiscAnywhereIsCaught) {
         const double lim = std::sqrt(w.neighbors.moved_far_limit2());
         // With no force, eq. 18 moves the disc by exactly v dt.
         d.vx[far_one] = (past ? 1.001 : 0.999) * lim / w.dt;
-        EXPECT_EQ(w.kick_drift_eq18(0.0), past) << "disc " << far_one << (wide ? ", AVX2" : ", SSE2");
+        EXPECT_EQ(w.kick_drift_eq18(0.0), past) << "disc " << far_one << ", " << width << " doubles a vector";
       }
   }
-  World::wide_law = had;
+  World::vector_width = had;
 }
 
 // Whole runs of a dense packing under gravity, every scheme, one kind or two, 1 and 2 threads:
-// four discs a vector give the bits of two.
+// four and eight discs a vector give the bits of two.
 TEST(IntegrationKernels, WideAndNarrowGiveTheSameBitsOverARun) {
-  if (!World::cpu_has_wide_law()) GTEST_SKIP() << "this processor has no AVX2: only the SSE2 loops run";
-  const bool had = World::wide_law;
+  if (World::cpu_vector_width() < 4) GTEST_SKIP() << "this processor has no AVX2: only the SSE2 loops run";
+  const int had = World::vector_width;
   for (Scheme scheme : testing::kSchemes)
     for (bool kinds : {false, true})
       for (int threads : {1, 2}) {
         std::vector<Discs> out;
         std::vector<long> rebuilds;
-        for (bool wide : {true, false}) {
-          World::wide_law = wide;
+        for (int width : {2, 4, 8}) {
+          if (width > World::cpu_vector_width()) continue;
+          World::vector_width = width;
           PairProps p = testing::linear(9.45e7, 0.3, 4.16, 0.577, 2.36e7, 2.0e4);
           World w = testing::make_world(p, ContactOptions{}, scheme, 5e-5, -980.0);
           w.threads = threads;
@@ -134,12 +136,15 @@ TEST(IntegrationKernels, WideAndNarrowGiveTheSameBitsOverARun) {
           out.push_back(w.discs);
           rebuilds.push_back(w.neighbors.rebuilds);
         }
-        World::wide_law = had;
-        const Discs &a = out[0], &b = out[1];
-        EXPECT_TRUE(same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.vx, b.vx) && same_bits(a.vy, b.vy) &&
-                    same_bits(a.omega, b.omega) && same_bits(a.dux, b.dux) && same_bits(a.phi, b.phi))
-            << to_string(scheme) << (kinds ? ", two kinds" : "") << ", " << threads << " threads";
-        EXPECT_EQ(rebuilds[0], rebuilds[1]);
+        World::vector_width = had;
+        for (std::size_t k = 1; k < out.size(); ++k) {  // out[0]: two a vector
+          const Discs &a = out[0], &b = out[k];
+          EXPECT_TRUE(same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.vx, b.vx) && same_bits(a.vy, b.vy) &&
+                      same_bits(a.omega, b.omega) && same_bits(a.dux, b.dux) && same_bits(a.phi, b.phi))
+              << to_string(scheme) << (kinds ? ", two kinds" : "") << ", " << threads << " threads, "
+              << (k == 1 ? 4 : 8) << " a vector";
+          EXPECT_EQ(rebuilds[0], rebuilds[k]);
+        }
         EXPECT_GT(rebuilds[0], 1) << "the run rebuilt its lists";
       }
 }
