@@ -5,7 +5,8 @@
 // (shear, dashpots, walls, bonds), each variant its own compiled kernel, the pass that records
 // the pair totals (an output step's) against the one that does not, and a scene of one disc kind
 // (its constants in registers) against several (read through each disc's kind); and the pair
-// law eight or four pairs a vector (AVX-512 or AVX2, the widest the processor has) against two (SSE2, `narrow_law`).
+// law eight or four pairs a vector (AVX-512 or AVX2, the widest the processor has) against four
+// (`four_law`) and two (SSE2, `narrow_law`).
 // DEM_KERNELS_SCENE=out/speed/bench_silo_100k_settled.toml (made by speed.py --start settled)
 // times them on a settled packing, where most candidate pairs touch.
 //
@@ -43,7 +44,8 @@ const World& settled() {
   return *w;
 }
 
-enum Variant { full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded, several_kinds, narrow_law };
+enum Variant { full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded, several_kinds, narrow_law,
+               four_law };
 
 World variant(Variant v, int threads) {
   World w = settled();
@@ -79,6 +81,7 @@ void BM_ContactForces(benchmark::State& st) {
   World w = variant(static_cast<Variant>(st.range(0)), static_cast<int>(st.range(1)));
   const int widest = World::vector_width;
   if (st.range(0) == narrow_law) World::vector_width = 2;  // the law two pairs a vector (SSE2), not four or eight
+  if (st.range(0) == four_law) World::vector_width = std::min(4, widest);  // four (AVX2), not eight
   for (auto _ : st) {
     w.compute_forces_now();
     benchmark::DoNotOptimize(w.discs.fx.data());
@@ -87,16 +90,15 @@ void BM_ContactForces(benchmark::State& st) {
   st.SetItemsProcessed(st.iterations() * static_cast<long>(w.neighbors.pairs.size()));
   st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
   static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond",
-                                "recorded", "several_kinds", "narrow_law"};
-  st.SetLabel(std::string(names[st.range(0)]) + (st.range(0) != narrow_law && World::vector_width > 2
-                                                          ? " [" + std::to_string(World::vector_width) + " a vector]"
-                                                          : "") +
+                                "recorded", "several_kinds", "narrow_law", "four_law"};
+  const int width = st.range(0) == narrow_law ? 2 : st.range(0) == four_law ? std::min(4, widest) : widest;
+  st.SetLabel(std::string(names[st.range(0)]) + " [" + std::to_string(width) + " a vector]" +
               (w.kernel_shear ? "" : " [shear compiled out]") +
               (w.kernel_dashpots ? "" : " [dashpots compiled out]"));
 }
 BENCHMARK(BM_ContactForces)
     ->ArgsProduct({{full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded, several_kinds,
-                    narrow_law},
+                    narrow_law, four_law},
                    {1}})
     ->ArgsProduct({{full}, {2}})
     ->Unit(benchmark::kMicrosecond);

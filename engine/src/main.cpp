@@ -99,9 +99,9 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
               s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
   std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s\n", to_string(w.options.normal_spring),
               to_string(w.options.no_tension), to_string(w.options.friction_cap));
-  std::printf("  kernel: shear %s, dashpots %s, bonds %s, moving walls %s (compiled out when off)\n",
+  std::printf("  kernel: shear %s, dashpots %s, bonds %s, moving walls %s (compiled out when off); %d doubles a vector\n",
               w.kernel_shear ? "on" : "off", w.kernel_dashpots ? "on" : "off", w.bonds.empty() ? "off" : "on",
-              w.moving.empty() ? "off" : "on");
+              w.moving.empty() ? "off" : "on", World::vector_width);
   std::printf("  %-14s %9s %9s %7s %9s %6s %7s | dt bounds [s]: %-9s %-9s %-9s %-9s %-9s\n", "pair", "m*", "omega0",
               "zeta_n", "t_c", "e", "zeta_t", "normal", "tangent", "eq.26", "eq.21", "rot z=4");
   for (const auto& p : st.pairs) {
