@@ -79,9 +79,10 @@ World variant(Variant v, int threads) {
 
 void BM_ContactForces(benchmark::State& st) {
   World w = variant(static_cast<Variant>(st.range(0)), static_cast<int>(st.range(1)));
+  // The law two pairs a vector (SSE2) or four (AVX2), or the widest the processor has.
   const int widest = World::vector_width;
-  if (st.range(0) == narrow_law) World::vector_width = 2;  // the law two pairs a vector (SSE2), not four or eight
-  if (st.range(0) == four_law) World::vector_width = std::min(4, widest);  // four (AVX2), not eight
+  const int width = st.range(0) == narrow_law ? 2 : st.range(0) == four_law ? std::min(4, widest) : widest;
+  World::vector_width = width;
   for (auto _ : st) {
     w.compute_forces_now();
     benchmark::DoNotOptimize(w.discs.fx.data());
@@ -91,7 +92,6 @@ void BM_ContactForces(benchmark::State& st) {
   st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
   static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond",
                                 "recorded", "several_kinds", "narrow_law", "four_law"};
-  const int width = st.range(0) == narrow_law ? 2 : st.range(0) == four_law ? std::min(4, widest) : widest;
   st.SetLabel(std::string(names[st.range(0)]) + " [" + std::to_string(width) + " a vector]" +
               (w.kernel_shear ? "" : " [shear compiled out]") +
               (w.kernel_dashpots ? "" : " [dashpots compiled out]"));

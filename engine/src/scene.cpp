@@ -847,5 +847,4 @@ void build_world_releasing_discs(SceneSpec& s, World& w) {
   release_free_heap();  // the setup's temporaries: the scene's parse, the fill's file, the first build's scratch
 }
 
-
 }  // namespace dem

@@ -9,8 +9,10 @@
 
 namespace dem {
 
-// AVX-512 code: eight doubles a vector (512-bit, which GCC otherwise avoids), and the FMA that
-// AVX-512 brings is never used for a contraction (-ffp-contract=off).
+// Code compiled for a wider vector than the build's (chosen at run time by vector_width): AVX2,
+// four doubles a vector, without FMA; AVX-512, eight (512-bit, which GCC otherwise avoids), whose
+// FMA is never used for a contraction (-ffp-contract=off).
+#define DEM_TARGET_AVX2 __attribute__((target("avx2")))
 #define DEM_TARGET_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,prefer-vector-width=512")))
 
 int World::cpu_vector_width() {
@@ -218,7 +220,7 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
 // count of far discs, whose floats widen to doubles and whose count is 64-bit) and AVX-512 (eight).
 #if defined(__x86_64__) && defined(__GNUC__)
 template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
-__attribute__((target("avx2"))) long kick_drift_kernel_avx2(A... a) {
+DEM_TARGET_AVX2 long kick_drift_kernel_avx2(A... a) {
   return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
 }
 template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
@@ -379,7 +381,7 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
 // does not enable FMA).
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
-__attribute__((target("avx2"))) static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props,
+DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props,
                                                                  double inv_dt) {
   pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
 }
