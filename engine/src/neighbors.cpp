@@ -141,42 +141,17 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
     if (!std::isfinite(reach)) b = Box{-HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, b.live};
   }
   build_pairs(d, nt);
+  // Obstacle entries: a few per disc at a wall, a small list, built beside the old one from the
+  // discs of the cells under each obstacle's box.
+  make_room(new_walls_, walls.size());
+  search_walls(d, g, new_walls_);
+  fit(new_walls_);
+  merge_history(walls, new_walls_, wall_key);
+  walls.swap(new_walls_);
   // The cells serve this build only: freed, not kept for the next (at a million discs 8 bytes a
   // disc or more, which would add to the peak of the steps between builds).
   std::vector<int>().swap(order_);
   std::vector<int>().swap(cell_start_);
-  // Obstacle entries: a few per disc at a wall, a small list; built beside the old one.
-  if (nt <= 1) {
-    make_room(new_walls_, walls.size());
-    search_walls(d, g, 0, n, new_walls_);
-    fit(new_walls_);
-    merge_history(walls, new_walls_, wall_key);
-    walls.swap(new_walls_);
-    return;
-  }
-  // Threads search contiguous blocks of discs; the list is sorted by i, so the blocks' lists,
-  // each merged with the old entries of its discs, concatenate in order: the same list as the
-  // serial search, whatever the thread count.
-  block_walls_.resize(nt);
-  std::vector<std::size_t> wall_at(nt + 1, 0);
-#pragma omp parallel num_threads(nt)
-  {
-    const int t = omp_thread_index();
-    const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
-    auto& bw = block_walls_[t].value;
-    make_room(bw, walls.size() / nt);
-    search_walls(d, g, i0, i1, bw);
-    fit(bw);
-    merge_history(walls, bw, wall_key);
-    wall_at[t + 1] = bw.size();
-#pragma omp barrier
-#pragma omp single
-    {
-      for (int u = 0; u < nt; ++u) wall_at[u + 1] += wall_at[u];
-      resize_exact(walls, wall_at[nt]);  // the old entries are all in the blocks now
-    }
-    std::copy(bw.begin(), bw.end(), walls.begin() + static_cast<std::ptrdiff_t>(wall_at[t]));
-  }
 }
 
 // The pair list is the engine's largest array (about 3 pairs a disc, 24 bytes each). A new list
@@ -319,32 +294,55 @@ std::size_t Neighbors::count_pairs(const Discs& d, int i0, int i1) const {
 std::size_t Neighbors::scratch_bytes() const {
   std::size_t b = new_walls_.capacity() * sizeof(WallContact);
   for (const auto& v : round_pairs_) b += v.value.capacity() * sizeof(PairContact);
-  for (const auto& v : block_walls_) b += v.value.capacity() * sizeof(WallContact);
   return b;
 }
 
 void Neighbors::search_pairs(const Discs& d, int i0, int i1, std::vector<PairContact>& out) const {
-  std::vector<int> found;
   for (int i = i0; i < i1; ++i) {
-    found.clear();
-    candidates(d, i, [&](int j) { found.push_back(j); });
-    // A handful of candidates: insertion sort.
-    for (std::size_t a = 1; a < found.size(); ++a)
-      for (std::size_t b = a; b > 0 && found[b - 1] > found[b]; --b) std::swap(found[b - 1], found[b]);
-    for (int j : found) out.push_back(PairContact{i, j});
+    // Straight into the list, field by field (a push_back of PairContact{i, j} built the entry on
+    // the stack in two stores and read it back in one, which the processor cannot forward: a
+    // stall at every pair, a third of the search), then a handful of j put in order.
+    const std::size_t at = out.size();
+    candidates(d, i, [&](int j) {
+      PairContact& o = out.emplace_back();
+      o.i = i;
+      o.j = j;
+    });
+    PairContact* c = out.data();
+    for (std::size_t a = at + 1; a < out.size(); ++a) {  // insertion sort by j (i is the same)
+      const int j = c[a].j;
+      std::size_t b = a;
+      for (; b > at && c[b - 1].j > j; --b) c[b].j = c[b - 1].j;
+      c[b].j = j;
+    }
   }
 }
 
-void Neighbors::search_walls(const Discs& d, const Geometry& g, int i0, int i1, std::vector<WallContact>& out) const {
+void Neighbors::search_walls(const Discs& d, const Geometry& g, std::vector<WallContact>& out) const {
   const int nk = g.obstacle_count();
-  for (int i = i0; i < i1; ++i) {
-    const double xi = d.x[i], yi = d.y[i];
-    for (int k = 0; k < nk; ++k) {
-      const Box& b = boxes_[k];
-      if (!b.live || !(xi >= b.xlo && xi <= b.xhi && yi >= b.ylo && yi <= b.yhi)) continue;
-      if (obstacle_distance(g, k, xi, yi) < d.r(i) + skin) out.push_back(WallContact{i, k});
+  // The cell along an axis of a box's edge, clamped to the grid (as Grid::cell_of; an infinite
+  // edge gives the first or the last cell): a disc inside the box is in a cell of the range.
+  const auto along = [&](double v, double lo, long cells) -> long {
+    const double f = (v - lo) * grid_.inv_cell;
+    if (!(f > 0)) return 0;
+    return f < static_cast<double>(cells - 1) ? static_cast<long>(f) : cells - 1;
+  };
+  for (int k = 0; k < nk; ++k) {
+    const Box& b = boxes_[k];
+    if (!b.live) continue;
+    const long cx0 = along(b.xlo, grid_.xmin, grid_.nx), cx1 = along(b.xhi, grid_.xmin, grid_.nx);
+    const long cy0 = along(b.ylo, grid_.ymin, grid_.ny), cy1 = along(b.yhi, grid_.ymin, grid_.ny);
+    for (long cy = cy0; cy <= cy1; ++cy) {
+      const int s1 = cell_start_[cy * grid_.nx + cx1 + 1];  // a row's cells are consecutive in the order
+      for (int s = cell_start_[cy * grid_.nx + cx0]; s < s1; ++s) {
+        const int i = order_[s];
+        const double xi = d.x[i], yi = d.y[i];
+        if (!(xi >= b.xlo && xi <= b.xhi && yi >= b.ylo && yi <= b.yhi)) continue;
+        if (obstacle_distance(g, k, xi, yi) < d.r(i) + skin) out.push_back(WallContact{i, k});
+      }
     }
   }
+  std::sort(out.begin(), out.end(), [](const WallContact& a, const WallContact& c) { return wall_key(a) < wall_key(c); });
 }
 
 }  // namespace dem
