@@ -349,10 +349,11 @@ double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::ve
 // The law for n touching pairs of a block, in the block's arrays (pair_pass): no branch and no
 // store that a later pair reads, so the compiler runs it two pairs at a time (SSE2) and the
 // pairs' square roots and divisions overlap. The same operations, in the same order, as the
-// law applied pair by pair: the same bits.
+// law applied pair by pair: the same bits. One kind of disc: r_i + r_j is `sum1` (not gathered
+// pair by pair).
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
 static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, int n, const PairProps* __restrict props,
-                                                                  double inv_dt) {
+                                                                 double inv_dt, double sum1) {
   for (int k = 0; k < n; ++k) {
     const double R = std::sqrt(b.R2[k]);
     const double nx = b.dx[k] / R, ny = b.dy[k] / R;  // (4): cos(alpha), sin(alpha), from i to j
@@ -360,7 +361,7 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
     const double du_n = ddx * nx + ddy * ny;                                          // (5a)
     double du_s = 0;
     if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + b.rot_i[k] + b.rot_j[k];       // (5b)
-    const double overlap = b.sum[k] - R;
+    const double overlap = (ONE_KIND ? sum1 : b.sum[k]) - R;
     double fn, fs;
     contact_law<NS, NT, FC, SHEAR, DASH>(props[ONE_KIND ? 0 : b.prop[k]], overlap, du_n, du_s, inv_dt, b.en[k],
                                          b.es[k], fn, fs);
@@ -369,7 +370,7 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
       fx += fs * ny;
       fy -= fs * nx;
     }
-    b.overlap[k] = overlap;
+    b.overlap[k] = overlap;  // (a max taken here, without -ffast-math, keeps GCC from vectorising the loop)
     b.fn[k] = fn; b.fs[k] = fs;
     b.fx[k] = fx; b.fy[k] = fy;
   }
@@ -381,23 +382,23 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
 // does not enable FMA).
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
-DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props,
-                                                                 double inv_dt) {
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt,
+                                                double sum1) {
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const PairProps* __restrict props,
-                                                    double inv_dt) {
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+                                                    double inv_dt, double sum1) {
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 #endif
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
-static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt) {
+static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::vector_width >= 8) return pair_block_law_avx512<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
-  if (World::vector_width >= 4) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+  if (World::vector_width >= 8) return pair_block_law_avx512<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  if (World::vector_width >= 4) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 #endif
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt);
+  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 
 // Disc-disc contacts [p0, p1) of the sorted pair list, a block of touching pairs at a time: the
@@ -441,7 +442,8 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
         continue;
       }
       b.pair[n] = static_cast<int>(p - p0);
-      b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2; b.sum[n] = sum;
+      b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
+      if constexpr (!ONE_KIND) b.sum[n] = sum;
       b.ddx[n] = ux[i] * uf - ux[j] * uf;  // the relative increment of (5)
       b.ddy[n] = uy[i] * uf - uy[j] * uf;
       if constexpr (SHEAR) {
@@ -452,7 +454,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       b.en[n] = c.en; b.es[n] = c.es;
       ++n;
     }
-    pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt);
+    pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, ONE_KIND ? kr[0] + kr[0] : 0.0);
     for (int k = 0; k < n; ++k) {
       PairContact& c = pc[p0 + static_cast<std::size_t>(b.pair[k])];
       const int i = c.i, j = c.j;

@@ -28,7 +28,7 @@ struct alignas(64) PairBlock {
   static constexpr int kSize = 128;
   int pair[kSize];  // offset in the pass's part of the list
   int prop[kSize];  // index of the pair's constants (several kinds of disc)
-  double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j
+  double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j (several kinds)
   double ddx[kSize], ddy[kSize], rot_i[kSize], rot_j[kSize];  // (5): du_i - du_j, r_i dphi_i, r_j dphi_j
   double en[kSize], es[kSize];  // history in, history out
   double overlap[kSize], fn[kSize], fs[kSize], fx[kSize], fy[kSize];  // out: fx, fy on i
