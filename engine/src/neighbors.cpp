@@ -160,14 +160,17 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
 
 // The pair list is the engine's largest array (about 3 pairs a disc, 24 bytes each). A new list
 // built beside the old one would need both at once: twice the largest array, the peak memory of
-// a million-disc run. Instead the old list is moved to the tail of its own buffer (sized with a
-// 1/16 margin at the last build) and the new one written from the front, in rounds of
-// kRoundDiscs discs a thread: each thread searches its part of the round into a small scratch
-// list and takes the history from the old entries of the same discs, then the round is copied
-// into place. The new entries of discs up to b overwrite only old entries of discs below b, which
-// have been read, as long as the list has not grown by more than the margin up to b; if it has,
-// the buffer is enlarged then (rare: the list changes little between builds). The list is the
-// same as a build beside the old one, for any thread count.
+// a million-disc run. Instead the new list is written over the old one in its own buffer (sized
+// with a 1/16 margin at the last build), from the front, in rounds of kRoundDiscs discs a
+// thread: each thread searches its part of the round into a small scratch list and takes the
+// history from the old entries of the same discs, then the round is copied into place. The old
+// entries stay where they are while the new entries of discs below b fit in front of the old
+// entries of discs from b on (which are still to be read); when a round would not fit (the list
+// grew up to b), the unread old entries are moved once to the buffer's tail, behind the margin,
+// and if even that is too little the buffer is enlarged. Moving the whole old list to the tail
+// before every build, as until session 14, copied the largest array serially at each build (at
+// a million discs some 72 MB). The list is the same as a build beside the old one, for any
+// thread count.
 void Neighbors::build_pairs(const Discs& d, int nt) {
   const int n = static_cast<int>(d.size());
   const std::size_t old_n = pairs.size();
@@ -185,21 +188,22 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
     want = c + c / 16 + 64;
   }
   std::size_t cap = std::max(want, pairs.capacity());
+  std::size_t r = 0, old_end = old_n;  // the old entries not yet read: [r, old_end)
   if (pairs.capacity() < cap) {  // a larger buffer (first build, or the list grew): old at its tail
     std::vector<PairContact> v;
     v.reserve(cap);
     v.resize(cap);
     std::copy(pairs.begin(), pairs.end(), v.end() - static_cast<std::ptrdiff_t>(old_n));
     pairs.swap(v);
+    r = cap - old_n;
+    old_end = cap;
   } else {
-    pairs.resize(cap);
-    std::move_backward(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(old_n), pairs.end());
+    pairs.resize(cap);  // the old entries stay at the front, the margin behind them
   }
-  std::size_t w = 0;             // next new entry
-  std::size_t r = cap - old_n;   // first old entry not yet read: the old ones are [r, cap)
+  std::size_t w = 0;  // next new entry
   const auto old_from = [&](std::size_t from, int i) {  // first old entry at or after from with disc >= i
     return static_cast<std::size_t>(
-        std::lower_bound(pairs.begin() + static_cast<std::ptrdiff_t>(from), pairs.begin() + static_cast<std::ptrdiff_t>(cap), i,
+        std::lower_bound(pairs.begin() + static_cast<std::ptrdiff_t>(from), pairs.begin() + static_cast<std::ptrdiff_t>(old_end), i,
                          [](const PairContact& c, int k) { return c.i < k; }) - pairs.begin());
   };
   const int threads = std::max(1, nt);
@@ -213,26 +217,33 @@ void Neighbors::build_pairs(const Discs& d, int nt) {
     bp.clear();
     search_pairs(d, i0, i1, bp);
     const std::size_t from = old_from(r, i0);
-    merge_history(pairs.data() + from, pairs.data() + cap, bp, pair_key);
+    merge_history(pairs.data() + from, pairs.data() + old_end, bp, pair_key);
     at[t + 1] = bp.size();
   };
-  const auto place_round = [&](int b) {  // serial: where the round goes, the buffer enlarged if needed
+  const auto place_round = [&](int b) {  // serial: where the round goes, room made if needed
     at[0] = 0;
     for (int u = 0; u < threads; ++u) at[u + 1] += at[u];
     const std::size_t next = old_from(r, b);  // the old entries of discs >= b start here
-    const std::size_t need = w + at[threads];
-    if (need > next) {  // the list grew past the margin: a larger buffer, old entries at its tail
-      const std::size_t rest = cap - next, cap2 = need + rest + (need + rest) / 16 + 64;
+    const std::size_t need = w + at[threads], rest = old_end - next;
+    if (need <= next) {
+      r = next;
+    } else if (need + rest <= cap) {  // the list grew up to b: the unread old entries to the tail
+      std::move_backward(pairs.begin() + static_cast<std::ptrdiff_t>(next), pairs.begin() + static_cast<std::ptrdiff_t>(old_end),
+                         pairs.end());
+      r = cap - rest;
+      old_end = cap;
+    } else {  // it grew past the margin: a larger buffer, the unread old entries at its tail
+      const std::size_t cap2 = need + rest + (need + rest) / 16 + 64;
       std::vector<PairContact> v;
       v.reserve(cap2);
       v.resize(cap2);
       std::copy(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(w), v.begin());
-      std::copy(pairs.begin() + static_cast<std::ptrdiff_t>(next), pairs.end(), v.end() - static_cast<std::ptrdiff_t>(rest));
+      std::copy(pairs.begin() + static_cast<std::ptrdiff_t>(next), pairs.begin() + static_cast<std::ptrdiff_t>(old_end),
+                v.end() - static_cast<std::ptrdiff_t>(rest));
       pairs.swap(v);
       cap = cap2;
       r = cap2 - rest;
-    } else {
-      r = next;
+      old_end = cap2;
     }
     for (int u = 0; u < threads; ++u) at[u] += w;
   };
