@@ -370,7 +370,7 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
       fx += fs * ny;
       fy -= fs * nx;
     }
-    b.overlap[k] = overlap;  // (a max taken here, without -ffast-math, keeps GCC from vectorising the loop)
+    b.overlap[k] = overlap;  // (a max taken here instead would keep GCC, without -ffast-math, from vectorising the loop)
     b.fn[k] = fn; b.fs[k] = fs;
     b.fx[k] = fx; b.fy[k] = fy;
   }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "neighbors.hpp"
@@ -81,6 +82,38 @@ TEST(Neighbors, InPlaceBuildGrowingWithinItsMarginIsTheFreshList) {
   for (int k = 0; k < 300; ++k) before.x[k] = (k % row) * 3.0, before.y[k] = (k / row) * 3.0 + 1000;
   Discs after = lattice(n, row, 2.1);
   for (int threads : {1, 2}) EXPECT_TRUE(check_rebuild(before, after, threads)) << "the buffer was kept";
+}
+
+TEST(Neighbors, ObstacleCandidatesAreEveryDiscWithinReach) {
+  // The obstacle entries come from the cells under each obstacle's box (search_walls): they must
+  // be exactly the discs within r + skin of each live obstacle, found by testing every disc
+  // against every obstacle, in (i, k) order. Walls along the packing's edges, across it on a
+  // slant, reaching far past the discs (boxes beyond the grid), one removed, and points, over
+  // discs of two radii.
+  Discs d;
+  unsigned s = 12345;
+  const auto rnd = [&] { return (s = s * 1103515245u + 12345u) / 4294967296.0; };
+  for (int k = 0; k < 3000; ++k) d.add(100 * rnd(), 60 * rnd(), k % 3 ? 0.5 : 0.8, 1.0, 0);
+  Geometry g;
+  g.walls.push_back({"floor", "b", -50, 0, 150, 0, 0});
+  g.walls.push_back({"left", "s", 0, 500, 0, -500, 0});
+  g.walls.push_back({"slant", "s", 10, 5, 90, 55, 0});
+  g.walls.push_back({"gone", "s", 0, 30, 100, 30, 0, false});
+  g.walls.push_back({"short", "s", 40, 20, 41, 21, 0});
+  g.points.push_back({"p", "p", 50, 30, 0, {}});
+  g.points.push_back({"q", "p", 99.9, 59.9, 0, {}});
+  g.points.push_back({"far", "p", -400, 900, 0, {}});
+  for (int threads : {1, 2}) {
+    Neighbors nb;
+    nb.rebuild(d, g, threads);
+    std::vector<std::pair<int, int>> want, got;
+    for (int i = 0; i < static_cast<int>(d.size()); ++i)
+      for (int k = 0; k < g.obstacle_count(); ++k)
+        if (obstacle_distance(g, k, d.x[i], d.y[i]) < d.r(i) + nb.skin) want.emplace_back(i, k);
+    for (const WallContact& c : nb.walls) got.emplace_back(c.i, c.k);
+    EXPECT_GT(want.size(), 100u) << "the test needs discs near the obstacles";
+    EXPECT_EQ(got, want) << threads << " threads";
+  }
 }
 
 TEST(Neighbors, InPlaceBuildShrinkingIsTheFreshList) {
