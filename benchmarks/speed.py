@@ -197,7 +197,28 @@ def worker(args) -> None:
 
 # ------------------------------------------------------------------ the study
 
-def run_point(code, scene, size, threads, rep, out, dem, scheme=None, dt=None, timeout=3600) -> dict:
+# What a finished point keeps of its run directory: the records the study read and the inputs
+# and logs that say how it ran. The rest (disc, contact and snapshot files, dumps, the case's copy
+# of the packing) is some 0.5 GB a point at 1M discs, 17 GB for two studies; --keep-runs keeps it.
+KEEP_SUFFIXES = {".json", ".log", ".toml", ".py", ".md"}
+KEEP_NAMES = {"peak_rss_kb", "in.liggghts", "log.liggghts"}
+
+
+def prune_run(d: Path) -> int:
+    """Deletes a finished point's bulky outputs under d (every file but those KEEP_* name, then the
+    directories left empty); returns the bytes freed."""
+    freed = 0
+    for f in sorted(d.rglob("*"), reverse=True):  # files before their directories
+        if f.is_file() and not f.is_symlink() and f.suffix not in KEEP_SUFFIXES and f.name not in KEEP_NAMES:
+            freed += f.stat().st_size
+            f.unlink()
+        elif f.is_dir() and not any(f.iterdir()):
+            f.rmdir()
+    return freed
+
+
+def run_point(code, scene, size, threads, rep, out, dem, scheme=None, dt=None, timeout=3600,
+              keep_runs=False) -> dict:
     d = out / "runs" / f"{size}_{code}{'_' + scheme if scheme else ''}_t{threads}_r{rep}"
     d.mkdir(parents=True, exist_ok=True)
     file, settle, dis, scale = SIZES[size]
@@ -216,6 +237,8 @@ def run_point(code, scene, size, threads, rep, out, dem, scheme=None, dt=None, t
     rec.update(code=code, size=size, threads=threads, repeat=rep, scheme=scheme or "shared_verlet")
     if "loop_s" in rec and rec.get("particle_steps"):
         rec["us_per_ps"] = rec["loop_s"] / rec["particle_steps"] * 1e6
+    if not keep_runs and "error" not in rec:  # a failed point keeps everything, to be looked at
+        prune_run(d)
     return rec
 
 
@@ -346,6 +369,8 @@ def main() -> int:
                     help="10k-1M scenes: from the lattice (default) or from a packing settled before the study")
     ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(ROOT / "build" / "dem")))
     ap.add_argument("--timeout", type=float, default=3600)
+    ap.add_argument("--keep-runs", action="store_true",
+                    help="keep each point's full outputs (by default only its records, inputs and logs)")
     ap.add_argument("--ceiling", default=str(ROOT / "build" / "benchmarks" / "dem_ceiling"),
                     help="the machine's 1 -> 2 thread ceiling program (benchmarks/ceiling.cpp)")
     # worker mode (internal)
@@ -403,7 +428,7 @@ def main() -> int:
                 scene = out / f"bench_{size}_paper.toml"
                 if not scene.exists():
                     scene_with_phases(bases[size], settle // 2, dis // 2, DT_PAPER, scene)
-            rec = run_point(code, scene, size, th, rep, out, args.dem, scheme, dt, args.timeout)
+            rec = run_point(code, scene, size, th, rep, out, args.dem, scheme, dt, args.timeout, args.keep_runs)
             records.append(rec)
             print(f"[{time.monotonic() - t0:7.0f} s] {size:>5} {code:9} {rec['scheme']:14} t{th} r{rep}: "
                   f"{rec.get('us_per_ps', float('nan')):.4g} us/ps, {rec.get('peak_rss_bytes', 0) / 2**20:.0f} MiB"

@@ -34,3 +34,15 @@ def test_targets_state_both_native_memory_rows(tmp_path):
     # The 1-thread rows: the largest peak over their repeats, per disc.
     assert "shared law, velocity Verlet: native peak memory 190 bytes per disc" in targets
     assert "paper's law, eq. 19: native peak memory 215 bytes per disc" in targets
+
+
+def test_finished_points_keep_their_records_inputs_and_logs_only(tmp_path):
+    d = tmp_path / "runs" / "1m_native_t1_r0"
+    keep = ["peak_rss_kb", "run/summary.json", "case/scene.toml", "liggghts.log", "in.liggghts", "yade_script.py"]
+    drop = ["run/discs.csv", "run/contacts.vtu", "run/snapshots/discs_0001.vtu", "case/packing.csv", "discs_60.dump"]
+    for name in keep + drop:
+        (d / name).parent.mkdir(parents=True, exist_ok=True)
+        (d / name).write_text("x" * 100)
+    assert speed.prune_run(d) == 100 * len(drop)
+    assert sorted(str(f.relative_to(d)) for f in d.rglob("*") if f.is_file()) == sorted(keep)
+    assert not (d / "run" / "snapshots").exists()
