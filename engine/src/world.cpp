@@ -455,6 +455,11 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       ++n;
     }
     pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, ONE_KIND ? kr[0] + kr[0] : 0.0);
+    // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
+    // is never the current i): the same additions in the same order, without a store and a
+    // reload of fx[i], fy[i], torque[i] between two pairs of one disc.
+    int cur = -1;
+    double ax = 0, ay = 0, at = 0;
     for (int k = 0; k < n; ++k) {
       PairContact& c = pc[p0 + static_cast<std::size_t>(b.pair[k])];
       const int i = c.i, j = c.j;
@@ -462,8 +467,17 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       worst = std::max(worst, b.overlap[k]);
       const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
       if constexpr (RECORD) *record++ = PairForce{i, j, b.fn[k], fs};
-      fxa[i] += fx; fya[i] += fy;
-      if constexpr (SHEAR) tq[i] -= kr[ONE_KIND ? 0 : kd[i]] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+      if (i != cur) {
+        if (cur >= 0) {
+          fxa[cur] = ax; fya[cur] = ay;
+          if constexpr (SHEAR) tq[cur] = at;
+        }
+        cur = i;
+        ax = fxa[i]; ay = fya[i];
+        if constexpr (SHEAR) at = tq[i];
+      }
+      ax += fx; ay += fy;
+      if constexpr (SHEAR) at -= kr[ONE_KIND ? 0 : kd[i]] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
       const double rj = kr[ONE_KIND ? 0 : kd[j]];
       if (j < own_end) {
         fxa[j] -= fx; fya[j] -= fy;
@@ -471,6 +485,10 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       } else {
         later->push_back(Deferred{j, fx, fy, SHEAR ? rj * fs : 0.0});
       }
+    }
+    if (cur >= 0) {
+      fxa[cur] = ax; fya[cur] = ay;
+      if constexpr (SHEAR) tq[cur] = at;
     }
   }
   return worst;
