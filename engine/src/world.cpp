@@ -426,6 +426,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   const int n_mat = n_materials;
   // One kind of disc: one pair of materials, its constants fetched once.
   const PairProps* law_props = ONE_KIND ? &props[kmat[0] * n_mat + kmat[0]] : props.data();
+  const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
   for (std::size_t p = p0; p < p1;) {
@@ -454,12 +455,17 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       b.en[n] = c.en; b.es[n] = c.es;
       ++n;
     }
-    pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, ONE_KIND ? kr[0] + kr[0] : 0.0);
+    pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, sum1);
     // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
     // is never the current i): the same additions in the same order, without a store and a
     // reload of fx[i], fy[i], torque[i] between two pairs of one disc.
     int cur = -1;
     double ax = 0, ay = 0, at = 0;
+    const auto put_back = [&] {  // the current disc's sums to its arrays
+      if (cur < 0) return;
+      fxa[cur] = ax; fya[cur] = ay;
+      if constexpr (SHEAR) tq[cur] = at;
+    };
     for (int k = 0; k < n; ++k) {
       PairContact& c = pc[p0 + static_cast<std::size_t>(b.pair[k])];
       const int i = c.i, j = c.j;
@@ -468,10 +474,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
       if constexpr (RECORD) *record++ = PairForce{i, j, b.fn[k], fs};
       if (i != cur) {
-        if (cur >= 0) {
-          fxa[cur] = ax; fya[cur] = ay;
-          if constexpr (SHEAR) tq[cur] = at;
-        }
+        put_back();
         cur = i;
         ax = fxa[i]; ay = fya[i];
         if constexpr (SHEAR) at = tq[i];
@@ -486,10 +489,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
         later->push_back(Deferred{j, fx, fy, SHEAR ? rj * fs : 0.0});
       }
     }
-    if (cur >= 0) {
-      fxa[cur] = ax; fya[cur] = ay;
-      if constexpr (SHEAR) tq[cur] = at;
-    }
+    put_back();
   }
   return worst;
 }
