@@ -47,7 +47,9 @@ struct RemovedDiscs {
 
 struct Discs {
   DiscKinds kinds;
-  std::vector<int> kind;         // index into kinds
+  // Index into kinds; empty while there is one kind (every disc of kind 0): a scene of one kind
+  // spends nothing on it (4 bytes a disc, 2 % of a million-disc run). Read it through kind_at.
+  std::vector<int> kind;
   std::vector<int> id;           // stable id (survives removals)
   // Kinematics.
   std::vector<double> x, y;            // position [cm]
@@ -57,19 +59,25 @@ struct Discs {
   // Resultants of eq. (15), gravity included.
   std::vector<double> fx, fy, torque;
 
-  std::size_t size() const { return kind.size(); }
+  std::size_t size() const { return x.size(); }
+  int kind_at(std::size_t i) const { return kind.empty() ? 0 : kind[i]; }
   // Disc i's constants.
-  double r(std::size_t i) const { return kinds.r[kind[i]]; }
-  double mass(std::size_t i) const { return kinds.mass[kind[i]]; }
-  double inv_mass(std::size_t i) const { return kinds.inv_mass[kind[i]]; }
-  double inv_inertia(std::size_t i) const { return kinds.inv_inertia[kind[i]]; }
-  int material(std::size_t i) const { return kinds.material[kind[i]]; }
+  double r(std::size_t i) const { return kinds.r[kind_at(i)]; }
+  double mass(std::size_t i) const { return kinds.mass[kind_at(i)]; }
+  double inv_mass(std::size_t i) const { return kinds.inv_mass[kind_at(i)]; }
+  double inv_inertia(std::size_t i) const { return kinds.inv_inertia[kind_at(i)]; }
+  int material(std::size_t i) const { return kinds.material[kind_at(i)]; }
 
   // Room for n discs exactly (a fill of known count): no doubling slack, about 5 % at 1M discs.
+  // The kind array gets its room when a second kind appears.
   void reserve(std::size_t n) {
     for (auto* v : {&x, &y, &phi, &vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->reserve(n);
-    kind.reserve(n);
     id.reserve(n);
+    room_ = n;
+  }
+  // After the kinds table changed (a state read back): no kind array for one kind.
+  void drop_kind_array_if_one_kind() {
+    if (kinds.size() <= 1) std::vector<int>().swap(kind);
   }
   void add(double px, double py, double radius, double density, int mat) {
     add_position(px, py, radius, density, mat);
@@ -79,19 +87,31 @@ struct Discs {
   // that are not stepped (the scene's check of its initial discs); add() goes on from here.
   void add_position(double px, double py, double radius, double density, int mat) {
     const double m = density * 3.14159265358979323846 * radius * radius;
-    kind.push_back(kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
+    set_kind(x.size(), kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
     id.push_back(static_cast<int>(id.size()));
     x.push_back(px);
     y.push_back(py);
   }
   // Disc i no longer moves under forces: a kind of its own, with zero inverse mass and inertia.
   void hold(std::size_t i) {
-    kind[i] = kind_of(r(i), mass(i), 0.0, 0.0, material(i));
+    set_kind(i, kind_of(r(i), mass(i), 0.0, 0.0, material(i)));
   }
   // Frees the index add() searches kinds with (the world calls it once the discs are in).
   void forget_kind_index() { std::vector<std::size_t>().swap(slots_); }
 
  private:
+  std::size_t room_ = 0;  // discs reserve() made room for (the kind array's, when it is made)
+  // Disc i (i == size(): the disc being added) is of kind k; the array is made, all zeros, when
+  // the first disc of another kind than 0 comes.
+  void set_kind(std::size_t i, int k) {
+    if (kind.empty() && k != 0) {
+      kind.reserve(std::max(room_, i + 1));
+      kind.assign(x.size(), 0);
+    }
+    if (kind.empty()) return;
+    if (i == kind.size()) kind.push_back(k);
+    else kind[i] = k;
+  }
   // Open-addressing hash of the kinds by their constants' bits; empty until add() needs it.
   std::vector<std::size_t> slots_;  // kind + 1, 0 empty
   static std::size_t bits(double v) {

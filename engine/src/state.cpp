@@ -33,7 +33,16 @@ std::vector<WallContact> zero_padded(const std::vector<WallContact>& v) {
 void write_discs(BinaryOut& o, const Discs& d) {
   const DiscKinds& k = d.kinds;
   o.vec(k.r); o.vec(k.mass); o.vec(k.inv_mass); o.vec(k.inv_inertia); o.vec(k.material);
-  o.vec(d.kind); o.vec(d.id);
+  if (d.kind.empty()) {  // one kind: written as the array of zeros it stands for (the same format)
+    const std::vector<int> zeros(std::min<std::size_t>(d.size(), 4096), 0);
+    o.put<std::uint64_t>(d.size());
+    for (std::size_t done = 0; done < d.size(); done += zeros.size())
+      o.out.write(reinterpret_cast<const char*>(zeros.data()),
+                  static_cast<std::streamsize>(std::min(zeros.size(), d.size() - done) * sizeof(int)));
+  } else {
+    o.vec(d.kind);
+  }
+  o.vec(d.id);
   o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
   o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
 }
@@ -55,6 +64,7 @@ void read_discs(BinaryIn& r, Discs& d) {
   for (auto* v : {&d.dux, &d.duy, &d.dphi, &d.phi})  // kept by eq. 19 / with the rotation angle only
     if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
   if (d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
+  d.drop_kind_array_if_one_kind();
 }
 
 void write_world(BinaryOut& o, const World& w) {

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "discs.hpp"
 #include "scene.hpp"
+#include "state.hpp"
 #include "world.hpp"
 
 namespace dem {
@@ -40,6 +42,43 @@ TEST(DiscKinds, SharedByEqualConstantsOnly) {
   poly.add(0, 1, 0.3, 2.65, 0);
   EXPECT_EQ(poly.kinds.size(), 5000u);
   EXPECT_EQ(poly.kind.back(), poly.kind.front());
+}
+
+// One kind: no kind array (a scene of one kind pays nothing for several); it appears, all zeros
+// but the new disc's, when a second kind does, and the state files hold the same bytes either way.
+TEST(DiscKinds, OneKindHasNoKindArrayUntilASecondKindComes) {
+  Discs d;
+  d.reserve(10000);
+  for (int k = 0; k < 9000; ++k) d.add(k, 0, 0.5, 2.65, 0);
+  EXPECT_TRUE(d.kind.empty());
+  EXPECT_EQ(d.size(), 9000u);
+  EXPECT_EQ(d.r(8999), 0.5);
+  Discs full = d;  // the same discs written with an explicit array of zeros
+  full.kind.assign(full.size(), 0);
+  std::ostringstream a, b;
+  BinaryOut oa{a}, ob{b};
+  write_discs(oa, d);
+  write_discs(ob, full);
+  EXPECT_EQ(a.str(), b.str()) << "one kind is written as the array of zeros it stands for";
+  std::istringstream in(a.str());
+  BinaryIn r{in, "test"};
+  Discs back;
+  read_discs(r, back);
+  EXPECT_TRUE(back.kind.empty()) << "read back with one kind: no array";
+  EXPECT_EQ(back.size(), 9000u);
+  // A second kind, at the end and in the middle.
+  d.add(0, 1, 0.25, 2.65, 0);
+  ASSERT_EQ(d.kind.size(), 9001u);
+  EXPECT_GE(d.kind.capacity(), 10000u) << "made with the room reserve() asked for";
+  EXPECT_EQ(d.kind.back(), 1);
+  EXPECT_EQ(d.r(9000), 0.25);
+  for (std::size_t i = 0; i < 9000; ++i) ASSERT_EQ(d.kind[i], 0);
+  Discs h = back;
+  h.hold(4321);
+  ASSERT_EQ(h.kind.size(), 9000u);
+  EXPECT_EQ(h.inv_mass(4321), 0.0);
+  EXPECT_GT(h.inv_mass(4320), 0.0);
+  EXPECT_GT(h.inv_mass(4322), 0.0);
 }
 
 TEST(DiscKinds, HoldGivesOneDiscItsOwnKind) {
@@ -74,6 +113,8 @@ TEST(DiscKinds, OneKindPathGivesTheBitsOfTheGeneralPath) {
       DiscKinds& k = general.discs.kinds;
       k.r.push_back(2.0); k.mass.push_back(1.0); k.inv_mass.push_back(1.0); k.inv_inertia.push_back(1.0);
       k.material.push_back(0);
+      general.discs.kind.assign(general.discs.size(), 0);  // with two kinds the array is there (Discs::kind)
+      ASSERT_TRUE(one.discs.kind.empty()) << "one kind: no kind array";
       one.record_pair_forces = general.record_pair_forces = true;
       for (int s = 0; s < 400; ++s) {
         one.step();

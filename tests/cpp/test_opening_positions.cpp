@@ -25,8 +25,7 @@ Discs discs_with_gaps() {
     if (d.id[i] % 7 != 3) keep.push_back(static_cast<int>(i));
   Discs out;
   for (int i : keep) {
-    out.kind.push_back(d.kind[i]);
-    out.id.push_back(d.id[i]);
+        out.id.push_back(d.id[i]);
     out.x.push_back(d.x[i]);
     out.y.push_back(d.y[i]);
   }
