@@ -294,13 +294,13 @@ int cmd_run(int argc, char** argv) {
       res.reason = dr.reason;
       extra["reason"] = dr.reason;
     }
-    extra["discharge"] = dr.metrics;
     if (!quiet)
       std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
                   dr.status.c_str(), dr.duration, dr.removals.size(), dr.metrics["discs_out_at_1s"].get<int>(),
                   dr.metrics["flow_rate_discs"].is_null() ? NAN : dr.metrics["flow_rate_discs"].get<double>(),
                   dr.metrics["pattern"].get<std::string>().c_str(), dr.metrics["peak_ratio_bottom"].get<double>(),
                   dr.metrics["peak_ratio_side"].get<double>());
+    extra["discharge"] = std::move(dr.metrics);  // moved, not copied: its series are some MB at a million discs
   }
   if (spec.shear_box.shear && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {  // paper 2
     if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
@@ -319,6 +319,8 @@ int cmd_run(int argc, char** argv) {
                   sr.metrics["strain_at_peak"].get<double>(), sr.metrics["peak_ratio_windowed"].get<double>(),
                   sr.metrics["sigma_initial"].get<double>());
   }
+  // The discharge's or shear's status, read before write_outputs moves `extra` into the summary.
+  const std::string phase_status = extra.contains("status") ? extra["status"].get<std::string>() : "";
   write_outputs(out, spec, world, res, stab, &extra);
   res.last_good.discard();  // the outputs hold it when it was needed; a checkpoint carries its own copy
   if (!save_to.empty() && res.status != RunStatus::unstable) save_state(world, save_to);
@@ -328,14 +330,14 @@ int cmd_run(int argc, char** argv) {
                  res.last_good.time(), out.c_str());
     return 3;
   }
-  if (res.status == RunStatus::interrupted || (extra.contains("status") && extra["status"] == "interrupted")) {
+  if (res.status == RunStatus::interrupted || phase_status == "interrupted") {
     std::fprintf(stderr, "dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (dem run %s --out %s --resume goes on)\n",
                  stop_signal(), world.time, world.steps, ckpt.c_str(), scene.c_str(), out.c_str());
     return 128 + stop_signal();
   }
   if (!quiet) {
     if (spec.discharge.enabled || spec.shear_box.shear)
-      std::printf("  %s at t = %.4f s after %ld steps", extra["status"].get<std::string>().c_str(), world.time, world.steps);
+      std::printf("  %s at t = %.4f s after %ld steps", phase_status.c_str(), world.time, world.steps);
     else
       std::printf("  %s at t = %.4f s after %ld steps", to_string(res.status), world.time, world.steps);
     std::printf("; fill rest %s", res.rest_reached ? "reached" : "not reached");

@@ -344,7 +344,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
 }
 
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
-                   const StabilityReport& stab, const json* extra) {
+                   const StabilityReport& stab, json* extra) {
   const bool unstable = res.status == RunStatus::unstable;
   // An unstable run writes its discs as they were in the last good state (a discharge may have
   // removed some since); wall loads and the summary's counters are those of the stop.
@@ -453,7 +453,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
     write_file_atomic(dir + "/wall_profiles.csv", o.str());
   }
   if (extra)
-    for (const auto& [k, v] : extra->items()) js[k] = v;
+    for (auto& [k, v] : extra->items()) js[k] = std::move(v);
   if (!unstable) write_contact_files(dir, "contacts", w);
   write_disc_files(dir, "discs", spec, d, nullptr);
   write_file_atomic(dir + "/summary.json", js.dump(2) + "\n");

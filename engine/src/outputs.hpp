@@ -37,9 +37,10 @@ struct PointLoad {
 
 void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points);
 
-// Writes all files of one run into dir (which must exist). `extra` is merged into summary.json.
+// Writes all files of one run into dir (which must exist). `extra` is moved into summary.json
+// (left empty): its series are some MB at a million discs, not copied at the run's last peak.
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
-                   const StabilityReport& stab, const nlohmann::ordered_json* extra = nullptr);
+                   const StabilityReport& stab, nlohmann::ordered_json* extra = nullptr);
 
 // STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w);

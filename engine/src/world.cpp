@@ -41,7 +41,10 @@ void World::step() {
     if (walls_move) { kick_walls(0.5 * dt); drift_walls(false); }
   }
   if (walls_move && walls_moved_far()) neighbors.invalidate();
-  if (far || neighbors.stale(discs)) rebuild_lists();
+  if (far || neighbors.stale(discs)) {
+    drop_pair_forces();  // the last step's totals, stale once this step runs: never beside a build's scratch
+    rebuild_lists();
+  }
   if (steps % kRebalanceEvery == 0) balance_blocks();  // and whenever they do not fit (compute_forces)
   // Eqs. (3)-(15) from the increments of the last move; then, for each thread's discs:
   switch (scheme) {
@@ -142,6 +145,11 @@ void World::init() {
   force_pass(Then::nothing, 0.0);  // forces at the start (Verlet's first half kick uses them)
 }
 
+void World::drop_pair_forces() {
+  std::vector<PairForce>().swap(pair_forces);
+  pair_forces_step = -1;
+}
+
 void World::size_pair_forces(std::size_t count) {
   // A larger count: the old totals are dropped before the new room is taken, never both held.
   if (count > pair_forces.capacity()) std::vector<PairForce>().swap(pair_forces);
@@ -155,10 +163,7 @@ bool World::force_pass(Then then, double h) {
   const bool record = record_pair_forces;
   // Totals recorded by an earlier pass are stale after this one (pair_forces_current is false):
   // freed, so that they never sit beside a list build's scratch (one or the other at the peak).
-  if (!record && pair_forces.capacity() > 0) {
-    std::vector<PairForce>().swap(pair_forces);
-    pair_forces_step = -1;
-  }
+  if (!record && pair_forces.capacity() > 0) drop_pair_forces();
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
   return far;

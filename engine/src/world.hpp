@@ -173,6 +173,7 @@ class World {
   static bool apart(double R2, double sum) { return R2 > sum * sum; }
   std::size_t touching_pairs(std::size_t p0, std::size_t p1) const;  // pairs of [p0, p1) that touch now
   void size_pair_forces(std::size_t count);  // room for exactly count recorded totals
+  void drop_pair_forces();  // frees the recorded totals (pair_forces_current() is false after)
   std::vector<Padded<std::size_t>> touching_;  // per thread: touching pairs of a recorded pass
   // Every disc of one kind: the kernels keep its constants in registers instead of reading them
   // through each disc's kind.
