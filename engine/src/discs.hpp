@@ -75,6 +75,14 @@ struct Discs {
     id.reserve(n);
     room_ = n;
   }
+  // Room for the positions, ids and kinds of n discs only (a contact search over discs that are
+  // not stepped, add_position).
+  void reserve_positions(std::size_t n) {
+    x.reserve(n);
+    y.reserve(n);
+    id.reserve(n);
+    room_ = n;
+  }
   // After the kinds table changed (a state read back): no kind array for one kind.
   void drop_kind_array_if_one_kind() {
     if (kinds.size() <= 1) std::vector<int>().swap(kind);

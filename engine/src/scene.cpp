@@ -502,9 +502,7 @@ void read_fill(SceneSpec& s, Tab& root) {
 // Overlapping discs and discs outside the walls are refused (cell grid, no O(N^2)).
 void check_initial_discs(const SceneSpec& s) {
   Discs d;  // what the contact search reads, beside the scene's own list (at 1M discs the run's peak)
-  d.x.reserve(s.discs.size());
-  d.y.reserve(s.discs.size());
-  d.id.reserve(s.discs.size());
+  d.reserve_positions(s.discs.size());
   for (const auto& c : s.discs) d.add_position(c.x, c.y, c.r, 1.0, c.material);
   Neighbors nb;
   nb.skin = 0;

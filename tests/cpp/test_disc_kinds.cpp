@@ -73,6 +73,13 @@ TEST(DiscKinds, OneKindHasNoKindArrayUntilASecondKindComes) {
   EXPECT_EQ(d.kind.back(), 1);
   EXPECT_EQ(d.r(9000), 0.25);
   for (std::size_t i = 0; i < 9000; ++i) ASSERT_EQ(d.kind[i], 0);
+  Discs pos;  // positions only (the scene's check of its discs): the same room for the kinds
+  pos.reserve_positions(5000);
+  for (int k = 0; k < 5000; ++k) pos.add_position(k, 0, k < 10 ? 0.5 : 0.25, 1.0, 0);
+  ASSERT_EQ(pos.kind.size(), 5000u);
+  EXPECT_EQ(pos.kind.capacity(), 5000u) << "no doubling slack";
+  EXPECT_EQ(pos.r(9), 0.5);
+  EXPECT_EQ(pos.r(10), 0.25);
   Discs h = back;
   h.hold(4321);
   ASSERT_EQ(h.kind.size(), 9000u);
