@@ -286,7 +286,8 @@ void DischargeState::save(BinaryOut& o) const {
   o.vec(removals);
   o.put(jam_at); o.put(jams);
   for (double v : sink_time) o.put(v);
-  for (const std::ostringstream* s : {&series, &totals, &flow, &pvd_d, &pvd_c}) o.str(s->str());
+  o.put(series_bytes);
+  for (const std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) o.str(s->str());
   o.put<std::uint64_t>(bin_series.size());
   for (const auto& wall : bin_series) {
     o.put<std::uint64_t>(wall.size());
@@ -314,7 +315,8 @@ void DischargeState::load(BinaryIn& r) {
   r.vec(removals);
   jam_at = r.get<double>(); jams = r.get<int>();
   for (double& v : sink_time) v = r.get<double>();
-  for (std::ostringstream* s : {&series, &totals, &flow, &pvd_d, &pvd_c}) {
+  series_bytes = r.get<std::uint64_t>();
+  for (std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) {
     s->str(r.str());
     s->seekp(0, std::ios_base::end);  // append after the restored text
   }
@@ -335,6 +337,20 @@ void DischargeState::load(BinaryIn& r) {
     r.fail("corrupt discharge state (walls)");
   for (std::size_t k = 0; k < static_walls.size(); ++k)
     if (bin_series[k].size() != static_walls[k].bin_normal.size()) r.fail("corrupt discharge state (bins)");
+}
+
+std::string series_file_problem(const std::string& out, const DischargeState& st) {
+  if (st.next_s == 0) return "";  // made at the opening
+  namespace fs = std::filesystem;
+  const std::string path = out + "/wall_series.csv", tmp = path + ".tmp";
+  std::error_code ec;
+  const std::string& f = fs::exists(tmp, ec) ? tmp : path;
+  const auto size = fs::file_size(f, ec);
+  if (ec) return "the wall series so far (" + tmp + ", or " + path + " after a stop on a signal) is missing";
+  if (size < st.series_bytes)
+    return f + " (the wall series so far) has " + std::to_string(size) + " bytes, fewer than the checkpoint's " +
+           std::to_string(st.series_bytes);
+  return "";
 }
 
 std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) {
@@ -363,7 +379,6 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) 
   if (!w.deactivate_wall(spec.discharge.gate)) return "no gate wall \"" + spec.discharge.gate + "\" to open";
   st.energy.start(w, spec.max_energy_gain);
 
-  st.series << "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
   st.totals << "t,name,normal,shear,fx,fy\n";
   st.flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,"
              "surface_right,arch_discs,arch_crown_y\n";
@@ -402,6 +417,24 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   namespace fs = std::filesystem;
   const std::string snapdir = out + "/snapshots";
   fs::create_directories(snapdir);
+
+  // The wall series file: new at the opening; a resumed run cut back to the checkpoint's length
+  // (a run killed after it wrote on), from its temporary name or, after a stop on a signal, from
+  // the complete file that stop wrote.
+  const std::string series_path = out + "/wall_series.csv", series_tmp = series_path + ".tmp";
+  if (const std::string why = series_file_problem(out, st); !why.empty()) throw std::runtime_error(why);
+  if (st.next_s == 0) {
+    static const char header[] = "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
+    st.series_out.open(series_tmp, std::ios::binary | std::ios::trunc);
+    st.series_out << header;
+    st.series_bytes = sizeof header - 1;
+  } else {
+    std::error_code ec;
+    if (!fs::exists(series_tmp, ec)) fs::rename(series_path, series_tmp);
+    fs::resize_file(series_tmp, st.series_bytes);
+    st.series_out.open(series_tmp, std::ios::binary | std::ios::app);
+  }
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
 
   RemovedDiscs dead;  // the discs leaving at a step: a few indices, not a mask of all discs
   const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
@@ -503,6 +536,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
       std::vector<PointLoad> points;
       measure_loads(w, spec.profile_bin, walls, points);
       st.sample_t.push_back(t);
+      std::ostringstream series;  // this sample's rows of the wall series
       for (std::size_t k = 0; k < walls.size(); ++k) {
         const WallLoad& L = walls[k];
         const Wall& wl = w.geometry.walls[k];
@@ -513,10 +547,13 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
           const double mid = std::min(L.length, (b + 0.5) * L.bin);
           const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
           st.bin_series[k][b].push_back(L.bin_normal[b]);
-          st.series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
+          series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
                     << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
         }
       }
+      const std::string rows = series.str();
+      st.series_out.write(rows.data(), static_cast<std::streamsize>(rows.size()));
+      st.series_bytes += rows.size();
       for (const PointLoad& P : points)
         st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
                   << fmt(P.fy) << '\n';
@@ -571,6 +608,8 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
     if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->discharge_checkpoint) {
       const double before = st.wall_seconds;
       st.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      st.series_out.flush();  // the file holds at least what the checkpoint says
+      if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
       ctl->discharge_checkpoint(st);
       st.wall_seconds = before;
     }
@@ -587,7 +626,9 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   res.wall_seconds = st.wall_seconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   st.wall_seconds = res.wall_seconds;  // a final checkpoint (interrupted) counts this session
 
-  write_file_atomic(out + "/wall_series.csv", st.series.str());
+  st.series_out.close();
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
+  fs::rename(series_tmp, series_path);
   write_file_atomic(out + "/wall_totals_series.csv", st.totals.str());
   write_file_atomic(out + "/flow_series.csv", st.flow.str());
   {

@@ -3,6 +3,8 @@
 // drew (wall forces, flow pictures) and what it could not (series, ratios, jams, patterns).
 #pragma once
 
+#include <cstdint>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -65,7 +67,13 @@ struct DischargeState {
   double jam_at = -1;
   int jams = 0;
   double sink_time[3] = {0, 0, 0};
-  std::ostringstream series, totals, flow, pvd_d, pvd_c;  // the text of the series files and .pvd entries
+  // The wall series (a row per wall, bin and sample: at a million discs some 0.4 MB a sample) go
+  // to OUT/wall_series.csv.tmp as they are sampled, renamed when the discharge ends; a checkpoint
+  // holds the file's length, to which a resumed run cuts it. The other series are a row or a few
+  // a sample, kept as text.
+  std::uint64_t series_bytes = 0;
+  std::ofstream series_out;
+  std::ostringstream totals, flow, pvd_d, pvd_c;  // the text of the other series files and .pvd entries
   std::vector<std::vector<std::vector<double>>> bin_series;  // per wall and bin: normal force samples
   std::vector<std::vector<double>> total_series;             // per wall: total normal force samples
   std::vector<double> sample_t;
@@ -82,6 +90,9 @@ struct DischargeState {
 std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st);
 // Runs the discharge from st (just opened, or restored from a checkpoint with the world) to its
 // end, a jam, or a stop request (status "interrupted"), then writes its files and metrics.
+// Why a discharge resumed from a checkpoint cannot go on with its wall series file ("" : it can).
+std::string series_file_problem(const std::string& out_dir, const DischargeState& st);
+
 DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out_dir,
                                    bool progress, const RunControl* ctl, LastGood* good = nullptr);
 

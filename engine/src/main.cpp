@@ -243,6 +243,8 @@ int cmd_run(int argc, char** argv) {
     } catch (const std::runtime_error& e) {
       return bad(std::string("--resume: ") + e.what());
     }
+    if (resumed_in_discharge)
+      if (const std::string why = series_file_problem(out, dstate); !why.empty()) return bad("--resume: " + why);
   }
   // Only a valid scene creates its output directory.
   std::error_code ec;

@@ -213,3 +213,27 @@ def test_resume_without_checkpoint(tmp_path, dem_binary):
     assert not (tmp_path / "none").exists()
     p = dem(dem_binary, "run", SILO, "--out", tmp_path / "x", "--checkpoint-every", "-1")
     assert p.returncode == 2 and "--checkpoint-every" in p.stderr
+
+
+def test_resume_needs_the_wall_series_so_far(tmp_path, dem_binary, full_runs):
+    """The wall series is written as it is sampled (wall_series.csv.tmp, renamed at the end); a
+    checkpoint holds its length. A resumed discharge cuts the file back to that length and goes on;
+    without it, or with less, it refuses, saying which file."""
+    out = tmp_path / "run"
+    proc = start(dem_binary, DISCHARGE, out, 0.01)
+    assert wait_for(proc, out / "snapshots" / "discs_0001.csv")
+    assert stop(proc, signal.SIGINT) == 130, proc.stderr.read()
+    series = out / "wall_series.csv"
+    text = series.read_bytes()
+    assert text.startswith(b"t,wall,bin,") and text.endswith(b"\n")
+    assert not (out / "wall_series.csv.tmp").exists()
+    series.write_bytes(text[:-1])
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2 and "wall_series.csv" in p.stderr and "fewer than the checkpoint" in p.stderr, p.stderr
+    series.unlink()
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 2 and "wall_series.csv" in p.stderr and "missing" in p.stderr, p.stderr
+    series.write_bytes(text + b"rows a killed run wrote after its checkpoint\n")  # cut off again
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 0, p.stderr
+    assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)
