@@ -74,7 +74,7 @@ std::string EnergyWatch::check(const World& w) const {
   os.precision(4);
   os << "energy created without a source: kinetic + potential energy " << now << " exceeds the start budget "
      << budget << " (kinetic + potential + elastic) by " << (now - budget) << " erg/cm, more than end.max_energy_gain "
-     << gain << " x scale " << scale << "; kinetic energy " << ke << "; fastest disc id " << d.id[fast] << " at ("
+     << gain << " x scale " << scale << "; kinetic energy " << ke << "; fastest disc id " << d.id_at(fast) << " at ("
      << d.x[fast] << ", " << d.y[fast] << ") cm, speed " << std::sqrt(vmax2) << " cm/s, omega " << d.omega[fast]
      << " 1/s; at t = " << w.time << " s (step " << w.steps << ")";
   return os.str();

@@ -197,8 +197,8 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
     r.fail("corrupt checkpoint (reference positions)");
   if (in_discharge) {
     discharge.load(r);
-    for (int id : w.discs.id)
-      if (id < 0 || static_cast<std::uint64_t>(id) >= discharge.at_open.size()) r.fail("corrupt checkpoint (disc ids)");
+    for (std::size_t i = 0; i < w.discs.size(); ++i)
+      if (const int id = w.discs.id_at(i); id < 0 || static_cast<std::uint64_t>(id) >= discharge.at_open.size()) r.fail("corrupt checkpoint (disc ids)");
   }
   if (static_cast<std::uint64_t>(in.tellg()) != size - sizeof(std::uint64_t)) r.fail("corrupt checkpoint (trailing bytes)");
   // Kernel, point links and scratch as for any start, with the lists exactly as saved (no build

@@ -486,7 +486,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
         if (w.discs.y[i] < y_out) {
           dead.sorted.push_back(static_cast<int>(i));
           any = true;
-          st.removals.push_back({t, w.discs.id[i], w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
+          st.removals.push_back({t, w.discs.id_at(i), w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
           st.removed_mass += w.discs.mass(i);
         }
       if (any) {
@@ -520,7 +520,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
             if (pick < 0) {
               st.status = "jammed";
             } else {
-              st.removals.push_back({t, w.discs.id[pick], w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
+              st.removals.push_back({t, w.discs.id_at(pick), w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
               dead.sorted.assign(1, pick);
               w.remove_discs(dead);
               st.last_removal = t;
@@ -562,7 +562,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
       for (std::size_t i = 0; i < w.discs.size(); ++i) {
         (w.discs.y[i] > slit.floor ? inside : below)++;
         double x0, y0;
-        open_at.at(w.discs.id[i], x0, y0);
+        open_at.at(w.discs.id_at(i), x0, y0);
         if (std::hypot(w.discs.x[i] - x0, w.discs.y[i] - y0) >= w.discs.r(i)) ++moved;
       }
       const int removed = static_cast<int>(st.removals.size());

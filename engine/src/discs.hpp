@@ -50,7 +50,9 @@ struct Discs {
   // Index into kinds; empty while there is one kind (every disc of kind 0): a scene of one kind
   // spends nothing on it (4 bytes a disc, 2 % of a million-disc run). Read it through kind_at.
   std::vector<int> kind;
-  std::vector<int> id;           // stable id (survives removals)
+  // Stable ids (they survive removals); empty while disc i has id i (no disc has left): a run
+  // that removes none spends nothing on them (4 bytes a disc). Read them through id_at.
+  std::vector<int> id;
   // Kinematics.
   std::vector<double> x, y;            // position [cm]
   std::vector<double> phi;             // rotation [rad], counter-clockwise: only with World::rotation_angle
@@ -61,6 +63,19 @@ struct Discs {
 
   std::size_t size() const { return x.size(); }
   int kind_at(std::size_t i) const { return kind.empty() ? 0 : kind[i]; }
+  int id_at(std::size_t i) const { return id.empty() ? static_cast<int>(i) : id[i]; }
+  // The ids as an array (before a removal breaks id == index).
+  void make_ids() {
+    if (!id.empty() || x.empty()) return;
+    id.reserve(x.capacity());
+    for (std::size_t i = 0; i < x.size(); ++i) id.push_back(static_cast<int>(i));
+  }
+  // Drops the array when the ids are the indices again (a state read back).
+  void drop_ids_if_indices() {
+    for (std::size_t i = 0; i < id.size(); ++i)
+      if (id[i] != static_cast<int>(i)) return;
+    std::vector<int>().swap(id);
+  }
   // Disc i's constants.
   double r(std::size_t i) const { return kinds.r[kind_at(i)]; }
   double mass(std::size_t i) const { return kinds.mass[kind_at(i)]; }
@@ -72,7 +87,6 @@ struct Discs {
   // The kind array gets its room when a second kind appears.
   void reserve(std::size_t n) {
     for (auto* v : {&x, &y, &phi, &vx, &vy, &omega, &dux, &duy, &dphi, &fx, &fy, &torque}) v->reserve(n);
-    id.reserve(n);
     room_ = n;
   }
   // Room for the positions, ids and kinds of n discs only (a contact search over discs that are
@@ -80,7 +94,6 @@ struct Discs {
   void reserve_positions(std::size_t n) {
     x.reserve(n);
     y.reserve(n);
-    id.reserve(n);
     room_ = n;
   }
   // After the kinds table changed (a state read back): no kind array for one kind.
@@ -96,7 +109,7 @@ struct Discs {
   void add_position(double px, double py, double radius, double density, int mat) {
     const double m = density * 3.14159265358979323846 * radius * radius;
     set_kind(x.size(), kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
-    id.push_back(static_cast<int>(id.size()));
+    if (!id.empty()) id.push_back(id.back() + 1);  // after removals: the next id (ids only grow)
     x.push_back(px);
     y.push_back(py);
   }

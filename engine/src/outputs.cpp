@@ -267,7 +267,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;
     const double cx = d.x[c.i] + nx * (d.r(c.i) - 0.5 * ov), cy = d.y[c.i] + ny * (d.r(c.i) - 0.5 * ov);
-    o << "dd," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
+    o << "dd," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
       << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
   }
   for (std::size_t p = 0; p < w.bonds.size(); ++p) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
@@ -276,7 +276,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, at = c.ai / (c.ai + c.aj) * R;
-    o << "db," << d.id[c.i] << ',' << d.id[c.j] << ',' << fmt(d.x[c.i] + nx * at) << ',' << fmt(d.y[c.i] + ny * at)
+    o << "db," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(d.x[c.i] + nx * at) << ',' << fmt(d.y[c.i] + ny * at)
       << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
   }
@@ -285,7 +285,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     const WallContact& c = w.neighbors.walls[p];
     const bool is_wall = c.k < nw;
     const std::string& name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
-    o << (is_wall ? "dw," : "dp,") << d.id[c.i] << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
+    o << (is_wall ? "dw," : "dp,") << d.id_at(c.i) << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
       << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
   }
@@ -308,7 +308,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   if (disp) open_at.emplace(*at_open);
   const auto displacement = [&](std::size_t i, double& dx, double& dy) {
     double x0, y0;
-    open_at->at(d.id[i], x0, y0);
+    open_at->at(d.id_at(i), x0, y0);
     dx = d.x[i] - x0;
     dy = d.y[i] - y0;
   };
@@ -318,7 +318,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   const bool angle = !d.phi.empty();  // output.rotation_angle
   o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << (angle ? ",phi" : "") << "\n";
   for (std::size_t i = 0; i < d.size(); ++i) {
-    o << d.id[i] << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r(i)) << ',' << fmt(d.vx[i]) << ','
+    o << d.id_at(i) << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r(i)) << ',' << fmt(d.vx[i]) << ','
       << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material(i)];
     if (disp) {
       double dx, dy;
@@ -339,7 +339,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   if (angle) scalars.push_back({"phi", [&](std::size_t i) { return d.phi[i]; }});
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
     vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1, scalars, vec,
-        {{"id", [&](std::size_t i) { return static_cast<long long>(d.id[i]); }}}, false);
+        {{"id", [&](std::size_t i) { return static_cast<long long>(d.id_at(i)); }}}, false);
   });
 }
 

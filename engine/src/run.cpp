@@ -22,7 +22,7 @@ std::string diagnose(const World& w, double overlap_limit) {
   for (std::size_t i = 0; i < d.size(); ++i)
     if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i]) || !std::isfinite(d.vx[i]) || !std::isfinite(d.vy[i]) ||
         !std::isfinite(d.omega[i])) {
-      os << "non-finite state of disc " << d.id[i] << " at t = " << w.time << " s (step " << w.steps << ")";
+      os << "non-finite state of disc " << d.id_at(i) << " at t = " << w.time << " s (step " << w.steps << ")";
       return os.str();
     }
   os << "overlap " << w.max_overlap << " cm exceeds the limit " << overlap_limit << " cm (end.max_overlap x r_min) at t = "

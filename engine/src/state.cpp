@@ -33,16 +33,21 @@ std::vector<WallContact> zero_padded(const std::vector<WallContact>& v) {
 void write_discs(BinaryOut& o, const Discs& d) {
   const DiscKinds& k = d.kinds;
   o.vec(k.r); o.vec(k.mass); o.vec(k.inv_mass); o.vec(k.inv_inertia); o.vec(k.material);
-  if (d.kind.empty()) {  // one kind: written as the array of zeros it stands for (the same format)
-    const std::vector<int> zeros(std::min<std::size_t>(d.size(), 4096), 0);
+  // An array a scene leaves out (one kind: zeros; no removal: the indices) is written as the
+  // array it stands for, in blocks (the same format, no array of all discs in memory).
+  const auto implicit = [&](auto value_at) {
+    std::vector<int> block(std::min<std::size_t>(d.size(), 4096));
     o.put<std::uint64_t>(d.size());
-    for (std::size_t done = 0; done < d.size(); done += zeros.size())
-      o.out.write(reinterpret_cast<const char*>(zeros.data()),
-                  static_cast<std::streamsize>(std::min(zeros.size(), d.size() - done) * sizeof(int)));
-  } else {
-    o.vec(d.kind);
-  }
-  o.vec(d.id);
+    for (std::size_t done = 0; done < d.size(); done += block.size()) {
+      const std::size_t m = std::min(block.size(), d.size() - done);
+      for (std::size_t k = 0; k < m; ++k) block[k] = value_at(done + k);
+      o.out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(m * sizeof(int)));
+    }
+  };
+  if (d.kind.empty()) implicit([](std::size_t) { return 0; });
+  else o.vec(d.kind);
+  if (d.id.empty()) implicit([](std::size_t i) { return static_cast<int>(i); });
+  else o.vec(d.id);
   o.vec(d.x); o.vec(d.y); o.vec(d.phi); o.vec(d.vx); o.vec(d.vy); o.vec(d.omega);
   o.vec(d.dux); o.vec(d.duy); o.vec(d.dphi); o.vec(d.fx); o.vec(d.fy); o.vec(d.torque);
 }
@@ -65,6 +70,7 @@ void read_discs(BinaryIn& r, Discs& d) {
     if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
   if (d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
   d.drop_kind_array_if_one_kind();
+  d.drop_ids_if_indices();
 }
 
 void write_world(BinaryOut& o, const World& w) {

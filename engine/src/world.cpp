@@ -733,6 +733,7 @@ void World::remove_discs(const RemovedDiscs& removed) {
       throw std::logic_error("remove_discs: the removed indices are not sorted, distinct discs");
   if (gone.empty()) return;
   auto keep = [&](auto& v) { removed.compact(v); };
+  d.make_ids();  // the first removal: ids are no longer the indices
   keep(d.kind); keep(d.id);  // the kinds table stays (a kind without discs costs its entry only)
   keep(d.x); keep(d.y); keep(d.vx); keep(d.vy); keep(d.omega);
   if (!d.phi.empty()) keep(d.phi);  // output.rotation_angle only

@@ -88,6 +88,42 @@ TEST(DiscKinds, OneKindHasNoKindArrayUntilASecondKindComes) {
   EXPECT_GT(h.inv_mass(4322), 0.0);
 }
 
+// Ids: no array while they are the indices; the first removal makes it, and the state files
+// hold the same bytes either way.
+TEST(DiscIds, NoIdArrayUntilADiscLeaves) {
+  SceneOverrides ov;
+  SceneSpec spec = load_scene(std::string(DEM_SOURCE_DIR) + "/reference_inputs/scenes/bench_silo_10k.toml", ov);
+  World w;
+  build_world(spec, w);
+  const std::size_t n = w.discs.size();
+  ASSERT_GT(n, 1000u);
+  EXPECT_TRUE(w.discs.id.empty());
+  EXPECT_EQ(w.discs.id_at(n - 1), static_cast<int>(n - 1));
+  Discs full = w.discs;
+  full.make_ids();
+  ASSERT_EQ(full.id.size(), n);
+  std::ostringstream a, b;
+  BinaryOut oa{a}, ob{b};
+  write_discs(oa, w.discs);
+  write_discs(ob, full);
+  EXPECT_EQ(a.str(), b.str()) << "implicit ids are written as the indices they stand for";
+  std::istringstream in(b.str());
+  BinaryIn r{in, "test"};
+  Discs back;
+  read_discs(r, back);
+  EXPECT_TRUE(back.id.empty()) << "ids that are the indices are read back as none";
+  const double x_after = w.discs.x[8];
+  RemovedDiscs gone;
+  gone.sorted = {0, 5, 6};
+  w.remove_discs(gone);
+  ASSERT_EQ(w.discs.id.size(), n - 3);
+  EXPECT_EQ(w.discs.id_at(0), 1);
+  EXPECT_EQ(w.discs.id_at(4), 7);
+  EXPECT_EQ(w.discs.id_at(5), 8);
+  EXPECT_EQ(w.discs.x[5], x_after);
+  EXPECT_EQ(w.discs.id_at(n - 4), static_cast<int>(n - 1));
+}
+
 TEST(DiscKinds, HoldGivesOneDiscItsOwnKind) {
   Discs d;
   for (int k = 0; k < 4; ++k) d.add(k, 0, 0.5, 2.65, 0);

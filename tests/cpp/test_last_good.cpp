@@ -100,7 +100,7 @@ TEST(LastGood, DischargeKeepsItsOwnEveryThousandSteps) {
   for (std::size_t i = 0; i < good.size(); ++i) {
     ASSERT_TRUE(std::isfinite(good.x[i]) && std::isfinite(good.y[i]) && std::isfinite(good.vx[i]));
     if (i > 0) {
-      ASSERT_LT(good.id[i - 1], good.id[i]) << "removals keep the order of ids";
+      ASSERT_LT(good.id_at(i - 1), good.id_at(i)) << "removals keep the order of ids";
     }
   }
   std::filesystem::remove_all(out);

@@ -22,10 +22,10 @@ Discs discs_with_gaps() {
   for (int k = 0; k < kIds; ++k) d.add(0.25 * k, -1.5 * k + 0.125, 0.5, 2.65, 0);
   std::vector<int> keep;
   for (std::size_t i = 0; i < d.size(); ++i)
-    if (d.id[i] % 7 != 3) keep.push_back(static_cast<int>(i));
+    if (d.id_at(i) % 7 != 3) keep.push_back(static_cast<int>(i));
   Discs out;
   for (int i : keep) {
-        out.id.push_back(d.id[i]);
+        out.id.push_back(d.id_at(i));
     out.x.push_back(d.x[i]);
     out.y.push_back(d.y[i]);
   }
@@ -38,9 +38,9 @@ void expect_positions(const OpeningPositions& p, const Discs& d) {
   OpeningPositions::Reader forward(p);
   for (std::size_t i = 0; i < d.size(); ++i) {
     double x0, y0;
-    forward.at(d.id[i], x0, y0);
-    ASSERT_EQ(x0, d.x[i]) << "id " << d.id[i];
-    ASSERT_EQ(y0, d.y[i]) << "id " << d.id[i];
+    forward.at(d.id_at(i), x0, y0);
+    ASSERT_EQ(x0, d.x[i]) << "id " << d.id_at(i);
+    ASSERT_EQ(y0, d.y[i]) << "id " << d.id_at(i);
   }
   OpeningPositions::Reader backward(p);  // any order works (a block at a time)
   for (int id = kIds - 1; id >= 0; id -= 997) {
@@ -93,6 +93,7 @@ TEST(OpeningPositions, RefusesDiscsOutOfIdOrder) {
   Discs d;
   d.add(0, 0, 0.5, 1, 0);
   d.add(1, 0, 0.5, 1, 0);
+  d.make_ids();
   std::swap(d.id[0], d.id[1]);
   OpeningPositions p;
   EXPECT_THROW(p.keep(d), std::logic_error);

@@ -48,7 +48,7 @@ TEST(State, SplitRunThroughSavedStateIsBitIdentical) {
       ASSERT_EQ(b.discs.size(), d.discs.size()) << scheme << " split " << split;
       ASSERT_LT(b.discs.size(), a.discs.size()) << "no disc left: the test needs a flowing discharge";
       for (std::size_t i = 0; i < b.discs.size(); ++i) {
-        ASSERT_EQ(b.discs.id[i], d.discs.id[i]);
+        ASSERT_EQ(b.discs.id_at(i), d.discs.id_at(i));
         ASSERT_EQ(b.discs.x[i], d.discs.x[i]) << scheme << " split " << split << " disc " << i;
         ASSERT_EQ(b.discs.y[i], d.discs.y[i]);
         ASSERT_EQ(b.discs.omega[i], d.discs.omega[i]);
