@@ -44,6 +44,21 @@ TEST(DiscKinds, SharedByEqualConstantsOnly) {
   EXPECT_EQ(poly.kind.back(), poly.kind.front());
 }
 
+// Discs with an array left out and the same discs with it written out give the same bytes (the
+// state format does not change); what is read back.
+Discs written_alike_and_read_back(const Discs& implicit, const Discs& explicit_arrays) {
+  std::ostringstream a, b;
+  BinaryOut oa{a}, ob{b};
+  write_discs(oa, implicit);
+  write_discs(ob, explicit_arrays);
+  EXPECT_EQ(a.str(), b.str()) << "an array left out is written as the values it stands for";
+  std::istringstream in(b.str());
+  BinaryIn r{in, "test"};
+  Discs back;
+  read_discs(r, back);
+  return back;
+}
+
 // One kind: no kind array (a scene of one kind pays nothing for several); it appears, all zeros
 // but the new disc's, when a second kind does, and the state files hold the same bytes either way.
 TEST(DiscKinds, OneKindHasNoKindArrayUntilASecondKindComes) {
@@ -55,15 +70,7 @@ TEST(DiscKinds, OneKindHasNoKindArrayUntilASecondKindComes) {
   EXPECT_EQ(d.r(8999), 0.5);
   Discs full = d;  // the same discs written with an explicit array of zeros
   full.kind.assign(full.size(), 0);
-  std::ostringstream a, b;
-  BinaryOut oa{a}, ob{b};
-  write_discs(oa, d);
-  write_discs(ob, full);
-  EXPECT_EQ(a.str(), b.str()) << "one kind is written as the array of zeros it stands for";
-  std::istringstream in(a.str());
-  BinaryIn r{in, "test"};
-  Discs back;
-  read_discs(r, back);
+  const Discs back = written_alike_and_read_back(d, full);
   EXPECT_TRUE(back.kind.empty()) << "read back with one kind: no array";
   EXPECT_EQ(back.size(), 9000u);
   // A second kind, at the end and in the middle.
@@ -102,15 +109,7 @@ TEST(DiscIds, NoIdArrayUntilADiscLeaves) {
   Discs full = w.discs;
   full.make_ids();
   ASSERT_EQ(full.id.size(), n);
-  std::ostringstream a, b;
-  BinaryOut oa{a}, ob{b};
-  write_discs(oa, w.discs);
-  write_discs(ob, full);
-  EXPECT_EQ(a.str(), b.str()) << "implicit ids are written as the indices they stand for";
-  std::istringstream in(b.str());
-  BinaryIn r{in, "test"};
-  Discs back;
-  read_discs(r, back);
+  const Discs back = written_alike_and_read_back(w.discs, full);
   EXPECT_TRUE(back.id.empty()) << "ids that are the indices are read back as none";
   const double x_after = w.discs.x[8];
   RemovedDiscs gone;
