@@ -548,7 +548,7 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
           const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
           st.bin_series[k][b].push_back(L.bin_normal[b]);
           series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
-                    << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
+                 << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
         }
       }
       const std::string rows = series.str();
