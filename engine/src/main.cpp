@@ -1,4 +1,5 @@
-// dem: command-line front end. Exit codes: 0 ok, 2 bad input, 3 unstable run.
+// dem: command-line front end. Exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could
+// not go on (a file it could not write or read).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -34,7 +35,8 @@ const char* kMainHelp =
     "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
     "  dem resolve SCENE.toml [--out FILE.json] the validated scene with every value resolved (JSON)\n"
     "\n"
-    "exit codes: 0 ok, 2 bad input, 3 unstable run, 130/143 interrupted by SIGINT/SIGTERM\n";
+    "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
+    "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
@@ -479,9 +481,16 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
-  if (cmd == "run") return cmd_run(argc - 2, argv + 2);
-  if (cmd == "params") return cmd_params(argc - 2, argv + 2);
-  if (cmd == "resolve") return cmd_resolve(argc - 2, argv + 2);
-  if (cmd == "ensemble") return cmd_ensemble(argc - 2, argv + 2);
+  // What the commands do not turn into an exit code of their own (a file that cannot be written
+  // in the middle of a run, say) ends the run with a message naming it, not with an abort.
+  try {
+    if (cmd == "run") return cmd_run(argc - 2, argv + 2);
+    if (cmd == "params") return cmd_params(argc - 2, argv + 2);
+    if (cmd == "resolve") return cmd_resolve(argc - 2, argv + 2);
+    if (cmd == "ensemble") return cmd_ensemble(argc - 2, argv + 2);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dem: the run could not go on: %s\n", e.what());
+    return 4;
+  }
   return bad("unknown command " + cmd + " (dem --help)");
 }

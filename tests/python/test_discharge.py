@@ -144,3 +144,15 @@ def test_snapshots_and_pvd(every_step):
     for f in files:
         m = meshio.read(every_step / f)
         assert "displacement" in m.point_data
+
+
+def test_a_series_file_that_cannot_be_written_stops_the_run_with_exit_4(tmp_path, run_dem):
+    """The wall series is written as it is sampled: a file the run cannot write ends it with exit 4
+    and a message naming the file (not an abort)."""
+    out = tmp_path / "out"
+    (out / "wall_series.csv.tmp").mkdir(parents=True)  # a directory where the file must go
+    proc = run_dem("run", scene(tmp_path, "short", d_time="0.05"), "--out", out, "--no-plots", "--quiet")
+    assert proc.returncode == 4, proc.stderr
+    assert "cannot write" in proc.stderr and "wall_series.csv.tmp" in proc.stderr, proc.stderr
+    assert "terminate" not in proc.stderr
+    assert not (out / "summary.json").exists()
