@@ -288,13 +288,17 @@ void DischargeState::save(BinaryOut& o) const {
   for (double v : sink_time) o.put(v);
   o.put(series_bytes);
   for (const std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) o.str(s->str());
-  o.put<std::uint64_t>(bin_series.size());
-  for (const auto& wall : bin_series) {
+  const auto put_peaks = [&](const PeakTracker& p) {
+    o.put(p.raw); o.put(p.windowed); o.put(p.acc); o.put(p.count);
+    o.vec(p.last);
+  };
+  o.put<std::uint64_t>(bin_peaks.size());
+  for (const auto& wall : bin_peaks) {
     o.put<std::uint64_t>(wall.size());
-    for (const auto& bin : wall) o.vec(bin);
+    for (const auto& bin : wall) put_peaks(bin);
   }
-  o.put<std::uint64_t>(total_series.size());
-  for (const auto& v : total_series) o.vec(v);
+  o.put<std::uint64_t>(total_peaks.size());
+  for (const auto& p : total_peaks) put_peaks(p);
   o.vec(sample_t);
   o.put<std::uint64_t>(next_snap);
   o.put(last_removal); o.put(removed_mass); o.put(moved_fraction);
@@ -320,23 +324,28 @@ void DischargeState::load(BinaryIn& r) {
     s->str(r.str());
     s->seekp(0, std::ios_base::end);  // append after the restored text
   }
-  bin_series.resize(r.count(1 << 20));
-  for (auto& wall : bin_series) {
+  const auto get_peaks = [&](PeakTracker& p) {
+    p.raw = r.get<double>(); p.windowed = r.get<double>(); p.acc = r.get<double>();
+    p.count = r.get<std::uint64_t>();
+    r.vec(p.last);
+  };
+  bin_peaks.resize(r.count(1 << 20));
+  for (auto& wall : bin_peaks) {
     wall.resize(r.count(1 << 24));
-    for (auto& bin : wall) r.vec(bin);
+    for (auto& bin : wall) get_peaks(bin);
   }
-  total_series.resize(r.count(1 << 20));
-  for (auto& v : total_series) r.vec(v);
+  total_peaks.resize(r.count(1 << 20));
+  for (auto& p : total_peaks) get_peaks(p);
   r.vec(sample_t);
   next_snap = r.get<std::uint64_t>();
   last_removal = r.get<double>(); removed_mass = r.get<double>(); moved_fraction = r.get<double>();
   wall_seconds = r.get<double>();
   energy.active = r.get<bool>(); energy.budget = r.get<double>(); energy.scale = r.get<double>();
   energy.gain = r.get<double>();
-  if (static_walls.size() != bin_series.size() || static_walls.size() != total_series.size())
+  if (static_walls.size() != bin_peaks.size() || static_walls.size() != total_peaks.size())
     r.fail("corrupt discharge state (walls)");
   for (std::size_t k = 0; k < static_walls.size(); ++k)
-    if (bin_series[k].size() != static_walls[k].bin_normal.size()) r.fail("corrupt discharge state (bins)");
+    if (bin_peaks[k].size() != static_walls[k].bin_normal.size()) r.fail("corrupt discharge state (bins)");
 }
 
 std::string series_file_problem(const std::string& out, const DischargeState& st) {
@@ -383,9 +392,9 @@ std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) 
   st.flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,"
              "surface_right,arch_discs,arch_crown_y\n";
   // Per wall and bin: series of normal force (for the ratios).
-  st.bin_series.assign(st.static_walls.size(), {});
-  for (std::size_t k = 0; k < st.static_walls.size(); ++k) st.bin_series[k].resize(st.static_walls[k].bin_normal.size());
-  st.total_series.assign(st.static_walls.size(), {});
+  st.bin_peaks.assign(st.static_walls.size(), {});
+  for (std::size_t k = 0; k < st.static_walls.size(); ++k) st.bin_peaks[k].resize(st.static_walls[k].bin_normal.size());
+  st.total_peaks.assign(st.static_walls.size(), {});
   st.next_s = 0;
   st.status = "discharged";
   return "";
@@ -439,6 +448,8 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   RemovedDiscs dead;  // the discs leaving at a step: a few indices, not a mask of all discs
   const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
   const long sample_every = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
+  // The moving average of the peak ratios: peak_window in samples.
+  const std::size_t win = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every * w.dt))));
   const auto t0 = std::chrono::steady_clock::now();
   auto last_print = t0;
   if (st.status == "interrupted") st.status = "discharged";
@@ -542,11 +553,11 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
         const Wall& wl = w.geometry.walls[k];
         st.totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
                   << fmt(L.fy) << '\n';
-        st.total_series[k].push_back(L.normal);
+        st.total_peaks[k].add(L.normal, win);
         for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
           const double mid = std::min(L.length, (b + 0.5) * L.bin);
           const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
-          st.bin_series[k][b].push_back(L.bin_normal[b]);
+          st.bin_peaks[k][b].add(L.bin_normal[b], win);
           series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
                  << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
         }
@@ -645,34 +656,18 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
 
   // Ratios of peak to static: raw maximum and the maximum of a moving average.
   const std::vector<WallLoad>& static_walls = st.static_walls;
-  const std::vector<std::vector<std::vector<double>>>& bin_series = st.bin_series;
-  const std::vector<std::vector<double>>& total_series = st.total_series;
   const double* sink_time = st.sink_time;
   const double moved_fraction = st.moved_fraction, fill_top = st.fill_top, width = f.width, g = f.g;
-  const std::size_t win = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every * w.dt))));
-  auto peaks = [&](const std::vector<double>& v, double& raw, double& windowed) {
-    raw = 0;
-    windowed = 0;
-    double acc = 0;
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      raw = std::max(raw, v[i]);
-      acc += v[i];
-      if (i >= win) acc -= v[i - win];
-      if (i + 1 >= win) windowed = std::max(windowed, acc / win);
-    }
-  };
   json walls_json = json::array();
   double best_bottom[2] = {0, 0}, best_side[2] = {0, 0};
   for (std::size_t k = 0; k < static_walls.size(); ++k) {
     const WallLoad& S = static_walls[k];
-    double raw, wnd;
-    peaks(total_series[k], raw, wnd);
+    const double raw = st.total_peaks[k].raw, wnd = st.total_peaks[k].windowed;
     json bins = json::array();
     double smax = 0;
     for (double v : S.bin_normal) smax = std::max(smax, v);
     for (std::size_t b = 0; b < S.bin_normal.size(); ++b) {
-      double br, bw;
-      peaks(bin_series[k][b], br, bw);
+      const double br = st.bin_peaks[k][b].raw, bw = st.bin_peaks[k][b].windowed;
       // Bins that carried little at rest have no meaningful ratio (one contact of 1 disc weight).
       const bool ok = S.bin_normal[b] >= 0.25 * smax && smax > 0;
       const double rr = ok ? br / S.bin_normal[b] : NAN, rw = ok ? bw / S.bin_normal[b] : NAN;

@@ -3,6 +3,7 @@
 // drew (wall forces, flow pictures) and what it could not (series, ratios, jams, patterns).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -48,6 +49,26 @@ DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string
 struct BinaryOut;
 struct BinaryIn;
 
+// The peaks of a series fed a sample at a time: the largest sample and the largest moving average
+// over `win` samples, with the same operations in the same order as over the whole series kept
+// (the same bits), but only its last `win` samples in memory (a series per wall bin grew by 8
+// bytes a bin and sample: some 32 kB a sample at a million discs).
+struct PeakTracker {
+  double raw = 0, windowed = 0, acc = 0;
+  std::uint64_t count = 0;
+  std::vector<double> last;  // the last win samples, sample c at c % win
+  void add(double v, std::size_t win) {
+    if (last.size() != win) last.assign(win, 0.0);  // the first sample (win is the run's)
+    raw = std::max(raw, v);
+    acc += v;
+    const std::size_t slot = static_cast<std::size_t>(count % win);
+    if (count >= win) acc -= last[slot];
+    last[slot] = v;
+    if (count + 1 >= win) windowed = std::max(windowed, acc / static_cast<double>(win));
+    ++count;
+  }
+};
+
 // Everything a discharge carries from step to step besides the world: the state at opening,
 // the series and logs so far, the loop position. Checkpoints save it (checkpoint.hpp).
 struct DischargeState {
@@ -74,8 +95,8 @@ struct DischargeState {
   std::uint64_t series_bytes = 0;
   std::ofstream series_out;
   std::ostringstream totals, flow, pvd_d, pvd_c;  // the text of the other series files and .pvd entries
-  std::vector<std::vector<std::vector<double>>> bin_series;  // per wall and bin: normal force samples
-  std::vector<std::vector<double>> total_series;             // per wall: total normal force samples
+  std::vector<std::vector<PeakTracker>> bin_peaks;  // per wall and bin: peaks of the normal force
+  std::vector<PeakTracker> total_peaks;             // per wall: peaks of the total normal force
   std::vector<double> sample_t;
   std::size_t next_snap = 0;
   double last_removal = 0, removed_mass = 0, moved_fraction = 0;
