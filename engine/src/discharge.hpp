@@ -109,11 +109,10 @@ struct DischargeState {
 
 // Records the state at opening and removes the gate; returns "" or why it cannot open.
 std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st);
-// Runs the discharge from st (just opened, or restored from a checkpoint with the world) to its
-// end, a jam, or a stop request (status "interrupted"), then writes its files and metrics.
 // Why a discharge resumed from a checkpoint cannot go on with its wall series file ("" : it can).
 std::string series_file_problem(const std::string& out_dir, const DischargeState& st);
-
+// Runs the discharge from st (just opened, or restored from a checkpoint with the world) to its
+// end, a jam, or a stop request (status "interrupted"), then writes its files and metrics.
 DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out_dir,
                                    bool progress, const RunControl* ctl, LastGood* good = nullptr);
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstring>
+#include <numeric>
 #include <vector>
 
 namespace dem {
@@ -66,15 +67,9 @@ struct Discs {
   int id_at(std::size_t i) const { return id.empty() ? static_cast<int>(i) : id[i]; }
   // The ids as an array (before a removal breaks id == index).
   void make_ids() {
-    if (!id.empty() || x.empty()) return;
-    id.reserve(x.capacity());
-    for (std::size_t i = 0; i < x.size(); ++i) id.push_back(static_cast<int>(i));
-  }
-  // Drops the array when the ids are the indices again (a state read back).
-  void drop_ids_if_indices() {
-    for (std::size_t i = 0; i < id.size(); ++i)
-      if (id[i] != static_cast<int>(i)) return;
-    std::vector<int>().swap(id);
+    if (!id.empty()) return;
+    id.resize(x.size());
+    std::iota(id.begin(), id.end(), 0);
   }
   // Disc i's constants.
   double r(std::size_t i) const { return kinds.r[kind_at(i)]; }
@@ -96,9 +91,13 @@ struct Discs {
     y.reserve(n);
     room_ = n;
   }
-  // After the kinds table changed (a state read back): no kind array for one kind.
-  void drop_kind_array_if_one_kind() {
+  // Frees the kind and id arrays where they hold what kind_at and id_at give without them (a
+  // state read back, whose file holds both whole).
+  void drop_derivable_arrays() {
     if (kinds.size() <= 1) std::vector<int>().swap(kind);
+    for (std::size_t i = 0; i < id.size(); ++i)
+      if (id[i] != static_cast<int>(i)) return;
+    std::vector<int>().swap(id);
   }
   void add(double px, double py, double radius, double density, int mat) {
     add_position(px, py, radius, density, mat);

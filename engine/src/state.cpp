@@ -69,8 +69,7 @@ void read_discs(BinaryIn& r, Discs& d) {
   for (auto* v : {&d.dux, &d.duy, &d.dphi, &d.phi})  // kept by eq. 19 / with the rotation angle only
     if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
   if (d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
-  d.drop_kind_array_if_one_kind();
-  d.drop_ids_if_indices();
+  d.drop_derivable_arrays();
 }
 
 void write_world(BinaryOut& o, const World& w) {
