@@ -57,33 +57,31 @@ constexpr char kLeftFoot = 1, kRightFoot = 2;
 
 enum class ArchSearch { found, none, too_far };
 
-// One breadth-first search for the arch over the records rec[0, nrec) (sorted by (i, j); those
-// not compressive are skipped). A disc's partners, in the order of the record list: first those
-// below it (their records come first), by increasing index, from `below` (the (j, i) of each
-// compressive pair, sorted); then those above it, from its own run of records. `reach2`: the
-// records hold every partner of the discs within sqrt(reach2) of (ax, ay) only; popping a disc
-// farther out gives too_far (the search may differ from one over all records from there).
-ArchSearch arch_bfs(const Discs& d, const PairForce* rec, std::size_t nrec, const Feet& feet, double floor_y,
-                    double ax, double ay, double reach2, std::vector<int>& path) {
+// One breadth-first search for the arch over the compressive pairs `above` (their (i, j), sorted).
+// A disc's partners, in the order of the pairs: first those below it (their pairs come first), by
+// increasing index, from `below` (the (j, i) of each pair, sorted); then those above it, from its
+// own run of pairs. `reach2`: the pairs hold every partner of the discs within sqrt(reach2) of
+// (ax, ay) only; popping a disc farther out gives too_far (the search may differ from one over
+// all pairs from there).
+using Pairs = std::vector<std::pair<int, int>>;
+ArchSearch arch_bfs(const Discs& d, const Pairs& above, const Feet& feet, double floor_y, double ax, double ay,
+                    double reach2, std::vector<int>& path) {
   const auto foot = [&](int i) -> char {
     const auto it = std::lower_bound(feet.begin(), feet.end(), std::make_pair(i, char(0)));
     return it != feet.end() && it->first == i ? it->second : 0;
   };
-  std::size_t m = 0;
-  for (std::size_t a = 0; a < nrec; ++a) m += rec[a].fn > 0;
-  std::vector<std::pair<int, int>> below;
-  below.reserve(m);
-  for (std::size_t a = 0; a < nrec; ++a)
-    if (rec[a].fn > 0) below.emplace_back(rec[a].j, rec[a].i);
+  const std::size_t nrec = above.size();
+  Pairs below;
+  below.reserve(nrec);
+  for (const auto& a : above) below.emplace_back(a.second, a.first);
   std::sort(below.begin(), below.end());
   // The discs the search can reach or start from (those of the compressive pairs, and the
   // feet), sorted: a disc's place here indexes its predecessor on the search.
   std::vector<int> ids;
   {
     std::size_t a = 0, b = 0, f = 0;
-    const auto next_rec = [&] {  // the i of the next compressive record, or INT_MAX
-      while (a < nrec && !(rec[a].fn > 0)) ++a;
-      return a < nrec ? rec[a].i : std::numeric_limits<int>::max();
+    const auto next_rec = [&] {  // the i of the next pair, or INT_MAX
+      return a < nrec ? above[a].first : std::numeric_limits<int>::max();
     };
     for (;;) {
       const int r = next_rec();
@@ -111,7 +109,6 @@ ArchSearch arch_bfs(const Discs& d, const PairForce* rec, std::size_t nrec, cons
       q.push_back(j);
     }
   };
-  const PairForce* end = rec + nrec;
   while (!q.empty()) {
     const int i = q.front();
     q.pop_front();
@@ -127,9 +124,8 @@ ArchSearch arch_bfs(const Discs& d, const PairForce* rec, std::size_t nrec, cons
     }
     const auto lo = std::lower_bound(below.begin(), below.end(), std::make_pair(i, std::numeric_limits<int>::min()));
     for (auto it = lo; it != below.end() && it->first == i; ++it) visit(i, it->second);
-    const PairForce* first = std::lower_bound(rec, end, i, [](const PairForce& p, int k) { return p.i < k; });
-    for (const PairForce* it = first; it != end && it->i == i; ++it)
-      if (it->fn > 0) visit(i, it->j);
+    const auto first = std::lower_bound(above.begin(), above.end(), std::make_pair(i, std::numeric_limits<int>::min()));
+    for (auto it = first; it != above.end() && it->first == i; ++it) visit(i, it->second);
   }
   return ArchSearch::none;
 }
@@ -166,7 +162,6 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
   }
   feet.resize(nf);
   if (!w.pair_forces_current()) throw std::logic_error("find_arch: the pair forces of this step were not recorded");
-  const std::vector<PairForce>& rec = w.pair_forces;
   // The search in a disc of radius rho around the slit's centre first, over the compressive
   // records whose disc i lies in it (a copy sized by the slit's neighbourhood, not by the silo):
   // the whole packing's records sorted cost a serial sort of every compressive pair at each
@@ -181,32 +176,35 @@ std::vector<int> find_arch(const World& w, double slit_left, double slit_right, 
     return ex * ex + ey * ey;
   };
   double far2 = 0, hop2 = 0;  // the farthest compressive disc i, the longest compressive pair
-  for (const PairForce& p : rec)
-    if (p.fn > 0) {
-      far2 = std::max(far2, dist2(p.i));
-      const double ex = d.x[p.j] - d.x[p.i], ey = d.y[p.j] - d.y[p.i];
-      hop2 = std::max(hop2, ex * ex + ey * ey);
-    }
+  w.each_recorded_pair([&](int i, int j, double fn, double) {
+    if (!(fn > 0)) return;
+    far2 = std::max(far2, dist2(i));
+    const double ex = d.x[j] - d.x[i], ey = d.y[j] - d.y[i];
+    hop2 = std::max(hop2, ex * ex + ey * ey);
+  });
   const double hop = std::sqrt(hop2);
   double feet_far = 0;
   for (const auto& f : feet) feet_far = std::max(feet_far, std::sqrt(dist2(f.first)));
   std::vector<int> path;
-  std::vector<PairForce> near;
+  Pairs near;  // the compressive pairs searched: (i, j), 8 bytes each
   for (double rho = feet_far + 8 * hop + rmax;; rho *= 2) {
     if (stats) ++stats->searches;
+    near.clear();
     if (!(rho > 0) || !(rho * rho < far2)) {  // every record: the search as over the whole packing
-      if (stats) stats->records += rec.size();
-      arch_bfs(d, rec.data(), rec.size(), feet, floor_y, ax, ay, std::numeric_limits<double>::infinity(), path);
+      if (stats) stats->records += w.pair_totals.size();
+      w.each_recorded_pair([&](int i, int j, double fn, double) {
+        if (fn > 0) near.emplace_back(i, j);
+      });
+      arch_bfs(d, near, feet, floor_y, ax, ay, std::numeric_limits<double>::infinity(), path);
       return path;
     }
-    near.clear();
-    for (const PairForce& p : rec)
-      if (p.fn > 0 && !(dist2(p.i) > rho * rho)) near.push_back(p);  // NaN: kept
+    w.each_recorded_pair([&](int i, int j, double fn, double) {
+      if (fn > 0 && !(dist2(i) > rho * rho)) near.emplace_back(i, j);  // NaN: kept
+    });
     if (stats) stats->records += near.size();
     // Margins of 1e-9: rounding in the distances never admits a disc whose partner is outside.
     const double reach = rho * (1 - 1e-9) - hop * (1 + 1e-9);
-    const ArchSearch r = arch_bfs(d, near.data(), near.size(), feet, floor_y, ax, ay,
-                                  reach > 0 ? reach * reach : -1.0, path);
+    const ArchSearch r = arch_bfs(d, near, feet, floor_y, ax, ay, reach > 0 ? reach * reach : -1.0, path);
     if (r != ArchSearch::too_far) return path;
   }
 }

@@ -16,7 +16,7 @@ namespace dem {
 
 // One candidate disc-disc pair (i < j) and its history.
 // The history the next step needs, and nothing else: 24 bytes a pair. The total forces f_n, f_s
-// are outputs, recorded only for the force passes whose results are written (World::pair_forces).
+// are outputs, recorded only for the force passes whose results are written (World::pair_totals).
 struct PairContact {
   int i, j;
   double en = 0, es = 0;  // elastic normal and shear forces, eqs. (7a), (11a)

@@ -210,12 +210,12 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   for (std::size_t p = 0; p < w.bonds.size(); ++p) nb += bonded(p);
   for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) nwc += wall_touching(p);
   const std::size_t n = np + nb + nwc;
-  // A pair's totals: its entry in the recorded forces of this step, found by walking the record
-  // list (sorted by (i, j), as the pair list) beside the pairs; (0, 0) for a pair that pass found
-  // apart, NaN when this step's forces were not recorded (the run loops record them).
+  // A pair's totals: its entry in the recorded totals of this step, found by a cursor walking
+  // them beside the pairs (PairTotals::at); (0, 0) for a pair that pass found apart, NaN when this
+  // step's forces were not recorded (the run loops record them).
   const bool recorded = w.pair_forces_current();
-  const auto totals = [&](const PairContact& c, std::size_t& r, double& fn, double& fs) {
-    const PairForce* f = w.recorded_forces(c, r);
+  const auto totals = [&](std::size_t p, PairTotals::Cursor& r, double& fn, double& fs) {
+    const PairTotals::Force* f = recorded ? w.pair_totals.at(w.neighbors.pairs, p, r) : nullptr;
     fn = !recorded ? NAN : f ? f->fn : 0.0;
     fs = !recorded ? NAN : f ? f->fs : 0.0;
   };
@@ -228,15 +228,13 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   };
   const int nw = static_cast<int>(w.geometry.walls.size());
   NthKept pair_at, bond_at, wall_at;
-  std::size_t rec_at = 0, last_pair = 0;  // the record cursor, behind the pair last read
+  PairTotals::Cursor rec_at;  // the record cursor (a section read from its start again restarts it)
   const auto entry = [&](std::size_t c) -> Entry {
     if (c < np) {
       const std::size_t p = pair_at.find(c, touching);
-      if (p < last_pair) rec_at = 0;  // a section read from its start again
-      last_pair = p;
       const PairContact& q = w.neighbors.pairs[p];
       double fn, fs;
-      totals(q, rec_at, fn, fs);
+      totals(p, rec_at, fn, fs);
       return {q.en, q.es, fn, fs, 0, q.i, q.j, 0, 0};
     }
     if (c < np + nb) {
@@ -257,12 +255,12 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
   o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
-  std::size_t r = 0;
+  PairTotals::Cursor r;
   for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
     if (!touching(p)) continue;
     const PairContact& c = w.neighbors.pairs[p];
     double fn, fs;
-    totals(c, r, fn, fs);
+    totals(p, r, fn, fs);
     const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;

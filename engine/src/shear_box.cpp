@@ -143,7 +143,7 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
     s.ratio = s.sigma != 0 ? s.tau / s.sigma : 0;
     samples.push_back(s);
     int contacts = 0, sliding = 0;
-    w.each_pair_with_forces([&](std::size_t p, const PairForce* rec) {
+    w.each_pair_with_forces([&](std::size_t p, const PairTotals::Force* rec) {
       const PairContact& c = w.neighbors.pairs[p];
       if ((!rec || rec->fn == 0) && c.en == 0) return;
       ++contacts;

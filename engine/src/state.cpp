@@ -84,7 +84,9 @@ void write_world(BinaryOut& o, const World& w) {
   o.vec(w.neighbors.pairs);
   o.vec(zero_padded(w.neighbors.walls));
   o.put(w.pair_forces_step);  // the recorded totals (outputs), so a state saved at its end writes them again
-  o.vec(w.pair_forces);
+  // As (i, j, fn, fs) records, whatever their form in memory: written one by one, not copied.
+  o.put<std::uint64_t>(w.pair_totals.size());
+  w.each_recorded_pair([&](int i, int j, double fn, double fs) { o.put(PairForce{i, j, fn, fs}); });
   o.vec(w.force_blocks);
 }
 
@@ -112,9 +114,14 @@ void read_world(BinaryIn& r, World& w) {
     if (c.i < 0 || static_cast<std::size_t>(c.i) >= n || c.k < 0 || c.k >= w.geometry.obstacle_count())
       r.fail("corrupt wall-contact list");
   w.pair_forces_step = r.get<long>();
-  r.vec(w.pair_forces);
-  for (const auto& p : w.pair_forces)
+  // Detached (with their (i, j)): the lists may be built again before the totals are read.
+  const std::uint64_t nrec = r.count(1ull << 32);
+  w.pair_totals.start_detached(nrec);
+  for (std::uint64_t k = 0; k < nrec; ++k) {
+    const auto p = r.get<PairForce>();
     if (p.i < 0 || p.j < 0 || static_cast<std::size_t>(p.j) >= n || p.i >= p.j) r.fail("corrupt pair-force record");
+    w.pair_totals.push(p);
+  }
   r.vec(w.force_blocks);
   for (std::size_t t = 0; t < w.force_blocks.size(); ++t)
     if ((t == 0 && w.force_blocks[t] != 0) || (t > 0 && w.force_blocks[t] < w.force_blocks[t - 1]) ||

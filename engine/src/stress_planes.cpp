@@ -47,13 +47,13 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
     }
   };
   if (!w.pair_forces_current()) throw std::logic_error("plane stresses: the pair forces of this step were not recorded");
-  for (const PairForce& c : w.pair_forces) {  // the pairs that touched in the last force pass
-    const double dx = px[c.j] - px[c.i], dy = py[c.j] - py[c.i];
-    const double sum = d.r(c.i) + d.r(c.j);
-    if (dx * dx + dy * dy > sum * sum) continue;  // (as they must, at the positions of that pass)
-    if (c.fn == 0 && c.fs == 0) continue;
-    add_cut(c.i, c.j, c.fn, c.fs);
-  }
+  w.each_recorded_pair([&](int i, int j, double fn, double fs) {  // the pairs that touched in the last force pass
+    const double dx = px[j] - px[i], dy = py[j] - py[i];
+    const double sum = d.r(i) + d.r(j);
+    if (dx * dx + dy * dy > sum * sum) return;  // (as they must, at the positions of that pass)
+    if (fn == 0 && fs == 0) return;
+    add_cut(i, j, fn, fs);
+  });
   for (const Bond& b : w.bonds) add_cut(b.i, b.j, b.fn, b.fs);
 
   // Cross-check: the part above is held by the cut, so the cut force on it equals

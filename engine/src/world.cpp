@@ -126,6 +126,8 @@ void World::balance_blocks() {
 }
 
 void World::rebuild_lists() {
+  // Totals recorded over the old list (a build right after a recorded pass) name their pairs first.
+  if (pair_totals.allocated()) pair_totals.detach(neighbors.pairs);
   neighbors.rebuild(discs, geometry, threads_for(static_cast<int>(discs.size())));
   if (!moving.empty()) walls_listed();
   if (bonds.empty()) return;
@@ -146,15 +148,11 @@ void World::init() {
 }
 
 void World::drop_pair_forces() {
-  std::vector<PairForce>().swap(pair_forces);
+  pair_totals.clear();
   pair_forces_step = -1;
 }
 
-void World::size_pair_forces(std::size_t count) {
-  // A larger count: the old totals are dropped before the new room is taken, never both held.
-  if (count > pair_forces.capacity()) std::vector<PairForce>().swap(pair_forces);
-  pair_forces.resize(count);
-}
+void World::size_pair_forces(std::size_t count) { pair_totals.start(count, neighbors.pairs.size()); }
 
 bool World::force_pass(Then then, double h) {
   // Verlet's rest measure: the |v dt| of the move, before the closing kick overwrites v (the
@@ -163,7 +161,7 @@ bool World::force_pass(Then then, double h) {
   const bool record = record_pair_forces;
   // Totals recorded by an earlier pass are stale after this one (pair_forces_current is false):
   // freed, so that they never sit beside a list build's scratch (one or the other at the peak).
-  if (!record && pair_forces.capacity() > 0) drop_pair_forces();
+  if (!record && pair_totals.allocated()) drop_pair_forces();
   const bool far = (this->*force_kernel_)(then, h);
   if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
   return far;
@@ -343,7 +341,7 @@ std::size_t World::touching_pairs(std::size_t p0, std::size_t p1) const {
 
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
 double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                            PairForce* record) {
+                            PairTotals::Force* record) {
   if (record)
     return one_kind() ? pair_pass<NS, NT, FC, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
                      : pair_pass<NS, NT, FC, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
@@ -412,10 +410,11 @@ static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict
 // The i side of each pair is added at once; the j side too when j < own_end, otherwise (j belongs
 // to another thread's discs) it is kept in `later` and added after the parallel part, in a fixed
 // order. RECORD: the totals of the touching pairs are written from `record` on, room for
-// touching_pairs(p0, p1) of them. Returns the largest overlap.
+// touching_pairs(p0, p1) of them, and each touching pair's bit set in pair_totals' bits over the
+// list. Returns the largest overlap.
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
 double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                        PairForce* record) {
+                        PairTotals::Force* record) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
   PairContact* __restrict pc = neighbors.pairs.data();
@@ -434,6 +433,14 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
   const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
+  // RECORD: the touching pairs' bits, gathered a word at a time and or-ed into the list's bits
+  // (a thread's first and last words may be shared with its neighbours': atomic, in any order).
+  std::uint64_t* const bits = RECORD ? pair_totals.bits() : nullptr;
+  std::size_t word = 0;
+  std::uint64_t word_bits = 0;
+  const auto flush_bits = [&] {
+    if (word_bits != 0) __atomic_fetch_or(&bits[word], word_bits, __ATOMIC_RELAXED);
+  };
   for (std::size_t p = p0; p < p1;) {
     int n = 0;
     for (; p < p1 && n < PairBlock::kSize; ++p) {
@@ -477,7 +484,16 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       c.en = b.en[k]; c.es = b.es[k];
       worst = std::max(worst, b.overlap[k]);
       const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
-      if constexpr (RECORD) *record++ = PairForce{i, j, b.fn[k], fs};
+      if constexpr (RECORD) {
+        *record++ = PairTotals::Force{b.fn[k], fs};
+        const std::size_t q = p0 + static_cast<std::size_t>(b.pair[k]);
+        if ((q >> 6) != word) {
+          flush_bits();
+          word = q >> 6;
+          word_bits = 0;
+        }
+        word_bits |= std::uint64_t{1} << (q & 63);
+      }
       if (i != cur) {
         put_back();
         cur = i;
@@ -496,6 +512,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
     }
     put_back();
   }
+  if constexpr (RECORD) flush_bits();
   return worst;
 }
 
@@ -592,7 +609,7 @@ bool World::compute_forces(Then then, double h) {
     start_resultants(0, n);
     const std::size_t np = neighbors.pairs.size();
     if (record) size_pair_forces(touching_pairs(0, np));
-    worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? pair_forces.data() : nullptr);
+    worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? pair_totals.forces() : nullptr);
   } else {
     // Threads own contiguous blocks of discs (force_blocks: of equal work, set every
     // kRebalanceEvery steps); a pair is computed by the owner of its i. What a thread adds to a later block's
@@ -617,8 +634,8 @@ bool World::compute_forces(Then then, double h) {
       deferred_[t].value.clear();
       start_resultants(i0, i1);
       // A recorded pass: each thread writes its touching pairs' totals into its own slice of
-      // pair_forces, sized once to the exact count (the list's order; no growth, no copy).
-      PairForce* mine = nullptr;
+      // pair_totals, sized once to the exact count (the list's order; no growth, no copy).
+      PairTotals::Force* mine = nullptr;
       if (record) {  // the same branch on every thread
         touching_[t].value = touching_pairs(p0, p1);
 #pragma omp barrier
@@ -630,7 +647,7 @@ bool World::compute_forces(Then then, double h) {
 #pragma omp barrier
         std::size_t offset = 0;
         for (int u = 0; u < t; ++u) offset += touching_[u].value;
-        mine = pair_forces.data() + offset;
+        mine = pair_totals.forces() + offset;
       }
       // Walls before pairs: the order (and the bits) that gcc gave the former
       // std::max(pairs(), walls()), whose arguments it evaluates right to left; now explicit.
@@ -739,15 +756,10 @@ void World::remove_discs(const RemovedDiscs& removed) {
   if (!d.phi.empty()) keep(d.phi);  // output.rotation_angle only
   if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
   keep(d.fx); keep(d.fy); keep(d.torque);
+  pair_totals.compact(neighbors.pairs, removed);  // the recorded totals follow their pairs
   neighbors.compact(removed);
   for (int& b : force_blocks)  // the same block edges, less the discs gone below them
     b -= static_cast<int>(std::lower_bound(gone.begin(), gone.end(), b) - gone.begin());
-  std::size_t r = 0;  // the recorded totals follow their discs
-  for (const PairForce& f : pair_forces) {
-    const int i = removed.new_index(f.i), j = removed.new_index(f.j);
-    if (i >= 0 && j >= 0) pair_forces[r++] = PairForce{i, j, f.fn, f.fs};
-  }
-  pair_forces.resize(r);
   if (!bonds.empty()) {  // a bond goes with either of its discs; order (i, j) is kept
     std::size_t k = 0;
     for (const Bond& b : bonds) {

@@ -11,14 +11,9 @@
 #include "model.hpp"
 #include "moving_walls.hpp"
 #include "neighbors.hpp"
+#include "pair_totals.hpp"
 
 namespace dem {
-
-// The total forces f_n, f_s (eqs. 9, 14) of a touching pair in a recorded force pass.
-struct PairForce {
-  int i, j;
-  double fn, fs;
-};
 
 // A block of touching pairs on its way through the law (World::pair_pass): the gathered geometry
 // and history in, the forces out. 128 pairs: some 20 kB, on the stack of the thread that runs the
@@ -70,13 +65,14 @@ class World {
   double particle_steps = 0;  // sum over steps of the number of discs (throughput)
   double max_overlap = 0;  // largest overlap seen by the last force computation [cm]
 
-  // The total forces of the pairs that touched in the force pass of step `pair_forces_step`,
-  // sorted by (i, j). They are outputs, not history (the next step needs e_n and e_s alone), so a
-  // pass records them only when record_pair_forces is set: the run loops set it before the steps
-  // whose contacts they write or read. Keeping them in the pair list cost 16 bytes a pair and a
-  // third of the force pass's memory traffic.
+  // The total forces of the pairs that touched in the force pass of step `pair_forces_step`, in
+  // the list's order (PairTotals: 16 bytes a touching pair while the list is the pass's). They are
+  // outputs, not history (the next step needs e_n and e_s alone), so a pass records them only
+  // when record_pair_forces is set: the run loops set it before the steps whose contacts they
+  // write or read. Keeping them in the pair list cost 16 bytes a pair and a third of the force
+  // pass's memory traffic.
   bool record_pair_forces = false;
-  std::vector<PairForce> pair_forces;
+  PairTotals pair_totals;
   long pair_forces_step = -1;
   bool pair_forces_current() const { return pair_forces_step == steps; }
 
@@ -92,20 +88,17 @@ class World {
   static constexpr long kRebalanceEvery = 64;
   bool blocks_fit() const;  // force_blocks fit the thread count and the discs
   void balance_blocks();  // force_blocks from the lists as they are
-  // The recorded totals of pair c (nullptr for a pair the recorded pass found apart or did not
-  // have), found by a cursor r into pair_forces that only moves forward: ask for pairs in list
-  // order (both lists are sorted by (i, j)), starting from r = 0.
-  const PairForce* recorded_forces(const PairContact& c, std::size_t& r) const {
-    const std::size_t nr = pair_forces.size();
-    while (r < nr && (pair_forces[r].i < c.i || (pair_forces[r].i == c.i && pair_forces[r].j < c.j))) ++r;
-    return r < nr && pair_forces[r].i == c.i && pair_forces[r].j == c.j ? &pair_forces[r] : nullptr;
-  }
-  // f(p, rec) for each pair p of the list, in order, with its recorded totals rec (as above).
+  // f(p, rec) for each pair p of the list, in order, with its recorded totals rec (nullptr for a
+  // pair the recorded pass found apart or did not have).
   template <class F>
   void each_pair_with_forces(F&& f) const {
-    std::size_t r = 0;
-    for (std::size_t p = 0; p < neighbors.pairs.size(); ++p) f(p, recorded_forces(neighbors.pairs[p], r));
+    PairTotals::Cursor r;
+    for (std::size_t p = 0; p < neighbors.pairs.size(); ++p) f(p, pair_totals.at(neighbors.pairs, p, r));
   }
+  // f(i, j, fn, fs) for each recorded total, in (i, j) order.
+  template <class F>
+  void each_recorded_pair(F&& f) const { pair_totals.each(neighbors.pairs, f); }
+  std::vector<PairForce> recorded_pairs() const { return pair_totals.records(neighbors.pairs); }  // (tests)
 
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
   // Selects the specialised force kernel and computes the first forces (call before step()).
@@ -164,15 +157,16 @@ class World {
     double fx, fy, tq;
   };
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
-  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later, PairForce* record);
+  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                   PairTotals::Force* record);
   // pair_pass for this pass: recording or not (record null), one kind of disc or several.
   template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
   double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                       PairForce* record);
+                       PairTotals::Force* record);
   // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).
   static bool apart(double R2, double sum) { return R2 > sum * sum; }
   std::size_t touching_pairs(std::size_t p0, std::size_t p1) const;  // pairs of [p0, p1) that touch now
-  void size_pair_forces(std::size_t count);  // room for exactly count recorded totals
+  void size_pair_forces(std::size_t count);  // room for exactly count recorded totals over the list
   void drop_pair_forces();  // frees the recorded totals (pair_forces_current() is false after)
   std::vector<Padded<std::size_t>> touching_;  // per thread: touching pairs of a recorded pass
   // Every disc of one kind: the kernels keep its constants in registers instead of reading them

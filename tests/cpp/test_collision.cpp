@@ -64,7 +64,7 @@ Outcome simulate(bool with_wall, ContactOptions opt, Scheme scheme, double dt) {
   for (int s = 0; s < 200000; ++s) {
     w.step();
     const bool in_contact = with_wall ? (!w.neighbors.walls.empty() && w.neighbors.walls[0].fn != 0)
-                                      : (!w.pair_forces.empty() && w.pair_forces[0].fn != 0);
+                                      : (!w.pair_totals.empty() && w.recorded_pairs()[0].fn != 0);
     if (in_contact) ++touching;
     else if (touching > 0) break;
   }

@@ -33,7 +33,7 @@ std::vector<int> plain_arch(const World& w) {
     if (std::abs(c.px - kRightX) <= 2 * rmax) foot[c.i] |= 2;
   }
   std::vector<std::vector<int>> adj(n);
-  for (const PairForce& p : w.pair_forces)
+  for (const PairForce& p : w.recorded_pairs())
     if (p.fn > 0) {
       adj[p.i].push_back(p.j);
       adj[p.j].push_back(p.i);
@@ -86,7 +86,7 @@ TEST(FindArch, SameChainAsThePlainSearchOnRandomContactGraphs) {
     std::sort(rec.begin(), rec.end(), [](const PairForce& a, const PairForce& b) { return a.i < b.i || (a.i == b.i && a.j < b.j); });
     rec.erase(std::unique(rec.begin(), rec.end(), [](const PairForce& a, const PairForce& b) { return a.i == b.i && a.j == b.j; }),
               rec.end());
-    w.pair_forces = rec;
+    w.pair_totals.assign(rec);
     w.pair_forces_step = w.steps;
     // Feet: a few contacts at each slit end (some listed twice, some not touching), sometimes one
     // disc at both ends.
@@ -142,7 +142,7 @@ TEST(FindArch, LocalSearchGivesThePlainChainOnPackings) {
         const bool crosses = (w.discs.x[i] - 12) * (w.discs.x[j] - 12) < 0 && w.discs.y[i] < cut;
         rec.push_back(PairForce{i, j, crosses || rng() % 6 == 0 ? -1.0 : 1.0 + (rng() % 7), 0.0});
       }
-    w.pair_forces = rec;
+    w.pair_totals.assign(rec);
     w.pair_forces_step = w.steps;
     std::vector<WallContact> walls;  // the bottom row's floor contacts within reach of a slit end
     for (int i = 0; i < cols; ++i)

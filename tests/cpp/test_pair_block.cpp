@@ -51,8 +51,9 @@ struct Result {
 Result forces_of(World w) {  // a copy: each call starts from the same history
   w.record_pair_forces = true;
   w.compute_forces_now();
-  Result r{w.discs.fx, w.discs.fy, w.discs.torque, {}, {}, w.pair_forces};
-  EXPECT_EQ(w.pair_forces.capacity(), w.pair_forces.size()) << "the recorded totals are sized exactly";
+  Result r{w.discs.fx, w.discs.fy, w.discs.torque, {}, {}, w.recorded_pairs()};
+  EXPECT_EQ(w.pair_totals.capacity(), w.pair_totals.size()) << "the recorded totals are sized exactly";
+  EXPECT_FALSE(w.pair_totals.detached()) << "a pass's totals are bound to its list";
   for (const PairContact& c : w.neighbors.pairs) {
     r.en.push_back(c.en);
     r.es.push_back(c.es);

@@ -21,7 +21,7 @@ TEST(StressPlanes, HandMadeForcesAcrossTwoPlanes) {
   // Contacts 0-2 and 1-2 (normal from i to j: (0.6, 0.8) and (-0.6, 0.8)), a bond 2-3 in tension
   // (n = (0, 1)), a bond 0-1 lying in the bottom row, a plate contact on disc 3 (n = (0, 1)).
   w.neighbors.pairs = {PairContact{0, 2}, PairContact{1, 2}};
-  w.pair_forces = {PairForce{0, 2, 100.0, 10.0}, PairForce{1, 2, 80.0, -5.0}};  // as a recorded pass
+  w.pair_totals.assign({PairForce{0, 2, 100.0, 10.0}, PairForce{1, 2, 80.0, -5.0}});  // as a recorded pass
   w.pair_forces_step = w.steps;
   Bond b23;
   b23.i = 2; b23.j = 3; b23.fn = -30.0; b23.fs = 4.0;
