@@ -60,6 +60,43 @@ TEST(State, SplitRunThroughSavedStateIsBitIdentical) {
   }
 }
 
+// A state holds the recorded totals of its last pass (a state saved at a run's end writes its
+// contacts again): the same records come back, with their (i, j), whatever form they had.
+TEST(State, KeepsTheRecordedTotals) {
+  SceneOverrides ov;
+  ov.dt = 5e-5;
+  SceneSpec spec = load_scene(scene_path(), ov);
+  World a;
+  build_world(spec, a);
+  for (int s = 0; s < 2000; ++s) a.step();
+  a.record_pair_forces = true;
+  a.compute_forces_now();  // a pass over the current list: the totals' bound form
+  a.pair_forces_step = a.steps;
+  ASSERT_FALSE(a.pair_totals.detached());
+  World b = a;
+  b.pair_totals.detach(b.neighbors.pairs);
+  const std::vector<PairForce> want = a.recorded_pairs();
+  ASSERT_GT(want.size(), 100u) << "the discs must touch";
+  const std::string path = ::testing::TempDir() + "/totals.state";
+  for (const World* w : {&a, &b}) {
+    save_state(*w, path);
+    World d;
+    build_world(spec, d);
+    load_state(d, path);
+    EXPECT_TRUE(d.pair_forces_current());
+    EXPECT_TRUE(d.pair_totals.detached());
+    const std::vector<PairForce> got = d.recorded_pairs();
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t k = 0; k < want.size(); ++k) {
+      ASSERT_EQ(got[k].i, want[k].i);
+      ASSERT_EQ(got[k].j, want[k].j);
+      ASSERT_EQ(got[k].fn, want[k].fn);
+      ASSERT_EQ(got[k].fs, want[k].fs);
+    }
+  }
+  std::remove(path.c_str());
+}
+
 TEST(State, RefusesAStateOfAnotherScheme) {
   SceneSpec spec = load_scene(scene_path());
   World a;
