@@ -108,7 +108,7 @@ void World::balance_blocks() {
   // Only what a run resumed from a state file has too (its lists are built again at the restart,
   // with other candidates than the run in one piece, but the same history): the discs and the
   // pairs that touched.
-  constexpr long kDisc = 4, kTouched = 12;  // relative costs (see force_blocks)
+  constexpr long kDisc = 1, kTouched = 1;  // relative costs (see force_blocks)
   const auto& pairs = neighbors.pairs;
   const auto work = [](const PairContact& c) { return c.en != 0 || c.es != 0 ? kTouched : 0; };
   long total = kDisc * n;

@@ -78,10 +78,14 @@ class World {
 
   // The threads' blocks of discs in the force pass (thread t owns discs [force_blocks[t],
   // force_blocks[t + 1]); empty with one thread). Set every kRebalanceEvery steps so that each
-  // block has about the same work: a disc 4 units (its candidate pairs), a pair that touched in
-  // the last pass (non-zero history) 12 more, on its i. Equal numbers of discs left a settled
-  // silo's lower half (its pairs in contact) to one thread and the looser top to the other: 12.8
-  // against 4.5 ms a step at 1M discs. Where a reaction crosses a block's edge its sum is ordered
+  // block has about the same work: a disc 1 unit, a pair that touched in the last pass (non-zero
+  // history) 1 more, on its i. Equal numbers of discs left a settled silo's lower half (its pairs
+  // in contact) to one thread and the looser top to the other: 12.8 against 4.5 ms a step at 1M
+  // discs (session 11). Since the law runs eight pairs a vector a touching pair costs about what
+  // a disc does: with 12 units a pair against 4 a disc (until session 16) the thread of the
+  // upper, looser discs had 1.6 times the other's work at 1M discs (perf). Candidate pairs are
+  // not counted: a state file's restart builds its lists at another time than the run in one
+  // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's edge its sum is ordered
   // by the blocks, so they are part of the state (saved with it) and are remapped, not rebuilt,
   // on removals; they depend on the step count and the history only, which a resumed run has.
   std::vector<int> force_blocks;
