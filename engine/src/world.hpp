@@ -85,9 +85,10 @@ class World {
   // a disc does: with 12 units a pair against 4 a disc (until session 16) the thread of the
   // upper, looser discs had 1.6 times the other's work at 1M discs (perf). Candidate pairs are
   // not counted: a state file's restart builds its lists at another time than the run in one
-  // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's edge its sum is ordered
-  // by the blocks, so they are part of the state (saved with it) and are remapped, not rebuilt,
-  // on removals; they depend on the step count and the history only, which a resumed run has.
+  // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's
+  // edge its sum is ordered by the blocks, so they are part of the state (saved with it) and are
+  // remapped, not rebuilt, on removals; they depend on the step count and the history only,
+  // which a resumed run has.
   std::vector<int> force_blocks;
   static constexpr long kRebalanceEvery = 64;
   bool blocks_fit() const;  // force_blocks fit the thread count and the discs
