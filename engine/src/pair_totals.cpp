@@ -55,22 +55,21 @@ void PairTotals::compact(const std::vector<PairContact>& pairs, const RemovedDis
   if (!allocated()) return;  // nothing recorded
   check_list(pairs);
   // The pairs Neighbors::compact keeps, in order: their bits move down to their new places, and
-  // the totals of the touching ones with them (both in place: a new place is never after the old).
-  std::vector<std::uint64_t> kept((pairs.size() + 63) / 64, 0);
+  // the totals of the touching ones with them, both in place (a new place o is never after the
+  // old one p, whose bit is read before bit o is written).
   std::size_t o = 0, r = 0, nr = 0;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const bool touched = bit(p);
     if (removed.new_index(pairs[p].i) >= 0 && removed.new_index(pairs[p].j) >= 0) {
-      if (touched) {
-        kept[o >> 6] |= std::uint64_t{1} << (o & 63);
-        f_[nr++] = f_[r];
-      }
+      const std::uint64_t mask = std::uint64_t{1} << (o & 63);
+      bits_[o >> 6] = touched ? bits_[o >> 6] | mask : bits_[o >> 6] & ~mask;
+      if (touched) f_[nr++] = f_[r];
       ++o;
     }
     r += touched;
   }
-  kept.resize((o + 63) / 64);
-  bits_.swap(kept);
+  bits_.resize((o + 63) / 64);
+  if (o & 63) bits_.back() &= (std::uint64_t{1} << (o & 63)) - 1;  // no bits past the list's end
   f_.resize(nr);
   list_size_ = o;
 }

@@ -127,7 +127,7 @@ void World::balance_blocks() {
 
 void World::rebuild_lists() {
   // Totals recorded over the old list (a build right after a recorded pass) name their pairs first.
-  if (pair_totals.allocated()) pair_totals.detach(neighbors.pairs);
+  pair_totals.detach(neighbors.pairs);
   neighbors.rebuild(discs, geometry, threads_for(static_cast<int>(discs.size())));
   if (!moving.empty()) walls_listed();
   if (bonds.empty()) return;
