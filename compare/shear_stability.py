@@ -1,10 +1,13 @@
 """Time-step bounds of paper 2's clusters: the spectral radius of one step of each scheme on a
 whole cluster (its discs' x, y and rotation, its bonds, and the contacts to its touching
 neighbours, which are held fixed), linearised with every contact sticking. This is the
-multi-degree-of-freedom version of the engine's own bounds (engine/src/stability.cpp: one
-contact, or one disc's rotation held by 4 contacts). It is not a safe bound for the whole
-assembly (neighbours that move can raise the frequencies), but it shows what bonds across a gap
-do: their lever arms (R0/2 > r) stiffen the coupled rotation modes.
+multi-degree-of-freedom version of the one-contact bounds. The engine computes the same bound
+for its own scheme (engine/src/stability.cpp, cluster_dt_bound: printed in the run header,
+`stability.dt_clusters` in summary.json, and enforced); this module, written apart in numpy,
+gives it for every scheme and checks the engine's (tests/python/test_shear.py). It is not a
+safe bound for the whole assembly (neighbours that move can raise the frequencies), but it
+shows what bonds across a gap do: their lever arms (R0/2 > r) stiffen the coupled rotation
+modes.
 
     /usr/bin/python3 -m compare.shear_stability SCENE.toml [SCENE.toml ...] [--dem build/dem]
 """

@@ -117,6 +117,9 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
   std::printf("  stability bound of %s: %.4g s (single contact %.4g s, rotation on 4 contacts %.4g s), set by %s;"
               " dt/bound = %.3f\n", to_string(w.scheme), st.dt_bound, st.dt_single, st.dt_rot_z4, st.limited_by.c_str(),
               w.dt / st.dt_bound);
+  if (std::isfinite(st.clusters.dt))
+    std::printf("  bonded clusters (%d distinct shapes, neighbours held, contacts sticking): bound %.4g s, set by a"
+                " cluster of %d discs\n", st.clusters.shapes, st.clusters.dt, st.clusters.discs);
   if (w.dt > st.dt_rot_z6)
     std::printf("  warning: dt is above %.4g s, the bound for a disc whose rotation is held by 6 sticking contacts"
                 " (dense packings)\n", st.dt_rot_z6);

@@ -3,6 +3,9 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <string>
+#include <unordered_map>
 
 #include "world.hpp"
 
@@ -48,6 +51,184 @@ double scheme_dt_bound(Scheme scheme, double m, double k, double c) {
     (spectral_radius(scheme, m, k, c, mid) <= 1 + tol ? lo : hi) = mid;
   }
   return lo;
+}
+
+namespace {
+// Spectral radius of one step of `scheme` on the linear system M x'' = -K x - C x' written the
+// paper's way (as spectral_radius): minv the diagonal of M^-1.
+double system_spectral_radius(Scheme scheme, const Eigen::MatrixXd& K, const Eigen::MatrixXd& C,
+                              const Eigen::VectorXd& minv, double dt) {
+  const Eigen::Index n = minv.size();
+  const auto acc = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& du) -> Eigen::VectorXd {
+    return minv.cwiseProduct(-(K * x) - C * (du / dt));
+  };
+  Eigen::MatrixXd A(3 * n, 3 * n);  // columns: one step of each unit state (x, v, du)
+  for (Eigen::Index col = 0; col < 3 * n; ++col) {
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(n), v = x, du = x;
+    (col < n ? x : col < 2 * n ? v : du)[col % n] = 1;
+    if (scheme == Scheme::velocity_verlet) {
+      v += 0.5 * dt * acc(x, du);
+      du = v * dt;
+      x += du;
+      v += 0.5 * dt * acc(x, du);
+    } else {
+      v += dt * acc(x, du);                                                      // (17)
+      du = scheme == Scheme::paper_eq18 ? Eigen::VectorXd(v * dt) : Eigen::VectorXd(0.5 * (du + v * dt));  // (18) / (19)
+      x += du;
+    }
+    A.col(col) << x, v, du;
+  }
+  return Eigen::EigenSolver<Eigen::MatrixXd>(A, false).eigenvalues().cwiseAbs().maxCoeff();
+}
+
+// The linearised system of one cluster (3 degrees of freedom a disc: x, y, phi).
+struct ClusterSystem {
+  Eigen::MatrixXd K, C;
+  Eigen::VectorXd minv;
+};
+
+// A sticking contact (or bond) between dof blocks a and b (b < 0: a fixed partner) along the unit
+// normal (nx, ny) from a to b, lever arms la, lb: the relative normal and shear increments of
+// (5a), (5b) are rows bn, bs; the springs and dashpots act along them.
+void add_contact(ClusterSystem& s, int a, int b, double nx, double ny, double la, double lb, const PairProps& p) {
+  const Eigen::Index n = s.minv.size();
+  Eigen::VectorXd bn = Eigen::VectorXd::Zero(n), bs = Eigen::VectorXd::Zero(n);
+  bn[3 * a] = nx; bn[3 * a + 1] = ny;
+  bs[3 * a] = -ny; bs[3 * a + 1] = nx; bs[3 * a + 2] = la;
+  if (b >= 0) {
+    bn[3 * b] = -nx; bn[3 * b + 1] = -ny;
+    bs[3 * b] = ny; bs[3 * b + 1] = -nx; bs[3 * b + 2] = lb;
+  }
+  s.K += p.kn * bn * bn.transpose() + p.ks * bs * bs.transpose();
+  s.C += p.eta_n * bn * bn.transpose() + p.eta_s * bs * bs.transpose();
+}
+
+double system_dt_bound(Scheme scheme, const ClusterSystem& s) {
+  // Start well below the highest frequency (Gershgorin: omega^2 <= max row sum of |M^-1 K|).
+  double w2 = 0;
+  for (Eigen::Index r = 0; r < s.K.rows(); ++r) w2 = std::max(w2, s.minv[r] * s.K.row(r).cwiseAbs().sum());
+  if (!(w2 > 0)) return std::numeric_limits<double>::infinity();
+  // A cluster free to move has rigid modes (eigenvalue 1, not diagonalisable: computed as 1 +
+  // O(1e-8)); the tolerance keeps them stable and moves the bound by a part in a million.
+  const double tol = 1e-6, w = std::sqrt(w2);
+  const auto stable = [&](double dt) { return system_spectral_radius(scheme, s.K, s.C, s.minv, dt) <= 1 + tol; };
+  double lo = 1e-3 / w, hi = lo;
+  while (stable(hi)) {
+    lo = hi;
+    hi *= 1.2;
+    if (hi > 100 / w) return std::numeric_limits<double>::infinity();
+  }
+  for (int it = 0; it < 50; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (stable(mid) ? lo : hi) = mid;
+  }
+  return lo;
+}
+}  // namespace
+
+ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
+  ClusterBound out;
+  out.dt = std::numeric_limits<double>::infinity();
+  if (w.bonds.empty()) return out;
+  const Discs& d = w.discs;
+  const int n = static_cast<int>(d.size());
+  // Clusters: the connected discs of the bonds (union-find).
+  std::vector<int> root(n);
+  for (int i = 0; i < n; ++i) root[i] = i;
+  const auto find = [&](int i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (const Bond& b : w.bonds) root[find(b.i)] = find(b.j);
+  std::map<int, std::vector<int>> clusters;  // root -> members, ascending
+  for (const Bond& b : w.bonds) { clusters[find(b.i)]; }
+  for (int i = 0; i < n; ++i)
+    if (auto it = clusters.find(find(i)); it != clusters.end()) it->second.push_back(i);
+  // Neighbours within reach: a grid of cells of 2 r_max + touch.
+  double rmax = 0, x0 = std::numeric_limits<double>::infinity(), y0 = x0;
+  for (int i = 0; i < n; ++i) { rmax = std::max(rmax, d.r(i)); x0 = std::min(x0, d.x[i]); y0 = std::min(y0, d.y[i]); }
+  const double cell = 2 * rmax + kClusterTouch;
+  const auto key = [&](long cx, long cy) { return (cx << 32) ^ (cy & 0xffffffffL); };
+  std::unordered_map<long, std::vector<int>> grid;
+  for (int i = 0; i < n; ++i)
+    grid[key(std::lround(std::floor((d.x[i] - x0) / cell)), std::lround(std::floor((d.y[i] - y0) / cell)))].push_back(i);
+  const auto bonded = [&](int i, int j) {
+    const int a = std::min(i, j), b = std::max(i, j);
+    return std::binary_search(w.bonds.begin(), w.bonds.end(), Bond{a, b, 0, 0, 0, 0, 0, 0, 0},
+                              [](const Bond& u, const Bond& v) { return u.i != v.i ? u.i < v.i : u.j < v.j; });
+  };
+  std::map<std::vector<long long>, std::size_t> seen;  // shape -> index in systems
+  std::vector<ClusterSystem> systems;
+  std::vector<int> sizes;
+  for (const auto& [r0, members] : clusters) {
+    (void)r0;
+    const int m = static_cast<int>(members.size());
+    std::map<int, int> idx;
+    for (int k = 0; k < m; ++k) idx[members[k]] = k;
+    ClusterSystem s{Eigen::MatrixXd::Zero(3 * m, 3 * m), Eigen::MatrixXd::Zero(3 * m, 3 * m), Eigen::VectorXd(3 * m)};
+    for (int k = 0; k < m; ++k) {
+      const int i = members[k];
+      s.minv.segment(3 * k, 3) << 1 / d.mass(i), 1 / d.mass(i), d.inv_inertia(i);
+    }
+    for (const Bond& b : w.bonds) {
+      if (!idx.count(b.i)) continue;
+      const double dx = d.x[b.j] - d.x[b.i], dy = d.y[b.j] - d.y[b.i], R = std::hypot(dx, dy);
+      add_contact(s, idx[b.i], idx[b.j], dx / R, dy / R, b.ai, b.aj, w.pair(d.material(b.i), d.material(b.j)));
+    }
+    for (int k = 0; k < m; ++k) {
+      const int i = members[k];
+      const double ri = d.r(i);
+      const long cx = std::lround(std::floor((d.x[i] - x0) / cell)), cy = std::lround(std::floor((d.y[i] - y0) / cell));
+      for (long ax = cx - 1; ax <= cx + 1; ++ax)
+        for (long ay = cy - 1; ay <= cy + 1; ++ay) {
+          const auto g = grid.find(key(ax, ay));
+          if (g == grid.end()) continue;
+          for (int j : g->second) {
+            if (j == i || bonded(i, j)) continue;
+            const auto in = idx.find(j);
+            if (in != idx.end() && j < i) continue;  // a contact inside the cluster: once
+            const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i], R = std::hypot(dx, dy);
+            if (!(R > 0) || R - ri - d.r(j) > kClusterTouch) continue;
+            add_contact(s, k, in != idx.end() ? in->second : -1, dx / R, dy / R, ri, d.r(j),
+                        w.pair(d.material(i), d.material(j)));
+          }
+        }
+      for (const Wall& wl : w.geometry.walls) {  // the walls' lines (their end points are not partners)
+        if (!wl.active) continue;
+        const double ex = wl.bx - wl.ax, ey = wl.by - wl.ay, len2 = ex * ex + ey * ey;
+        if (!(len2 > 0)) continue;
+        const double u = ((d.x[i] - wl.ax) * ex + (d.y[i] - wl.ay) * ey) / len2;
+        if (u < 0 || u > 1) continue;
+        const double px = wl.ax + u * ex - d.x[i], py = wl.ay + u * ey - d.y[i], dist = std::hypot(px, py);
+        if (!(dist > 0) || dist - ri > kClusterTouch) continue;
+        add_contact(s, k, -1, px / dist, py / dist, ri, 0, w.pair(d.material(i), wl.material));
+      }
+    }
+    // The shape: stiffness and damping relative to their largest entries, to 9 digits, and the masses.
+    std::vector<long long> shape;
+    const double kmax = std::max(1.0, s.K.cwiseAbs().maxCoeff()), cmax = std::max(1.0, s.C.cwiseAbs().maxCoeff());
+    shape.push_back(m);
+    for (Eigen::Index a = 0; a < s.K.size(); ++a) {
+      shape.push_back(std::llround(s.K.data()[a] / kmax * 1e9));
+      shape.push_back(std::llround(s.C.data()[a] / cmax * 1e9));
+    }
+    shape.push_back(std::llround(kmax));
+    shape.push_back(std::llround(cmax));
+    for (Eigen::Index a = 0; a < s.minv.size(); ++a) shape.push_back(std::llround(s.minv[a] * 1e12));
+    if (seen.emplace(std::move(shape), systems.size()).second) {
+      systems.push_back(std::move(s));
+      sizes.push_back(m);
+    }
+  }
+  out.shapes = static_cast<int>(systems.size());
+  for (std::size_t k = 0; k < systems.size(); ++k) {
+    const double b = system_dt_bound(scheme, systems[k]);
+    if (b < out.dt) {
+      out.dt = b;
+      out.discs = sizes[k];
+    }
+  }
+  return out;
 }
 
 StabilityReport stability_report(const World& w, const std::vector<std::string>& names) {
@@ -138,6 +319,14 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
     rep.dt_bound = rep.dt_rot_z4;
     rep.limited_by = rep.rot_z4_at_wall ? "rotation held by 4 sticking contacts with the disc-wall constants"
                                         : "rotation held by 4 sticking disc-disc contacts";
+  }
+  // Paper 2's clusters: their bonds (across a gap, long lever arms) raise the frequencies of the
+  // rotation modes above the one-contact ones.
+  rep.clusters = cluster_dt_bound(w, w.scheme);
+  if (rep.clusters.dt < rep.dt_bound) {
+    rep.dt_bound = rep.clusters.dt;
+    rep.limited_by = "a bonded cluster of " + std::to_string(rep.clusters.discs) +
+                     " discs with its touching neighbours held (every contact sticking)";
   }
   return rep;
 }

@@ -36,13 +36,30 @@ struct PairReport {
   double dt_rot_z6 = 0;      // ... by 6 (hexagonal packing)
 };
 
+// Paper 2's clusters: the largest dt at which one step of `scheme` is stable on a whole cluster,
+// linearised with every contact sticking: its discs' x, y and rotation (3 degrees of freedom a
+// disc), its bonds (lever arms a_i, a_j), and the contacts to the discs and walls within
+// kClusterTouch of touching, those partners held fixed. The smallest over the distinct cluster
+// shapes (clusters with the same stiffness, damping and masses are computed once). The
+// many-degree-of-freedom form of the one-contact bounds above: bonds across a gap (lever arms
+// R0/2 > r) stiffen the coupled rotation modes. Like them, not a bound for the whole assembly
+// (moving neighbours can raise the frequencies). Infinite without bonds.
+constexpr double kClusterTouch = 0.01;  // [cm] a neighbour this near holds the cluster (lattice gaps: 0.004 cm)
+struct ClusterBound {
+  double dt = 0;       // [s] the smallest bound; infinite without bonds
+  int discs = 0;       // discs of the cluster that sets it
+  int shapes = 0;      // distinct cluster shapes examined
+};
+ClusterBound cluster_dt_bound(const World& w, Scheme scheme);
+
 struct StabilityReport {
   std::vector<PairReport> pairs;
   double dt_single = 0;      // min over pairs of the single-contact scheme bounds
   double dt_rot_z4 = 0;      // rotation held by 4 sticking contacts, disc-disc or disc-wall constants
   bool rot_z4_at_wall = false;  // ... the lowest with a wall among the four
   double dt_rot_z6 = 0;      // ... by 6 (hexagonal packing; printed as a warning only)
-  double dt_bound = 0;       // enforced: min(dt_single, dt_rot_z4)
+  ClusterBound clusters;     // bonded clusters (paper 2); dt infinite without bonds
+  double dt_bound = 0;       // enforced: min(dt_single, dt_rot_z4, clusters.dt)
   std::string limited_by;
 };
 

@@ -90,6 +90,22 @@ def test_shear_outputs(small_runs):
         assert ("db" in kinds) == (variant == "clusters")
 
 
+def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
+    """The engine's time-step bound of the clusters (C++, Eigen) against compare.shear_stability
+    (numpy), two codes written apart from the same model: each distinct cluster with its bonds
+    and its neighbours within 0.01 cm held, every contact sticking."""
+    from compare import shear_stability
+    for variant, out in small_runs.items():
+        stab = json.loads((out / "summary.json").read_text())["stability"]
+        if variant != "clusters":
+            assert stab["dt_clusters"] is None and stab["cluster_shapes"] == 0
+            continue
+        scene = out.parent / f"{variant}.toml"
+        python = shear_stability.scene_bounds(shear_stability.resolve(scene, dem_binary))
+        assert stab["dt_clusters"] == pytest.approx(python["paper_eq19"], rel=1e-5)
+        assert stab["dt_bound"] <= stab["dt_clusters"]
+
+
 def test_plane_stresses_match_plate_and_walls(small_runs):
     """Each plane's sigma and tau equal the load of the part above (weight, plate, walls) up to
     its inertia; exactly (to roundoff) with the inertia. At the start sigma exceeds the plate
