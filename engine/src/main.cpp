@@ -120,6 +120,9 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
   if (std::isfinite(st.clusters.dt))
     std::printf("  bonded clusters (%d distinct shapes, neighbours held, contacts sticking): bound %.4g s, set by a"
                 " cluster of %d discs\n", st.clusters.shapes, st.clusters.dt, st.clusters.discs);
+  if (st.clusters.skipped > 0)
+    std::printf("  warning: %d clusters of more than %d discs are not in the bound (their step matrices are too"
+                " large to examine)\n", st.clusters.skipped, kClusterMaxDiscs);
   if (w.dt > st.dt_rot_z6)
     std::printf("  warning: dt is above %.4g s, the bound for a disc whose rotation is held by 6 sticking contacts"
                 " (dense packings)\n", st.dt_rot_z6);

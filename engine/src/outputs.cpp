@@ -434,11 +434,12 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                      {"dt_rotation_z6", finite_or_null(stab.dt_rot_z6)},
                      {"dt_clusters", finite_or_null(stab.clusters.dt)},
                      {"cluster_shapes", stab.clusters.shapes},
+                     {"clusters_not_examined", stab.clusters.skipped},
                      {"note", "bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
                               "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
                               "sticking contacts (disc-disc or disc-wall constants); with bonded clusters, on each "
-                              "distinct cluster (its discs, bonds and the contacts to neighbours within 0.01 cm, "
-                              "those held fixed, every contact sticking); dt_bound = min(single contact, rotation "
+                              "distinct cluster of at most 10 discs (its discs, bonds and the contacts to neighbours "
+                              "within 0.01 cm, those held fixed, every contact sticking); dt_bound = min(single contact, rotation "
                               "on 4, clusters) is enforced"}};
 
   // wall_profiles.csv

@@ -45,10 +45,12 @@ struct PairReport {
 // R0/2 > r) stiffen the coupled rotation modes. Like them, not a bound for the whole assembly
 // (moving neighbours can raise the frequencies). Infinite without bonds.
 constexpr double kClusterTouch = 0.01;  // [cm] a neighbour this near holds the cluster (lattice gaps: 0.004 cm)
+constexpr int kClusterMaxDiscs = 10;    // larger clusters are not examined (counted in `skipped`)
 struct ClusterBound {
   double dt = 0;       // [s] the smallest bound; infinite without bonds
   int discs = 0;       // discs of the cluster that sets it
   int shapes = 0;      // distinct cluster shapes examined
+  int skipped = 0;     // clusters of more than kClusterMaxDiscs discs, not examined
 };
 ClusterBound cluster_dt_bound(const World& w, Scheme scheme);
 

@@ -111,3 +111,25 @@ TEST(Stability, AHeldClusterIsStifferAndEqualShapesAreComputedOnce) {
   w.geometry.walls[0].active = false;  // a removed wall holds nothing
   EXPECT_DOUBLE_EQ(cluster_dt_bound(w, Scheme::velocity_verlet).dt, alone);
 }
+
+TEST(Stability, ClustersTooLargeToExamineAreCountedNotComputed) {
+  // A row of kClusterMaxDiscs + 1 touching discs bonded into one body: skipped (a step matrix of
+  // 9 rows a disc, bisected a hundred times, takes seconds at 16 discs); one disc fewer is examined.
+  for (int extra : {1, 0}) {
+    World w = two_bonded_discs(Scheme::paper_eq19, 0.0);
+    const int n = kClusterMaxDiscs + extra;
+    for (int k = 2; k < n; ++k) w.discs.add(2.0 * k, 0, 1.0, 2.65, 0);
+    ClusterSpec c;
+    c.enabled = true;
+    c.bonds = BondSet::touching;
+    c.members = {{}};
+    for (int k = 0; k < n; ++k) c.members[0].push_back(k);
+    w.bonds = make_bonds(w.discs, c);
+    const ClusterBound b = cluster_dt_bound(w, Scheme::paper_eq19);
+    EXPECT_EQ(b.skipped, extra);
+    EXPECT_EQ(std::isinf(b.dt), extra == 1);
+    if (extra == 0) {
+      EXPECT_EQ(b.discs, n);
+    }
+  }
+}
