@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <string>
@@ -148,8 +149,10 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
   double rmax = 0, x0 = std::numeric_limits<double>::infinity(), y0 = x0;
   for (int i = 0; i < n; ++i) { rmax = std::max(rmax, d.r(i)); x0 = std::min(x0, d.x[i]); y0 = std::min(y0, d.y[i]); }
   const double cell = 2 * rmax + kClusterTouch;
-  const auto key = [&](long cx, long cy) { return (cx << 32) ^ (cy & 0xffffffffL); };
-  std::unordered_map<long, std::vector<int>> grid;
+  const auto key = [](long cx, long cy) {  // unsigned: the cells beside the first are at -1
+    return (static_cast<unsigned long long>(cx) << 32) ^ static_cast<std::uint32_t>(cy);
+  };
+  std::unordered_map<unsigned long long, std::vector<int>> grid;
   for (int i = 0; i < n; ++i)
     grid[key(std::lround(std::floor((d.x[i] - x0) / cell)), std::lround(std::floor((d.y[i] - y0) / cell)))].push_back(i);
   const auto bonded = [&](int i, int j) {
