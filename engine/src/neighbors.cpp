@@ -114,19 +114,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const double rounding = std::sqrt(2.0) * std::ldexp(std::max(dxmax - dxmin, dymax - dymin), -23);
   const double allowed = std::max(0.0, 0.5 * skin - rounding);
   limit2_ = allowed * allowed;
-  // A counting sort by cell; each pass computes the discs' cells again (Grid::cell_of) rather
-  // than keeping them: 4 bytes a disc less at each build, the peak of a loose packing's run.
-  cell_start_.assign(ncell + 1, 0);
-  for (int i = 0; i < n; ++i)
-    if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) ++cell_start_[c + 1];
-  for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
-  order_.resize(n);
-  // Each cell's start serves as its fill cursor, ending at the next cell's start; one shift back
-  // restores the starts (no second array of cells).
-  for (int i = 0; i < n; ++i)
-    if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) order_[cell_start_[c]++] = i;
-  for (long c = ncell; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
-  cell_start_[0] = 0;
+  sort_by_cell(d, ncell, nt);
   // Each obstacle's box grown by the largest reach: a disc outside it cannot be a candidate, so
   // most discs skip the distance to most walls (the same lists, far fewer square roots).
   const double reach = rmax + skin;
@@ -156,6 +144,69 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   // disc or more, which would add to the peak of the steps between builds).
   std::vector<int>().swap(order_);
   std::vector<int>().swap(cell_start_);
+}
+
+// A counting sort by cell; each pass computes the discs' cells again (Grid::cell_of) rather
+// than keeping them: 4 bytes a disc less at each build, the peak of a loose packing's run. Each
+// cell's start serves as its fill cursor, ending at the next cell's start; one shift back
+// restores the starts (no second array of cells). The order of the discs within a cell changes
+// no list (a disc's candidates are put in order of j, the obstacle entries in order of (i, k)).
+void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
+  const int n = static_cast<int>(d.size());
+  cell_start_.assign(ncell + 1, 0);
+  order_.resize(n);
+  if (nt <= 1) {
+    for (int i = 0; i < n; ++i)
+      if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) ++cell_start_[c + 1];
+    for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+    for (int i = 0; i < n; ++i)
+      if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) order_[cell_start_[c]++] = i;
+  } else {
+    // Thread t counts and places the discs of its block whose cells are in its rows, from the
+    // row of the block's first disc on: the discs are mostly in order of height (lattices and
+    // fills are made row by row, and a settled column keeps it), so each thread writes cells no
+    // other thread writes. The few others ("strays") are counted and placed after, serially, in
+    // thread order, behind each cell's own discs. Serial, the sort was a fifth of a 1M-disc
+    // build, most of what two threads could not share.
+    const long nx = grid_.nx;
+    std::vector<long> first_cell(nt + 1, 0);
+    first_cell[nt] = ncell;
+    for (int t = 1; t < nt; ++t) {
+      const int i = block_start(n, nt, t);
+      const long c = grid_.cell_of(d.x[i], d.y[i]);
+      first_cell[t] = std::max(first_cell[t - 1], c < 0 ? 0 : c / nx * nx);
+    }
+    strays_.resize(nt);
+#pragma omp parallel num_threads(nt)
+    {
+      const int t = omp_thread_index();
+      const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
+      const long c0 = first_cell[t], c1 = first_cell[t + 1];
+      std::vector<int>& mine = strays_[t].value;
+      mine.clear();
+      for (int i = i0; i < i1; ++i) {
+        const long c = grid_.cell_of(d.x[i], d.y[i]);
+        if (c >= c0 && c < c1) ++cell_start_[c + 1];
+        else if (c >= 0) mine.push_back(i);
+      }
+#pragma omp barrier
+#pragma omp single
+      {
+        for (int u = 0; u < nt; ++u)
+          for (int i : strays_[u].value) ++cell_start_[grid_.cell_of(d.x[i], d.y[i]) + 1];
+        for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+      }  // implied barrier
+      for (int i = i0; i < i1; ++i)
+        if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= c0 && c < c1) order_[cell_start_[c]++] = i;
+#pragma omp barrier
+#pragma omp single
+      for (int u = 0; u < nt; ++u)
+        for (int i : strays_[u].value) order_[cell_start_[grid_.cell_of(d.x[i], d.y[i])]++] = i;
+    }
+    for (auto& v : strays_) std::vector<int>().swap(v.value);  // freed with the cells (a shuffled packing strays a lot)
+  }
+  for (long c = ncell; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
+  cell_start_[0] = 0;
 }
 
 // The pair list is the engine's largest array (about 3 pairs a disc, 24 bytes each). A new list

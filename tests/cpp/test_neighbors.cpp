@@ -185,3 +185,40 @@ TEST(Neighbors, FloatReferencesCatchEveryDiscPastHalfTheSkin) {
 
 }  // namespace
 }  // namespace dem
+
+namespace dem {
+TEST(Neighbors, ThreadsSortTheCellsOfDiscsInAnyOrder) {
+  // The threaded cell sort lets each thread place the discs of its block that lie in its rows
+  // and places the others ("strays") after: discs in height order (few strays), upside down and
+  // shuffled (most of them strays) must give the lists of one thread.
+  Discs rows = lattice(3000, 50, 2.05);
+  for (int order = 0; order < 3; ++order) {
+    Discs d;
+    std::vector<int> idx(rows.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) idx[k] = static_cast<int>(k);
+    if (order == 1) std::reverse(idx.begin(), idx.end());
+    if (order == 2) {
+      unsigned s = 777;
+      for (std::size_t k = idx.size(); k > 1; --k) std::swap(idx[k - 1], idx[(s = s * 1103515245u + 12345u) % k]);
+    }
+    for (int k : idx) d.add(rows.x[k], rows.y[k], 1.0, 1.0, 0);
+    Geometry g;
+    g.walls.push_back({"floor", "b", -5, -1.1, 120, -1.1, 0});
+    Neighbors one, two, three;
+    one.rebuild(d, g, 1);
+    two.rebuild(d, g, 2);
+    three.rebuild(d, g, 3);
+    ASSERT_GT(one.pairs.size(), 5000u);
+    ASSERT_GT(one.walls.size(), 40u);
+    for (const Neighbors* nb : {&two, &three}) {
+      ASSERT_EQ(nb->pairs.size(), one.pairs.size()) << "order " << order;
+      for (std::size_t p = 0; p < one.pairs.size(); ++p) {
+        ASSERT_EQ(nb->pairs[p].i, one.pairs[p].i) << "order " << order << " pair " << p;
+        ASSERT_EQ(nb->pairs[p].j, one.pairs[p].j) << "order " << order << " pair " << p;
+      }
+      ASSERT_EQ(nb->walls.size(), one.walls.size()) << "order " << order;
+      for (std::size_t k = 0; k < one.walls.size(); ++k) ASSERT_EQ(nb->walls[k].i, one.walls[k].i);
+    }
+  }
+}
+}  // namespace dem
