@@ -155,7 +155,7 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
   const int n = static_cast<int>(d.size());
   cell_start_.assign(ncell + 1, 0);
   order_.resize(n);
-  if (nt <= 1) {
+  if (nt <= 1 || n < 64 * nt) {  // a few discs: no thread would have a block worth sharing
     for (int i = 0; i < n; ++i)
       if (const long c = grid_.cell_of(d.x[i], d.y[i]); c >= 0) ++cell_start_[c + 1];
     for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
