@@ -1,13 +1,14 @@
 #include "stability.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <map>
 #include <string>
-#include <unordered_map>
+#include <vector>
 
+#include "neighbors.hpp"
 #include "world.hpp"
 
 namespace dem {
@@ -133,7 +134,7 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
   if (w.bonds.empty()) return out;
   const Discs& d = w.discs;
   const int n = static_cast<int>(d.size());
-  // Clusters: the connected discs of the bonds (union-find).
+  // Clusters: the connected discs of the bonds (union-find), numbered in order of their first disc.
   std::vector<int> root(n);
   for (int i = 0; i < n; ++i) root[i] = i;
   const auto find = [&](int i) {
@@ -141,76 +142,79 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
     return i;
   };
   for (const Bond& b : w.bonds) root[find(b.i)] = find(b.j);
-  std::map<int, std::vector<int>> clusters, cluster_bonds;  // root -> members (ascending), its bonds
-  for (std::size_t k = 0; k < w.bonds.size(); ++k) cluster_bonds[find(w.bonds[k].i)].push_back(static_cast<int>(k));
-  for (int i = 0; i < n; ++i)
-    if (cluster_bonds.count(find(i))) clusters[find(i)].push_back(i);
-  // Neighbours within reach: a grid of cells of 2 r_max + touch.
-  double rmax = 0, x0 = std::numeric_limits<double>::infinity(), y0 = x0;
-  for (int i = 0; i < n; ++i) { rmax = std::max(rmax, d.r(i)); x0 = std::min(x0, d.x[i]); y0 = std::min(y0, d.y[i]); }
-  const double cell = 2 * rmax + kClusterTouch;
-  const auto key = [](long cx, long cy) {  // unsigned: the cells beside the first are at -1
-    return (static_cast<unsigned long long>(cx) << 32) ^ static_cast<std::uint32_t>(cy);
+  std::vector<int> cluster(n, -1), local(n, -1);  // a disc's cluster and its place in it
+  std::vector<std::vector<int>> members;
+  {
+    std::vector<int> number(n, -1);  // by root: -1 no bond, -2 a cluster not numbered yet
+    for (const Bond& b : w.bonds) number[find(b.i)] = -2;
+    for (int i = 0; i < n; ++i) {
+      int& c = number[find(i)];
+      if (c == -1) continue;
+      if (c == -2) {
+        c = static_cast<int>(members.size());
+        members.emplace_back();
+      }
+      cluster[i] = c;
+      local[i] = static_cast<int>(members[c].size());
+      members[c].push_back(i);
+    }
+  }
+  // The sticking contacts of each cluster: bonds, and the partners the engine's own lists find
+  // within kClusterTouch of touching (a build with that skin), discs and obstacles.
+  struct Link {
+    int a, b;         // places in the cluster (b < 0: a fixed partner)
+    double nx, ny;    // unit normal from a to b
+    double la, lb;    // lever arms
+    const PairProps* p;
   };
-  std::unordered_map<unsigned long long, std::vector<int>> grid;
-  for (int i = 0; i < n; ++i)
-    grid[key(std::lround(std::floor((d.x[i] - x0) / cell)), std::lround(std::floor((d.y[i] - y0) / cell)))].push_back(i);
-  const auto bonded = [&](int i, int j) {
-    const int a = std::min(i, j), b = std::max(i, j);
-    return std::binary_search(w.bonds.begin(), w.bonds.end(), Bond{a, b, 0, 0, 0, 0, 0, 0, 0},
+  std::vector<std::vector<Link>> links(members.size());
+  for (const Bond& b : w.bonds) {
+    const double dx = d.x[b.j] - d.x[b.i], dy = d.y[b.j] - d.y[b.i], R = std::hypot(dx, dy);
+    if (!(R > 0)) continue;  // coincident discs (refused by the scene check): no direction
+    links[cluster[b.i]].push_back({local[b.i], local[b.j], dx / R, dy / R, b.ai, b.aj,
+                                   &w.pair(d.material(b.i), d.material(b.j))});
+  }
+  Neighbors near;
+  near.skin = kClusterTouch;
+  near.rebuild(d, w.geometry, 1);
+  const auto bonded = [&](int i, int j) {  // i < j
+    return std::binary_search(w.bonds.begin(), w.bonds.end(), Bond{i, j, 0, 0, 0, 0, 0, 0, 0},
                               [](const Bond& u, const Bond& v) { return u.i != v.i ? u.i < v.i : u.j < v.j; });
   };
+  for (const PairContact& c : near.pairs) {
+    const int i = c.i, j = c.j;
+    if ((cluster[i] < 0 && cluster[j] < 0) || bonded(i, j)) continue;
+    const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i], R = std::hypot(dx, dy);
+    if (!(R > 0) || R - d.r(i) - d.r(j) > kClusterTouch) continue;
+    const PairProps* p = &w.pair(d.material(i), d.material(j));
+    const bool same = cluster[i] == cluster[j];
+    if (cluster[i] >= 0) links[cluster[i]].push_back({local[i], same ? local[j] : -1, dx / R, dy / R, d.r(i), d.r(j), p});
+    if (cluster[j] >= 0 && !same) links[cluster[j]].push_back({local[j], -1, -dx / R, -dy / R, d.r(j), d.r(i), p});
+  }
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  for (const WallContact& c : near.walls) {
+    ObstacleHit h{};
+    if (cluster[c.i] < 0 || !closest_point(w.geometry, c.k, d.x[c.i], d.y[c.i], h)) continue;
+    if (!(h.dist > 0) || h.dist - d.r(c.i) > kClusterTouch) continue;
+    const int mat = c.k < nw ? w.geometry.walls[c.k].material : w.geometry.points[c.k - nw].material;
+    links[cluster[c.i]].push_back({local[c.i], -1, (h.px - d.x[c.i]) / h.dist, (h.py - d.y[c.i]) / h.dist,
+                                   d.r(c.i), 0, &w.pair(d.material(c.i), mat)});
+  }
   std::map<std::vector<long long>, std::size_t> seen;  // shape -> index in systems
   std::vector<ClusterSystem> systems;
   std::vector<int> sizes;
-  for (const auto& [root_disc, members] : clusters) {
-    const int m = static_cast<int>(members.size());
+  for (std::size_t k = 0; k < members.size(); ++k) {
+    const int m = static_cast<int>(members[k].size());
     if (m > kClusterMaxDiscs) {  // a step matrix of 9 m rows: too large to examine
       ++out.skipped;
       continue;
     }
-    std::map<int, int> idx;
-    for (int k = 0; k < m; ++k) idx[members[k]] = k;
     ClusterSystem s{Eigen::MatrixXd::Zero(3 * m, 3 * m), Eigen::MatrixXd::Zero(3 * m, 3 * m), Eigen::VectorXd(3 * m)};
-    for (int k = 0; k < m; ++k) {
-      const int i = members[k];
-      s.minv.segment(3 * k, 3) << 1 / d.mass(i), 1 / d.mass(i), d.inv_inertia(i);
+    for (int a = 0; a < m; ++a) {
+      const int i = members[k][a];
+      s.minv.segment(3 * a, 3) << 1 / d.mass(i), 1 / d.mass(i), d.inv_inertia(i);
     }
-    for (int k : cluster_bonds[root_disc]) {
-      const Bond& b = w.bonds[k];
-      const double dx = d.x[b.j] - d.x[b.i], dy = d.y[b.j] - d.y[b.i], R = std::hypot(dx, dy);
-      if (!(R > 0)) continue;  // coincident discs (refused by the scene check): no direction
-      add_contact(s, idx[b.i], idx[b.j], dx / R, dy / R, b.ai, b.aj, w.pair(d.material(b.i), d.material(b.j)));
-    }
-    for (int k = 0; k < m; ++k) {
-      const int i = members[k];
-      const double ri = d.r(i);
-      const long cx = std::lround(std::floor((d.x[i] - x0) / cell)), cy = std::lround(std::floor((d.y[i] - y0) / cell));
-      for (long ax = cx - 1; ax <= cx + 1; ++ax)
-        for (long ay = cy - 1; ay <= cy + 1; ++ay) {
-          const auto g = grid.find(key(ax, ay));
-          if (g == grid.end()) continue;
-          for (int j : g->second) {
-            if (j == i || bonded(i, j)) continue;
-            const auto in = idx.find(j);
-            if (in != idx.end() && j < i) continue;  // a contact inside the cluster: once
-            const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i], R = std::hypot(dx, dy);
-            if (!(R > 0) || R - ri - d.r(j) > kClusterTouch) continue;
-            add_contact(s, k, in != idx.end() ? in->second : -1, dx / R, dy / R, ri, d.r(j),
-                        w.pair(d.material(i), d.material(j)));
-          }
-        }
-      for (const Wall& wl : w.geometry.walls) {  // the walls' lines (their end points are not partners)
-        if (!wl.active) continue;
-        const double ex = wl.bx - wl.ax, ey = wl.by - wl.ay, len2 = ex * ex + ey * ey;
-        if (!(len2 > 0)) continue;
-        const double u = ((d.x[i] - wl.ax) * ex + (d.y[i] - wl.ay) * ey) / len2;
-        if (u < 0 || u > 1) continue;
-        const double px = wl.ax + u * ex - d.x[i], py = wl.ay + u * ey - d.y[i], dist = std::hypot(px, py);
-        if (!(dist > 0) || dist - ri > kClusterTouch) continue;
-        add_contact(s, k, -1, px / dist, py / dist, ri, 0, w.pair(d.material(i), wl.material));
-      }
-    }
+    for (const Link& l : links[k]) add_contact(s, l.a, l.b, l.nx, l.ny, l.la, l.lb, *l.p);
     // The shape: stiffness and damping relative to their largest entries, to 9 digits, and the masses.
     std::vector<long long> shape;
     const double kmax = std::max(1.0, s.K.cwiseAbs().maxCoeff()), cmax = std::max(1.0, s.C.cwiseAbs().maxCoeff());
