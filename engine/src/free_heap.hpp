@@ -13,8 +13,21 @@
 
 namespace dem {
 
+// Not under AddressSanitizer. Its allocator replaces malloc, so glibc's own never starts, and
+// malloc_trim starts it: each thread that calls it first sets its arena to the main arena without
+// counting itself there. Two `dem ensemble` workers trimming at once then broke glibc: a null read
+// in mtrim, or "a->attached_threads > 0" failing as the second of them exited. There is nothing
+// of glibc's to trim in that build anyway.
+#if defined(__SANITIZE_ADDRESS__)
+#define DEM_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)  // clang before 14 says it only this way
+#define DEM_UNDER_ASAN 1
+#endif
+#endif
+
 inline void release_free_heap() {
-#if defined(__GLIBC__)
+#if defined(__GLIBC__) && !defined(DEM_UNDER_ASAN)
   malloc_trim(0);
 #endif
 }
