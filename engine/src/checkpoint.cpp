@@ -13,7 +13,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '7'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: float reference positions; 5: the threads' blocks; 6: the wall series' length, not its text; 7: the peaks so far, not the series
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '8'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: float reference positions; 5: the threads' blocks; 6: the wall series' length, not its text; 7: the peaks so far, not the series; 8: bonds and moving walls (state files)
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {

@@ -86,8 +86,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
       std::filesystem::create_directories(dir);
       try {
       World w;
-      build_world_releasing_discs(specs[k], w);
-      const StabilityReport stab = stability_report(w, specs[k].material_names);
+      const StabilityReport stab = build_world_releasing_discs(specs[k], w);
       RunResult res = run_scene(specs[k], w, false, dir + "/last_good.bin");
       json extra;
       Member& m = members[k];

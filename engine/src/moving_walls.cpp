@@ -18,6 +18,11 @@ void place_rotated(Wall& w, const RotatingWall& r) {
   turn(r.bx0, r.by0, w.bx, w.by);
 }
 
+void place_plate(Wall& w, const RigidPlate& p) {
+  w.ax = p.ax0 + p.x; w.ay = p.ay0 + p.y;
+  w.bx = p.bx0 + p.x; w.by = p.by0 + p.y;
+}
+
 // Horizontal displacement of a following plate: the rotating wall's offset at the plate's height.
 double followed_x(const RigidPlate& p, const RotatingWall& r) {
   const double height = 0.5 * (p.ay0 + p.by0) + p.y - r.pivot_y;
@@ -56,14 +61,17 @@ void World::drift_walls(bool eq19) {
       p.dux = eq19 ? 0.5 * (p.dux + p.vx * dt) : p.vx * dt;
     }
     p.x += p.dux;
-    Wall& w = geometry.walls[p.wall];
-    w.ax = p.ax0 + p.x; w.ay = p.ay0 + p.y;
-    w.bx = p.bx0 + p.x; w.by = p.by0 + p.y;
+    place_plate(geometry.walls[p.wall], p);
     ObstacleMotion& m = moving.motion[p.wall];
     m.dux = p.dux;
     m.duy = p.duy;
     m.dtheta = 0;
   }
+}
+
+void World::place_moving_walls() {
+  for (const RotatingWall& r : moving.rotating) place_rotated(geometry.walls[r.wall], r);
+  for (const RigidPlate& p : moving.plates) place_plate(geometry.walls[p.wall], p);
 }
 
 bool World::walls_moved_far() const {

@@ -797,7 +797,7 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
 
 namespace {
 // Everything but the contact lists (World::init).
-void set_up_world(const SceneSpec& s, World& w) {
+StabilityReport set_up_world(const SceneSpec& s, World& w) {
   w = World{};
   w.n_materials = static_cast<int>(s.material_names.size());
   w.props = s.props;
@@ -829,19 +829,22 @@ void set_up_world(const SceneSpec& s, World& w) {
        << "); set integrator.force_dt = true (or --force-dt) to run it anyway";
     throw SceneError(os.str());
   }
+  return rep;
 }
 }  // namespace
 
-void build_world(const SceneSpec& s, World& w) {
-  set_up_world(s, w);
+StabilityReport build_world(const SceneSpec& s, World& w) {
+  StabilityReport rep = set_up_world(s, w);
   w.init();
+  return rep;
 }
 
-void build_world_releasing_discs(SceneSpec& s, World& w) {
-  set_up_world(s, w);
+StabilityReport build_world_releasing_discs(SceneSpec& s, World& w) {
+  StabilityReport rep = set_up_world(s, w);
   std::vector<DiscInit>().swap(s.discs);
   w.init();
   release_free_heap();  // the setup's temporaries: the scene's parse, the fill's file, the first build's scratch
+  return rep;
 }
 
 }  // namespace dem

@@ -10,6 +10,7 @@
 #include "geometry.hpp"
 #include "model.hpp"
 #include "shear_box.hpp"
+#include "stability.hpp"
 
 namespace dem {
 
@@ -102,12 +103,13 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov = {});
 // Refuses overlapping discs and discs outside the walls (throws SceneError).
 void check_initial_discs(const SceneSpec& s);
 
-// Builds the world; throws SceneError for a dt above the scheme's bound (unless forced).
-void build_world(const SceneSpec& s, World& w);
+// Builds the world; throws SceneError for a dt above the scheme's bound (unless forced). Returns
+// the bounds it checked, for the run's header (computed once: the cluster bound takes a while).
+StabilityReport build_world(const SceneSpec& s, World& w);
 // The same, freeing the scene's disc list (s.discs) once the world holds the discs and before it
 // builds its contact lists: at a million discs the list (56 bytes a disc) would otherwise add
 // to the peak memory of the run. For callers that no longer need s.discs.
-void build_world_releasing_discs(SceneSpec& s, World& w);
+StabilityReport build_world_releasing_discs(SceneSpec& s, World& w);
 
 Scheme parse_scheme(const std::string& s, bool& ok);
 

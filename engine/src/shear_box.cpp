@@ -122,8 +122,16 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   json snaps = json::array();
   std::filesystem::create_directories(out + "/snapshots");
   const double b_w = b.width;
+  // From the start, or on from a state file's turned walls: the run that saved the state ended
+  // with the sample and snapshots due at its strain, so the next ones are those past it.
   std::size_t next_snap = 0;
   long next_sample = 0;
+  if (w.moving.rotating[0].theta != 0) {
+    const double done = std::tan(-w.moving.rotating[0].theta);
+    while (next_snap < b.snapshots.size() && done >= b.snapshots[next_snap] - 1e-12) ++next_snap;
+    next_sample = std::max(0L, static_cast<long>(std::floor((done + 1e-12) / b.sample_strain)) - 1);
+    while (done >= static_cast<double>(next_sample) * b.sample_strain - 1e-12) ++next_sample;
+  }
 
   auto sample = [&](double strain) {
     const std::vector<double> ys = planes_between_rows(d, row, n_rows);
@@ -181,7 +189,8 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   const auto c0 = std::chrono::steady_clock::now();
   auto last_print = c0;
   res.status = "sheared";
-  const long max_steps = static_cast<long>(std::ceil(std::abs(theta_end) / (b.rate * w.dt))) + 2;
+  const long max_steps =
+      static_cast<long>(std::ceil(std::abs(theta_end - w.moving.rotating[0].theta) / (b.rate * w.dt))) + 2;
   // Samples and snapshots read the pair forces: every step of this small scene records them.
   w.record_pair_forces = true;
   for (long step = 0;; ++step) {

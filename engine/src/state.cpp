@@ -1,6 +1,7 @@
 #include "state.hpp"
 
 #include <cstddef>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -11,7 +12,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '4'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: the threads' blocks
+constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '5'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: the threads' blocks; 5: bonds and moving walls
 
 // The wall contacts in their memory layout with the padding after `touching` zeroed, so that
 // equal states give equal files.
@@ -27,6 +28,79 @@ std::vector<WallContact> zero_padded(const std::vector<WallContact>& v) {
     std::memcpy(to + offsetof(WallContact, touching), &c.touching, sizeof c.touching);
   }
   return out;
+}
+
+// Paper 2's bonds and moving walls, field by field (their structs have padding). What the scene
+// builds (which discs are bonded, lever arms, pivots, the plate's place and mass) is written
+// too, and must match on reading: a state fits only the box and clusters it was saved from.
+void write_paper2(BinaryOut& o, const World& w) {
+  o.put<std::uint64_t>(w.bonds.size());
+  for (const Bond& b : w.bonds) {
+    o.put(b.i); o.put(b.j); o.put(b.ai); o.put(b.aj); o.put(b.rest);
+    o.put(b.en); o.put(b.es); o.put(b.fn); o.put(b.fs);
+  }
+  const MovingWalls& m = w.moving;
+  o.put<std::uint64_t>(m.rotating.size());
+  for (const RotatingWall& r : m.rotating) {
+    o.put(r.wall); o.put(r.pivot_x); o.put(r.pivot_y); o.put(r.ax0); o.put(r.ay0); o.put(r.bx0); o.put(r.by0);
+    o.put(r.theta); o.put(r.omega); o.put(r.theta_listed);
+  }
+  o.put<std::uint64_t>(m.plates.size());
+  for (const RigidPlate& p : m.plates) {
+    o.put(p.wall); o.put(p.mass); o.put(p.ax0); o.put(p.ay0); o.put(p.bx0); o.put(p.by0); o.put(p.follow);
+    o.put(p.x_free); o.put(p.x); o.put(p.y); o.put(p.vx); o.put(p.vy); o.put(p.dux); o.put(p.duy);
+    o.put(p.x_listed); o.put(p.y_listed);
+  }
+  o.vec(m.motion);  // the last increments (contact law 5a, 5b) and forces (the plate's next kick)
+}
+
+void read_paper2(BinaryIn& r, World& w) {
+  const auto fits = [&](bool ok, const char* what) {
+    if (!ok) r.fail(std::string("saved with ") + what + " than the scene builds");
+  };
+  const std::uint64_t nb = r.count(1ull << 32);
+  fits(nb == w.bonds.size(), "another number of cluster bonds");
+  for (Bond& b : w.bonds) {
+    const int i = r.get<int>(), j = r.get<int>();
+    const double ai = r.get<double>(), aj = r.get<double>(), rest = r.get<double>();
+    fits(i == b.i && j == b.j && ai == b.ai && aj == b.aj && rest == b.rest, "other cluster bonds");
+    if (static_cast<std::size_t>(j) >= w.discs.size()) r.fail("fewer discs than the scene's clusters bind");
+    b.en = r.get<double>(); b.es = r.get<double>(); b.fn = r.get<double>(); b.fs = r.get<double>();
+  }
+  MovingWalls& m = w.moving;
+  fits(r.count(1u << 20) == m.rotating.size(), "another number of turning walls");
+  for (RotatingWall& q : m.rotating) {
+    const int wall = r.get<int>();
+    double fixed[6];
+    for (double& v : fixed) v = r.get<double>();
+    fits(wall == q.wall && fixed[0] == q.pivot_x && fixed[1] == q.pivot_y && fixed[2] == q.ax0 &&
+             fixed[3] == q.ay0 && fixed[4] == q.bx0 && fixed[5] == q.by0,
+         "other turning walls");
+    q.theta = r.get<double>(); q.omega = r.get<double>(); q.theta_listed = r.get<double>();
+  }
+  fits(r.count(1u << 20) == m.plates.size(), "another number of plates");
+  for (RigidPlate& p : m.plates) {
+    const int wall = r.get<int>();
+    double fixed[5];
+    for (double& v : fixed) v = r.get<double>();
+    const int follow = r.get<int>();
+    fits(wall == p.wall && fixed[0] == p.mass && fixed[1] == p.ax0 && fixed[2] == p.ay0 && fixed[3] == p.bx0 &&
+             fixed[4] == p.by0,
+         "another plate (its place or mass)");
+    fits(follow == p.follow, "the plate moving otherwise (shear_box.plate_horizontal)");
+    p.x_free = r.get<double>(); p.x = r.get<double>(); p.y = r.get<double>();
+    p.vx = r.get<double>(); p.vy = r.get<double>(); p.dux = r.get<double>(); p.duy = r.get<double>();
+    p.x_listed = r.get<double>(); p.y_listed = r.get<double>();
+  }
+  std::vector<ObstacleMotion> motion;
+  r.vec(motion, 1u << 20);
+  fits(motion.size() == m.motion.size(), "another set of moving obstacles");
+  m.motion = std::move(motion);
+  for (const RotatingWall& q : m.rotating)
+    if (!std::isfinite(q.theta)) r.fail("corrupt file (a wall's angle not finite)");
+  for (const RigidPlate& p : m.plates)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) r.fail("corrupt file (the plate's place not finite)");
+  w.place_moving_walls();
 }
 }  // namespace
 
@@ -88,6 +162,7 @@ void write_world(BinaryOut& o, const World& w) {
   o.put<std::uint64_t>(w.pair_totals.size());
   w.each_recorded_pair([&](int i, int j, double fn, double fs) { o.put(PairForce{i, j, fn, fs}); });
   o.vec(w.force_blocks);
+  write_paper2(o, w);
 }
 
 void read_world(BinaryIn& r, World& w) {
@@ -127,6 +202,7 @@ void read_world(BinaryIn& r, World& w) {
     if ((t == 0 && w.force_blocks[t] != 0) || (t > 0 && w.force_blocks[t] < w.force_blocks[t - 1]) ||
         (t + 1 == w.force_blocks.size() && static_cast<std::size_t>(w.force_blocks[t]) != n))
       r.fail("corrupt thread blocks");
+  read_paper2(r, w);
 }
 
 void save_state(const World& w, const std::string& path) {

@@ -111,6 +111,8 @@ class World {
   // The same without computing forces: for a state restored with its forces and history. Without
   // build_lists the contact lists are taken as they are (a checkpoint restores them exactly).
   void prepare(bool build_lists = true);
+  // Puts the moving walls where their restored angles and plate displacements say (state files).
+  void place_moving_walls();
   // One time step; the whole algorithm is here.
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.

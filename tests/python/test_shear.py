@@ -106,6 +106,84 @@ def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
         assert stab["dt_bound"] <= stab["dt_clusters"]
 
 
+def without_shear(text):
+    """The same box, compressed only: the scene less its [shear] table."""
+    import re
+    out = re.sub(r"(?ms)^\[shear\]\n.*?(?=^\[)", "", text)
+    assert "[shear]" not in out and "[shear_box]" in out
+    return out
+
+
+def dem(binary, *args):
+    import subprocess
+    proc = subprocess.run([str(binary), *map(str, args), "--no-plots", "--quiet"], capture_output=True, text=True,
+                          timeout=120)
+    return proc
+
+
+def test_shear_from_a_saved_compression_is_the_run_in_one_piece(small_runs, dem_binary, tmp_path):
+    """Compress once and save (bonds, plate, walls in the state file), then shear from the state:
+    the same bits as compressing and shearing in one run. Split again inside the shear (walls
+    turned, plate moving): the second part's samples are the one-piece run's from there on."""
+    one = small_runs["clusters"]
+    scene = one.parent / "clusters.toml"
+    text = scene.read_text()
+    comp = tmp_path / "compress.toml"
+    comp.write_text(without_shear(text))
+    proc = dem(dem_binary, "run", comp, "--out", tmp_path / "comp", "--save-state", tmp_path / "sample.bin")
+    assert proc.returncode == 0, proc.stderr
+    proc = dem(dem_binary, "run", scene, "--out", tmp_path / "two", "--from", tmp_path / "sample.bin")
+    assert proc.returncode == 0, proc.stderr
+    for name in ("shear_series.csv", "shear_planes.csv", "snapshots/contacts_01.csv", "snapshots/discs_01.csv",
+                 "contacts.csv"):
+        assert (tmp_path / "two" / name).read_bytes() == (one / name).read_bytes(), name
+
+    half = tmp_path / "half.toml"
+    half.write_text(text.replace("max_strain = 0.02", "max_strain = 0.01"))
+    proc = dem(dem_binary, "run", half, "--out", tmp_path / "half", "--save-state", tmp_path / "half.bin")
+    assert proc.returncode == 0, proc.stderr
+    proc = dem(dem_binary, "run", scene, "--out", tmp_path / "rest", "--from", tmp_path / "half.bin")
+    assert proc.returncode == 0, proc.stderr
+    whole = read_rows(one / "shear_series.csv")
+    first = read_rows(tmp_path / "half" / "shear_series.csv")
+    rest = read_rows(tmp_path / "rest" / "shear_series.csv")
+    assert len(first) == 11 and len(rest) == 10  # samples every 0.001 to 0.01, then on to 0.02
+    no_t = [{k: v for k, v in r.items() if k != "t"} for r in first + rest]  # t counts from each part's start
+    assert no_t == [{k: v for k, v in r.items() if k != "t"} for r in whole]
+    assert (tmp_path / "rest" / "snapshots" / "contacts_01.csv").read_bytes() == \
+        (one / "snapshots" / "contacts_01.csv").read_bytes()
+    assert not (tmp_path / "rest" / "snapshots" / "contacts_00.csv").exists()  # strain 0 lies behind
+
+
+def test_a_state_fits_only_its_own_box_and_clusters(small_runs, dem_binary, tmp_path):
+    free = small_runs["free"].parent / "free.toml"
+    clusters = small_runs["clusters"].parent / "clusters.toml"
+    comp = tmp_path / "free_compress.toml"
+    comp.write_text(without_shear(free.read_text()))
+    proc = dem(dem_binary, "run", comp, "--out", tmp_path / "comp", "--save-state", tmp_path / "free.bin")
+    assert proc.returncode == 0, proc.stderr
+    cases = [
+        (clusters, "another number of cluster bonds"),
+        (free.parent / "wider.toml", "another plate"),
+        (free.parent / "follow.toml", "shear_box.plate_horizontal"),
+    ]
+    (free.parent / "wider.toml").write_text(free.read_text().replace("plate_volume = 1500.0", "plate_volume = 1400.0"))
+    (free.parent / "follow.toml").write_text(free.read_text().replace('plate_horizontal = "free"',
+                                                                      'plate_horizontal = "with_walls"'))
+    for k, (scene, fragment) in enumerate(cases):
+        proc = dem(dem_binary, "run", scene, "--out", tmp_path / f"o{k}", "--from", tmp_path / "free.bin")
+        assert proc.returncode == 2, proc.stderr
+        assert "free.bin" in proc.stderr and fragment in proc.stderr, proc.stderr
+        assert not (tmp_path / f"o{k}").exists()
+    proc = dem(dem_binary, "run", clusters, "--out", tmp_path / "ck", "--checkpoint-every", 0.1)
+    assert proc.returncode == 2 and "checkpoints / --resume: not for shear-box and cluster scenes" in proc.stderr
+    import subprocess
+    proc = subprocess.run([str(dem_binary), "ensemble", str(clusters), "--out", str(tmp_path / "ens"), "--members", "2",
+                           "--quiet"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "a [shear] scene runs with dem run" in proc.stderr, proc.stderr
+    assert not (tmp_path / "ens").exists()
+
+
 def test_plane_stresses_match_plate_and_walls(small_runs):
     """Each plane's sigma and tau equal the load of the part above (weight, plate, walls) up to
     its inertia; exactly (to roundoff) with the inertia. At the start sigma exceeds the plate
