@@ -280,11 +280,15 @@ int cmd_run(int argc, char** argv) {
     res.last_good.keep(world.discs, world.time);
     if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
   }
+  // A state file does not say whether its run reached rest: not reported as "NOT at rest".
+  const char* settled = !resume && !spec.start_from.empty() ? "from the state file"
+                        : res.rest_reached                   ? "at rest"
+                                                             : "NOT at rest";
   nlohmann::ordered_json extra;
   if (spec.discharge.enabled && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {
     std::string why;
     if (!resumed_in_discharge) {
-      if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
+      if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, settled);
       why = open_discharge(spec, world, dstate);
     }
     DischargeResult dr;
@@ -312,7 +316,7 @@ int cmd_run(int argc, char** argv) {
     extra["discharge"] = std::move(dr.metrics);  // moved, not copied: its series are some MB at a million discs
   }
   if (spec.shear_box.shear && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {  // paper 2
-    if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, res.rest_reached ? "at rest" : "NOT at rest");
+    if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, settled);
     const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet, &res.last_good);
     res.wall_seconds += sr.wall_seconds;
     extra["status"] = sr.status;
