@@ -73,8 +73,8 @@ def cluster_system(resolved, members, bonds):
     for d in members:
         xi, yi, ri, mi = discs[d]
         for e, (xj, yj, rj, mj) in enumerate(discs):
-            if e == d or tuple(sorted((d, e))) in bonded:
-                continue
+            if e == d or tuple(sorted((d, e))) in bonded or (e in idx and e < d):
+                continue  # a contact inside the cluster is met from both discs: counted once
             R = math.hypot(xj - xi, yj - yi)
             if R - ri - rj <= TOUCH:
                 add(idx[d], idx.get(e) if e in idx else None, ((xj - xi) / R, (yj - yi) / R), ri, rj,

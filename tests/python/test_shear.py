@@ -184,6 +184,30 @@ def test_a_state_fits_only_its_own_box_and_clusters(small_runs, dem_binary, tmp_
     assert not (tmp_path / "ens").exists()
 
 
+def test_a_contact_inside_a_cluster_counts_once():
+    """Three discs bonded 0-1 and 1-2 (as bonds = "touching" with a tolerance under 0.005 cm
+    makes them), 0 and 2 first apart, then 0.005 cm apart below disc 1: the 0-2 block of the
+    cluster's stiffness is zero, then that one contact's, -(kn n n^T + ks t t^T)."""
+    from compare import shear_stability
+    r, kn, ks = 1.0, 3.0e4, 1.0e4
+    x2 = 2 * r * math.cos(math.radians(30))
+    resolved = {
+        "discs": [(0.0, 0.0, r, 0), (x2, r, r, 0), (2 * x2, 0.0, r, 0)],  # 0 and 2 apart: no contact
+        "materials": [{"name": "sand", "density": 2.65}],
+        "pairs": [{"materials": ["sand", "sand"], "kn": kn, "ks": ks, "eta_n": 0.0, "eta_s": 0.0}],
+        "walls": [],
+    }
+    K, C, minv = shear_stability.cluster_system(resolved, [0, 1, 2], [(0, 1), (1, 2)])
+    assert np.all(K[0:3, 6:9] == 0)
+    gap = 0.005
+    resolved["discs"][1:] = [((2 * r + gap) / 2, math.sqrt(4 * r * r - ((2 * r + gap) / 2) ** 2), r, 0),
+                             (2 * r + gap, 0.0, r, 0)]
+    K, C, minv = shear_stability.cluster_system(resolved, [0, 1, 2], [(0, 1), (1, 2)])
+    n, t = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    assert np.allclose(K[0:2, 6:8], -(kn * np.outer(n, n) + ks * np.outer(t, t)), rtol=1e-12)
+    assert K[2, 8] == pytest.approx(ks * r * r)  # both lever arms r: one shear spring
+
+
 def test_plane_stresses_match_plate_and_walls(small_runs):
     """Each plane's sigma and tau equal the load of the part above (weight, plate, walls) up to
     its inertia; exactly (to roundoff) with the inertia. At the start sigma exceeds the plate
