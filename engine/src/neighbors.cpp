@@ -176,14 +176,13 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
       const long c = grid_.cell_of(d.x[i], d.y[i]);
       first_cell[t] = std::max(first_cell[t - 1], c < 0 ? 0 : c / nx * nx);
     }
-    strays_.resize(nt);
+    std::vector<Padded<std::vector<int>>> strays(nt);  // per thread: discs outside its rows
 #pragma omp parallel num_threads(nt)
     {
       const int t = omp_thread_index();
       const int i0 = block_start(n, nt, t), i1 = block_start(n, nt, t + 1);
       const long c0 = first_cell[t], c1 = first_cell[t + 1];
-      std::vector<int>& mine = strays_[t].value;
-      mine.clear();
+      std::vector<int>& mine = strays[t].value;
       for (int i = i0; i < i1; ++i) {
         const long c = grid_.cell_of(d.x[i], d.y[i]);
         if (c >= c0 && c < c1) ++cell_start_[c + 1];
@@ -193,7 +192,7 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
 #pragma omp single
       {
         for (int u = 0; u < nt; ++u)
-          for (int i : strays_[u].value) ++cell_start_[grid_.cell_of(d.x[i], d.y[i]) + 1];
+          for (int i : strays[u].value) ++cell_start_[grid_.cell_of(d.x[i], d.y[i]) + 1];
         for (long c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
       }  // implied barrier
       for (int i = i0; i < i1; ++i)
@@ -201,9 +200,8 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
 #pragma omp barrier
 #pragma omp single
       for (int u = 0; u < nt; ++u)
-        for (int i : strays_[u].value) order_[cell_start_[grid_.cell_of(d.x[i], d.y[i])]++] = i;
+        for (int i : strays[u].value) order_[cell_start_[grid_.cell_of(d.x[i], d.y[i])]++] = i;
     }
-    for (auto& v : strays_) std::vector<int>().swap(v.value);  // freed with the cells (a shuffled packing strays a lot)
   }
   for (long c = ncell; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
   cell_start_[0] = 0;

@@ -113,7 +113,6 @@ class Neighbors {
   } grid_;
   // The discs by cell: order_, and cell_start_ for ncell cells (nt threads, the same cells).
   void sort_by_cell(const Discs& d, long ncell, int nt);
-  std::vector<Padded<std::vector<int>>> strays_;  // per thread: discs outside its rows (sort_by_cell)
   // The new pair list, written over the old one (see neighbors.cpp).
   void build_pairs(const Discs& d, int nt);
   // Candidate pairs of discs [i0, i1) from the sorted cells, sorted by (i, j).

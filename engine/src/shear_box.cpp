@@ -129,8 +129,7 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   if (w.moving.rotating[0].theta != 0) {
     const double done = std::tan(-w.moving.rotating[0].theta);
     while (next_snap < b.snapshots.size() && done >= b.snapshots[next_snap] - 1e-12) ++next_snap;
-    next_sample = std::max(0L, static_cast<long>(std::floor((done + 1e-12) / b.sample_strain)) - 1);
-    while (done >= static_cast<double>(next_sample) * b.sample_strain - 1e-12) ++next_sample;
+    while (done >= static_cast<double>(next_sample) * b.sample_strain - 1e-12) ++next_sample;  // the loop's test
   }
 
   auto sample = [&](double strain) {
