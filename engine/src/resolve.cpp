@@ -1,5 +1,7 @@
 #include "resolve.hpp"
 
+#include <algorithm>
+
 #include "world.hpp"
 
 namespace dem {
@@ -46,6 +48,14 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
   json discs = json::array();
   for (const DiscInit& d : s.discs) discs.push_back({d.x, d.y, d.r, d.material});
   j["discs"] = discs;  // [x, y, r, material index]
+  // Start velocities (fill.velocities): [vx, vy, omega] per disc, only when some disc moves.
+  const bool moving = std::any_of(s.discs.begin(), s.discs.end(),
+                                  [](const DiscInit& d) { return d.vx != 0 || d.vy != 0 || d.omega != 0; });
+  if (moving) {
+    json v = json::array();
+    for (const DiscInit& d : s.discs) v.push_back({d.vx, d.vy, d.omega});
+    j["velocities"] = v;
+  }
   j["fill"] = {{"max_initial_overlap", s.max_initial_overlap}};
   j["end"] = {{"time", s.end_time}, {"stop_at_rest", s.stop_at_rest}, {"rest_factor", s.rest_factor},
               {"max_overlap", s.max_overlap_fraction}};
