@@ -1,44 +1,126 @@
-"""python3 -m compare report --out DIR [--full] [--codes native,liggghts,yade]
+"""python3 -m compare scene SCENE.toml|LIST.list ... --out DIR [options]   (what `dem compare` runs)
+python3 -m compare report --out DIR [--full]     the project's study: reference_inputs/agreement/{quick,full}.list
 python3 -m compare translate [--check]
 
-Runs the agreement study (compare/study.py) and writes DIR/report.md, DIR/agreement.json and
-the PNG plots. Exit 0 when every metric is within tolerance, 1 when any fails (a failed
-reference run counts as a failure), 2 for bad arguments.
+Runs scenes in the native engine and the real reference codes with the shared law and writes
+DIR/report.md, DIR/agreement.json and the PNGs. Exit 0 when every metric passes (with --mutants:
+and every mutant fails), 1 when any check fails (a failed reference run counts as a failure), 2
+for bad arguments or a scene a reference code cannot express (nothing is run then).
 """
 import argparse
+import json
 import sys
 from pathlib import Path
 
-from . import report, study
+from . import mutants, pipeline, plan, report
+
+CODES = ("native",) + plan.REFERENCE_CODES
+
+EPILOG = """kinds (--kind, default from the scene): collision (one or two discs meet and part; measured
+against analytic results and across codes), static (--start frozen: every code rests from the
+native engine's rested packing, judged against tolerances matched to the codes' agreement;
+--start scene: jittered members from the scene's own start, judged statistically), janssen (a
+tall column's ensemble-averaged side-wall profile fitted with Janssen's law), discharge (jittered
+members settle, the gate opens; means by Welch tests, jams by Fisher's exact test, each with the
+smallest difference it detects).
+
+Every code runs the law all three share (overlap spring, total-force no-tension, Coulomb cap on
+the total normal force) with velocity Verlet at the same dt; --native-law scene runs the native
+side with the scene's own law instead and attributes a failing metric to the law option that
+closes it. Each reference code's constants are read back from the code itself and compared with
+`dem resolve` (the translation check). A list file names one scene a line (relative to the list)
+with these same options; the project's CI and full studies are such lists
+(reference_inputs/agreement/quick.list, full.list).
+
+exit codes: 0 agreement (with --mutants: and every mutant caught), 1 a check failed, 2 bad
+arguments or a scene a reference code cannot express (refused before any run)."""
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python3 -m compare")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    s = sub.add_parser("scene", prog="dem compare", help="compare scenes (or list files) across codes",
+                       description="Runs scenes in the native engine, LIGGGHTS and YADE and judges whether "
+                                   "they agree.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    s.add_argument("scenes", nargs="+", type=Path, help="scene TOML files and/or .list files")
+    _common(s)
+    plan.add_arguments(s)
+    r = sub.add_parser("report", help="the project's agreement study (quick.list, or full.list with --full)")
+    _common(r)
+    t = sub.add_parser("translate", help="write reference_inputs/liggghts/ and reference_inputs/yade/ for the paper's scenes")
+    t.add_argument("--check", action="store_true", help="exit 1 when the committed inputs differ from the generator's")
+    return ap
+
+
+def _common(p) -> None:
+    p.add_argument("--out", required=True, type=Path, help="output folder (report.md, agreement.json, PNGs)")
+    p.add_argument("--codes", default="native,liggghts,yade", help="native plus any of liggghts,yade")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--quick", action="store_true", help="quick profile (default): 4 members, 0.3 s static rests")
+    g.add_argument("--full", action="store_true", help="full profile: 8 members, 0.6 s static rests, all mutants")
+    p.add_argument("--mutants", action="store_true",
+                   help="also run deliberately wrong translations of each reference code; passes only when "
+                        "the unmutated run passes and every mutant fails (quick: 3 mutants a code; --full: 8)")
+    p.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python3 -m compare")
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("report", help="run the agreement study and write the report")
-    r.add_argument("--out", required=True, type=Path)
-    r.add_argument("--full", action="store_true", help="the whole study (all lattices, 8-member ensembles, MPI)")
-    r.add_argument("--codes", default=",".join(study.CODES), help="comma-separated subset of native,liggghts,yade")
-    r.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
-    t = sub.add_parser("translate", help="write reference_inputs/liggghts/ and reference_inputs/yade/ for the paper's scenes")
-    t.add_argument("--check", action="store_true", help="exit 1 when the committed inputs differ from the generator's")
-    a = ap.parse_args(argv)
+    a = _parser().parse_args(argv)
     if a.cmd == "translate":
         from . import translate
         return translate.main(a.check)
-    codes = [c.strip() for c in a.codes.split(",") if c.strip()]
-    bad = [c for c in codes if c not in study.CODES]
+    codes = tuple(c.strip() for c in a.codes.split(",") if c.strip())
+    bad = [c for c in codes if c not in CODES]
     if bad or "native" not in codes:
         print(f"--codes: unknown {bad}" if bad else "--codes: native is the reference and must be included",
               file=sys.stderr)
         return 2
-    rep = study.run_study(a.out, "full" if a.full else "quick", codes, a.timeout,
-                          log=lambda m: print(m, flush=True))
+    base = plan.Options(codes=codes, profile="full" if a.full else "quick", timeout=a.timeout)
+    try:
+        if a.cmd == "report":
+            entries = plan.read_list(plan.default_list(base.profile), base)
+        else:
+            base = plan.options_from(a, base)
+            entries = []
+            for s in a.scenes:
+                if s.suffix == ".list":
+                    entries += plan.read_list(s, base)
+                elif not s.exists():
+                    raise plan.PlanError(f"{s}: no such scene file")
+                else:
+                    entries.append(plan.Entry(s.resolve(), base, str(s)))
+        plans = pipeline.plans_of(entries, codes)
+    except plan.PlanError as e:
+        print(f"dem compare: {e}", file=sys.stderr)
+        return 2
+    log = lambda m: print(m, flush=True)  # noqa: E731
+    rep = pipeline.run(entries, a.out, codes, log=log, plans=plans)
+    rep["profile"] = base.profile
+    if any(p.options.native_law == "scene" for p in plans):
+        from . import attribution
+        rep["attribution"] = attribution.attribute(plans, rep, a.out, log)
+    if a.mutants:
+        rep["mutants"] = run_mutants(plans, rep, a.out, codes, base.profile == "quick", log)
     report.write(rep, a.out)
     n_fail = sum(not m["pass"] for m in rep["metrics"])
+    verdict = rep["passed"] and (not a.mutants or rep["mutants"]["all_caught"])
     print(f"{a.out / 'report.md'}: {'PASS' if rep['passed'] else 'FAIL'} "
-          f"({len(rep['metrics']) - n_fail} of {len(rep['metrics'])} metrics within tolerance)")
-    return 0 if rep["passed"] else 1
+          f"({len(rep['metrics']) - n_fail} of {len(rep['metrics'])} metrics within tolerance)"
+          + (f"; mutants caught: {rep['mutants']['n_caught']} of {len(rep['mutants']['rows'])}" if a.mutants else ""))
+    return 0 if verdict else 1
+
+
+def run_mutants(plans, baseline: dict, out: Path, codes, quick: bool, log) -> dict:
+    rows = []
+    for mu in mutants.mutations(codes, quick):
+        rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=plans)
+        c = mutants.caught(baseline, rep)
+        rows.append({"mutant": mu.name, "code": mu.code, **c})
+        log(f"mutant {mu.label}: {'caught by ' + ', '.join(sorted({r['metric'] for r in c['metrics']})) if c['caught'] else 'NOT CAUGHT'}")
+    n = sum(r["caught"] for r in rows)
+    res = {"rows": rows, "n_caught": n, "all_caught": n == len(rows) and baseline["passed"]}
+    (out / "mutants.json").write_text(json.dumps(res, indent=1, default=float))
+    return res
 
 
 if __name__ == "__main__":

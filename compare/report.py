@@ -91,24 +91,32 @@ def plot_janssen(fits: dict, png: Path, name: str) -> None:
 
 
 def plot_calibration(rows: list, png: Path) -> None:
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
-    names = [r["case"] for r in rows]
-    x = np.arange(len(names))
-    for k, (key, label) in enumerate((("e", "restitution e"), ("t_c", "contact duration t_c [ms]"),
-                                      ("omega_end", "rebound spin ω [1/s]"))):
-        ax = axes[k]
-        for j, code in enumerate(("native", "liggghts", "yade")):
-            vals = [r["codes"].get(code, {}).get(key, np.nan) for r in rows]
-            vals = np.array(vals, float) * (1e3 if key == "t_c" else 1)
-            ax.bar(x + (j - 1) * 0.27, vals, 0.27, color=COLORS[code], label=code)
-        if key in ("e", "t_c"):
-            ode = [(r["ode"] or {}).get(key, np.nan) for r in rows]
-            ax.plot(x, np.array(ode, float) * (1e3 if key == "t_c" else 1), "k_", ms=18, mew=2, label="ODE (head-on)")
-        ax.set_xticks(x)
-        ax.set_xticklabels([n.replace("_", "\n", 2) for n in names], fontsize=7)
-        ax.set_title(label, fontsize=9)
-        ax.grid(alpha=0.3, axis="y")
-    axes[0].legend(fontsize=7)
+    """Each collision quantity of each code relative to its reference value (1 = the reference)."""
+    qs = sorted({q for r in rows for q, v in (r.get("reference") or {}).items() if isinstance(v, (int, float))
+                 and v != 0 and any(q in m for m in r["codes"].values())})
+    if not qs:
+        return
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.45 * len(rows) * len(qs) / 2), 4.2))
+    labels, x = [], 0
+    for r in rows:
+        for q in qs:
+            ref = (r.get("reference") or {}).get(q)
+            if not isinstance(ref, (int, float)) or ref == 0 or not any(q in m for m in r["codes"].values()):
+                continue
+            for j, code in enumerate(("native", "liggghts", "yade")):
+                v = r["codes"].get(code, {}).get(q)
+                if isinstance(v, (int, float)):
+                    ax.plot(x + (j - 1) * 0.2, v / ref, MARKERS[code], color=COLORS[code], ms=5,
+                            label=code if x == 0 else None)
+            labels.append(f"{r['case']}: {q}")
+            x += 1
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_xticks(range(len(labels)))
+    ax.set_xticklabels(labels, rotation=75, ha="right", fontsize=6)
+    ax.set_ylabel("measured / reference")
+    ax.set_title("Calibration collisions: every code against the analytic or independent reference", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
     fig.tight_layout()
     _savefig(fig, png)
 
@@ -178,20 +186,53 @@ def plot_flow_profiles(summary: dict, png: Path, name: str) -> None:
     _savefig(fig, png)
 
 
+def _ms(v) -> str:
+    """(mean, se, n) as 'mean ± se (n)'."""
+    if isinstance(v, (list, tuple)) and len(v) == 3:
+        return f"{_fmt(float(v[0]))} ± {_fmt(float(v[1]))} ({int(v[2])})"
+    return _fmt(v)
+
+
+METHOD = [
+    "- Each scene (the engine's TOML, resolved by `dem resolve`) is translated for each code; every code "
+    "uses the contact law all three express (e_n = K_n x overlap, the total normal force clamped at 0, the "
+    "Coulomb cap on the total normal force, shear dashpot off while sliding: `compare/common.py`), velocity "
+    "Verlet, the same dt. Whatever a code cannot express is refused before any run.",
+    "- Translation check: each reference code's effective constants (k_n, k_t, both dashpots, mu per material "
+    "pair, mass and inertia, gravity, dt) are read back from the code itself (compare/probe.py) and compared "
+    "with `dem resolve` to 1e-9 relative.",
+    "- Collisions: each code's rebound against the analytic result (or an independent integration of the "
+    "contact equations) within the scheme's first-order error in dt/t_c, and the codes against each other "
+    "within their measured agreement.",
+    "- Static from a frozen packing: every code rests from the native engine's rested packing (velocities "
+    "zeroed, no history); wall totals and cumulative profiles within tolerances set at no more than 10x the "
+    "codes' measured spread. Static from the scene's start: jittered members per code, means by Welch tests.",
+    "- Ensembles (discharge, static members, Janssen): members differ by a seeded jitter of every position. "
+    "Each mean is judged by a two-sided Welch test; the jam fraction by Fisher's exact test with Wilson "
+    "intervals; peaks as the largest 0.05 s average of a wall group's total (bootstrap interval of the median "
+    "shown). The family level 5 % is split over a scene's tests (Bonferroni); each metric states the "
+    "smallest difference it detects with 80 % power. No blanket floor.",
+    "- A run that crashed, timed out, blew up, lost discs or wrote no output fails every metric that needs it.",
+]
+
+
 def write(report: dict, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
+    for old in out.glob("*.png"):
+        old.unlink()
     pngs = []
     if report.get("calibration"):
         plot_calibration(report["calibration"], out / "calibration.png")
-        pngs.append(("Calibration collisions", "calibration.png"))
+        if (out / "calibration.png").exists():
+            pngs.append(("Calibration collisions", "calibration.png"))
     for st in report.get("static", []):
         pj = out / "static" / st["case"] / "profiles.json"
         if pj.exists():
             plot_profiles(pj, out / f"profiles_{st['case']}.png")
             pngs.append((f"Wall profiles, {st['case']}", f"profiles_{st['case']}.png"))
-        if st.get("janssen"):
-            plot_janssen(st["janssen"], out / f"janssen_{st['case']}.png", st["case"])
-            pngs.append((f"Janssen fits, {st['case']}", f"janssen_{st['case']}.png"))
+    for jd in report.get("janssen", []):
+        if jd.get("png"):
+            pngs.append((f"Janssen column, {jd['case']}", jd["png"]))
     for name in report.get("discharge", {}):
         sj = out / "discharge" / name / "series.json"
         if sj.exists():
@@ -201,95 +242,108 @@ def write(report: dict, out: Path) -> None:
             plot_flow_profiles(report["discharge"][name], out / f"flow_profiles_{name}.png", name)
             pngs.append((f"Time-averaged wall profiles during flow, {name}", f"flow_profiles_{name}.png"))
 
-    agreement = {"profile": report["profile"], "codes": report["codes"], "passed": report["passed"],
-                 "metrics": report["metrics"]}
+    agreement = {"profile": report.get("profile"), "codes": report["codes"], "passed": report["passed"],
+                 "scenes": report.get("scenes", []), "metrics": report["metrics"]}
+    if report.get("mutants"):
+        agreement["mutants"] = report["mutants"]
+    if report.get("attribution"):
+        agreement["attribution"] = report["attribution"]
     write_text_atomic(out / "agreement.json", json.dumps(agreement, indent=1, default=float) + "\n")
 
-    L = [f"# Agreement report ({report['profile']} profile)", "",
-         f"**Overall: {'PASS' if report['passed'] else 'FAIL'}** — "
-         f"{sum(m['pass'] for m in report['metrics'])} of {len(report['metrics'])} metrics within tolerance; "
-         f"{report.get('elapsed_s', float('nan')):.0f} s.", "",
-         "Codes: " + "; ".join(f"{c}: {v}" for c, v in report["codes"].items()), "",
-         "## Method", "",
-         "- One scene (the engine's TOML, resolved by `dem resolve`) is translated for each code; every code "
-         "uses the contact law all three can express: e_n = K_n x overlap, the total normal force clamped at 0, "
-         "the Coulomb cap on the total normal force, shear dashpot off while sliding (`compare/common.py`), "
-         "velocity Verlet, the same dt.",
-         "- Static cases start every code from the same frozen packing (the native engine's fill with that law, "
-         "velocities zeroed, no contact history) and rest for the same time.",
-         "- Discharge is compared over ensembles (members differ by a seeded 1e-3 cm perturbation of the lattice): "
-         "means against 3 combined standard errors + 10 % of the mean; jams against the binomial spread.",
-         "- Wall forces during flow: each member's wall-force samples (every 5 ms) are averaged per bin over the "
-         "same window in every code, from 0.1 s after the opening (the discs over the slit have fallen and the "
-         "flow is steady) to the end of the run; the gate is left out and the engine's slit-end point forces are "
-         "counted in the end bin of the bottom wall there (where LIGGGHTS' mesh edge and YADE's facet vertex "
-         "count them). The totals per wall group (side normal, side friction, bottom normal) are judged like the "
-         "other means; each wall's cumulative normal profile (from its 'from' end) point by point against "
-         "3 combined standard errors + 10 % of that wall's total.",
-         "- A run that crashed, timed out, blew up, lost discs or wrote no output fails every metric that needs it.",
-         "", "## Agreement table", "",
-         "| scene | metric | values | tolerance | pass | note |", "|---|---|---|---|---|---|"]
+    n_pass = sum(m["pass"] for m in report["metrics"])
+    L = [f"# Agreement report ({report.get('profile', 'quick')} profile)", "",
+         f"**Overall: {'PASS' if report['passed'] else 'FAIL'}** — {n_pass} of {len(report['metrics'])} metrics "
+         f"within tolerance; {report.get('elapsed_s', float('nan')):.0f} s."]
+    mu = report.get("mutants")
+    if mu:
+        L.append(f"**Mutants: {mu['n_caught']} of {len(mu['rows'])} caught** "
+                 f"({sum(r['caught_physically'] for r in mu['rows'])} by a physical metric, the translation check aside).")
+    L += ["", "Codes: " + "; ".join(f"{c}: {v}" for c, v in report["codes"].items()), "", "## Method", ""] + METHOD
+    if report.get("scenes"):
+        L += ["", "## Scenes", "", "| scene | kind | members | dt [s] | duration [s] | native law | time [s] | verdict |",
+              "|---|---|---|---|---|---|---|---|"]
+        for s in report["scenes"]:
+            L.append(f"| {s['name']} | {s['kind']} | {s['members']} | {s['dt']:g} | {s['duration']:g} | "
+                     f"{s['native_law']} | {s['elapsed_s']:.0f} | {'PASS' if s['passed'] else '**FAIL**'} |")
+    L += ["", "## Agreement table", "", "| scene | metric | values | tolerance | pass | note |", "|---|---|---|---|---|---|"]
     for m in report["metrics"]:
         L.append(f"| {m['scene']} | {m['metric']} | {_fmt(m['values'])} | {_fmt(m['tolerance'])} | "
                  f"{'PASS' if m['pass'] else '**FAIL**'} | {m['note']} |")
+    if mu:
+        L += ["", "## Mutants (one constant of one reference code's translation changed)", "",
+              "| mutant | code | caught | by a physical metric | metrics that caught it (tolerances off) |",
+              "|---|---|---|---|---|"]
+        for r in mu["rows"]:
+            by = "; ".join(f"{x['scene']}: {x['metric']} ({_fmt(x['by'])})" for x in r["metrics"][:6])
+            L.append(f"| {r['mutant']} | {r['code']} | {'yes' if r['caught'] else '**NO**'} | "
+                     f"{'yes' if r['caught_physically'] else 'no'} | {by} |")
+    if report.get("attribution"):
+        L += ["", "## Attribution: which law option closes a failing metric", "",
+              "| scene | native law option switched to the shared value | metrics failing before | after |",
+              "|---|---|---|---|"]
+        for a in report["attribution"]:
+            for row in a["rows"]:
+                L.append(f"| {a['scene']} | {row['option']} | {a['failing']} | {row['failing']} |")
+            L.append(f"| {a['scene']} | **verdict** | {a['verdict']} | |")
     if report.get("calibration"):
-        L += ["", "## Calibration collisions", "", "| case | code | e | t_c [s] | v_t end [cm/s] | ω end [1/s] |",
+        L += ["", "## Collisions", "", "| scene | quantity | reference | native | liggghts | yade |",
               "|---|---|---|---|---|---|"]
         for r in report["calibration"]:
-            if r["ode"]:
-                L.append(f"| {r['case']} | ODE | {r['ode']['e']:.5f} | {r['ode']['t_c']:.4e} | | |")
-            for c, v in r["codes"].items():
-                L.append(f"| {r['case']} | {c} | {v['e']:.5f} | {v['t_c']:.4e} | {v['v_t_end']:.4f} | {v['omega_end']:.4f} |")
-            if r["failures"]:
+            for q, ref in (r.get("reference") or {}).items():
+                if not isinstance(ref, (int, float)):
+                    continue
+                vals = [r["codes"].get(c, {}).get(q) for c in ("native", "liggghts", "yade")]
+                L.append(f"| {r['case']} | {q} | {ref:.7g} | " + " | ".join(
+                    f"{v:.7g}" if isinstance(v, (int, float)) else "" for v in vals) + " |")
+            if r.get("failures"):
                 L.append(f"| {r['case']} | FAILED | {r['failures']} | | | |")
     if report.get("static"):
-        L += ["", "## Static cases: wall totals (force by the discs on each wall)", "",
-              "| case | code | status | wall | normal | shear | wall time [s] |", "|---|---|---|---|---|---|---|"]
+        L += ["", "## Static cases: wall totals (force by the discs on each wall)", ""]
         for st in report["static"]:
-            for c, r in st["results"].items():
-                if r["status"] != "ok":
-                    L.append(f"| {st['case']} | {c} | FAILED: {r['reason']} | | | | |")
-                    continue
-                for w, t in r["totals"].items():
-                    L.append(f"| {st['case']} | {c} | ok | {w} | {t['normal']:.6g} | {t['shear']:.6g} | {r['wall_time_s']:.1f} |")
-            if st.get("janssen"):
-                L += ["", f"Janssen fits ({st['case']}):", "",
-                      "| code | p_inf | lambda [cm] | z0 [cm] | mu_w,eff | K | mobilised sum F_t / sum F_n | phi | fill height [cm] | r² |",
-                      "|---|---|---|---|---|---|---|---|---|---|"]
-                for c, f in st["janssen"].items():
-                    if "error" in f:
-                        L.append(f"| {c} | fit failed: {f['error']} | | | | | | | | |")
+            if "results" in st:
+                L += [f"{st['case']} (frozen packing, {st['n_discs']} discs):", "",
+                      "| code | status | wall | normal | shear | wall time [s] |", "|---|---|---|---|---|---|"]
+                for c, r in st["results"].items():
+                    if r["status"] != "ok":
+                        L.append(f"| {c} | FAILED: {r['reason']} | | | | |")
                         continue
-                    L.append(f"| {c} | {f['p_inf']:.4g} | {f['lambda']:.3g} | {f['z0']:.3g} | {f['mu_w_eff']:.3g} | "
-                             f"{f['K']:.3g} | {f['mobilised_friction']:.3g} | {f['phi']:.3f} | {f['fill_height']:.1f} | {f['r2']:.2f} |")
+                    for w, t in r["totals"].items():
+                        L.append(f"| {c} | ok | {w} | {t['normal']:.9g} | {t['shear']:.9g} | {r['wall_time_s']:.1f} |")
                 L.append("")
+            else:
+                L += [f"{st['case']} ({st['members']} members per code from the scene's start; mean ± s.e. (members)):",
+                      "", "| code | " + " | ".join(k for k in st["summary"]["native"] if k != "failed") + " |",
+                      "|---|" + "---|" * (len(st["summary"]["native"]) - 1)]
+                for c, v in st["summary"].items():
+                    L.append(f"| {c} | " + " | ".join(_ms(x) for k, x in v.items() if k != "failed") + " |")
+                L.append("")
+    for jd in report.get("janssen", []):
+        L += ["", f"## Janssen column {jd['case']}", ""] + jd.get("table", [])
     if report.get("discharge"):
-        L += ["", "## Discharge ensembles", "",
-              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jam fraction | peak side | peak bottom "
-              "| side normal during flow | side friction during flow | bottom normal during flow |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+        L += ["", "## Discharge ensembles (mean ± s.e. (members))", "",
+              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jammed (Wilson 95 %) | "
+              "windowed peak side | windowed peak bottom | raw peak side, median [95 %] | side normal during flow | "
+              "side friction during flow | bottom normal during flow |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        from .stats import wilson
         for name, s in report["discharge"].items():
             for c, v in s.items():
-                L.append(f"| {name} | {c} | {v['members']} ({v['failed']}) | {_fmt(v['discs_out'])} | "
-                         f"{_fmt(v['flow_rate'])} | {_fmt(v['jam_fraction'])} | {_fmt(v['peak_ratio_side'])} | "
-                         f"{_fmt(v['peak_ratio_bottom'])} | {_fmt(v.get('flow_side_normal', float('nan')))} | "
-                         f"{_fmt(v.get('flow_side_shear', float('nan')))} | {_fmt(v.get('flow_bottom_normal', float('nan')))} |")
+                lo, hi = wilson(v["jammed"], v["ok_members"]) if v["ok_members"] else (float("nan"),) * 2
+                pk = v["peak_ratio_side"]
+                L.append(f"| {name} | {c} | {v['members']} ({v['failed']}) | {_ms(v['discs_out'])} | "
+                         f"{_ms(v['flow_rate'])} | {v['jammed']}/{v['ok_members']} [{lo:.2f}, {hi:.2f}] | "
+                         f"{_ms(v['peak_window_side'])} | {_ms(v['peak_window_bottom'])} | "
+                         f"{_fmt(pk[0])} [{_fmt(pk[1])}, {_fmt(pk[2])}] | {_ms(v['flow_side_normal'])} | "
+                         f"{_ms(v['flow_side_shear'])} | {_ms(v['flow_bottom_normal'])} |")
                 for f in v["failures"]:
-                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | | | | |")
-    if report.get("mpi"):
-        m = report["mpi"]
-        L += ["", "## Scale-out: LIGGGHTS under MPI", "",
-              f"{m['n_discs']} discs, {m['steps']} steps, from the same scene description:", "",
-              "| ranks | status | wall time [s] | µs per particle-step |", "|---|---|---|---|"]
-        for k, v in m["ranks"].items():
-            L.append(f"| {k} | {v['status']} {v['reason']} | {_fmt(v['wall_time_s'])} | {_fmt(v['us_per_particle_step'])} |")
+                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | | | | | |")
     L += ["", "## Plots", ""] + [f"### {t}\n\n![{t}]({p})\n" for t, p in pngs]
     L += ["## What the translations cannot express exactly", "",
           "- The paper's incremental normal spring and its no-tension rule on the elastic force (eqs. 7a, 8) and "
           "the Coulomb cap on the elastic normal force (eq. 13): neither LIGGGHTS nor YADE has them; all codes "
-          "run the shared variant here (the native engine's paper law is compared in `out/paper_silo`).",
+          "run the shared variant (`--native-law scene` runs the engine's own law against them).",
           "- LIGGGHTS walls are triangle meshes: a wall's end acts as a point contact of the mesh that owns it, "
-          "where the engine has the explicit points L and R.",
+          "where the engine has explicit points.",
           "- YADE combines the two materials of a contact in series; the translation solves the wall material "
-          "for the resolved disc-wall constants (see compare/yade_backend.py).", ""]
+          "for the resolved disc-wall constants (compare/yade_backend.py).", ""]
     write_text_atomic(out / "report.md", "\n".join(L) + "\n")

@@ -1,0 +1,106 @@
+"""Mutants: deliberately wrong translations that the verdict must catch.
+
+A mutant changes one constant of the scene that ONE reference code translates (the others, and
+the constants the translation check expects, stay right), as a translation bug would. The run
+with mutants passes only when the unmutated run passes and every mutant fails at least one
+metric; the report lists which metrics caught each mutant and by how much, and whether a
+physical metric (anything but the translation check) caught it too.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+# (name, what, factor, scope): what = pair constant (kn, ks, eta_n, eta_s, mu) of the "disc-disc",
+# "disc-wall" or "all" pairs, or "density" / "gravity"; scope "gravity" = only cases with gravity.
+SPECS = [
+    ("kn_x1.05", "kn", "all", 1.05, "all"),
+    ("ks_x0.5", "ks", "all", 0.5, "all"),
+    ("eta_n_x1.2", "eta_n", "all", 1.2, "all"),
+    ("mu_disc_disc_x0.9", "mu", "disc-disc", 0.9, "all"),
+    ("mu_disc_wall_x0.9", "mu", "disc-wall", 0.9, "all"),
+    ("mu_disc_wall_x0.9_gravity_cases", "mu", "disc-wall", 0.9, "gravity"),
+    ("density_x1.01", "density", "", 1.01, "all"),
+    ("gravity_x1.01", "gravity", "", 1.01, "all"),
+]
+QUICK = ("kn_x1.05", "mu_disc_wall_x0.9_gravity_cases", "density_x1.01")
+
+
+@dataclasses.dataclass
+class Mutation:
+    name: str
+    code: str
+    what: str
+    pairs: str
+    factor: float
+    scope: str
+
+    def applies(self, code: str, case) -> bool:
+        if code != self.code:
+            return False
+        if self.scope == "gravity":
+            return float(np.hypot(*case.resolved["gravity"])) > 0
+        return True
+
+    def apply(self, resolved: dict) -> dict:
+        r = copy.deepcopy(resolved)
+        if self.what == "gravity":
+            r["gravity"] = [g * self.factor for g in r["gravity"]]
+        elif self.what == "density":
+            for m in r["materials"]:
+                m["density"] = m["density"] * self.factor
+        else:
+            solid = {m["name"] for m in r["materials"] if m["density"] > 0}
+            for p in r["pairs"]:
+                dd = all(m in solid for m in p["materials"])
+                if self.pairs == "all" or (self.pairs == "disc-disc") == dd:
+                    p[self.what] = p[self.what] * self.factor
+        return r
+
+    def folder(self, out: Path, code: str) -> Path:
+        return Path(out) / "mutants" / self.name / code
+
+    @property
+    def label(self) -> str:
+        return f"{self.code}: {self.name}"
+
+
+def mutations(codes, quick: bool) -> list[Mutation]:
+    out = []
+    for name, what, pairs, factor, scope in SPECS:
+        if quick and name not in QUICK:
+            continue
+        for c in codes:
+            if c != "native":
+                out.append(Mutation(f"{c}_{name}", c, what, pairs, factor, scope))
+    return out
+
+
+def caught(baseline: dict, mutant_report: dict) -> dict:
+    """Which metrics the mutant failed (that the baseline passed), with their margins."""
+    base = {(m["scene"], m["metric"]): m for m in baseline["metrics"]}
+    rows = []
+    for m in mutant_report["metrics"]:
+        b = base.get((m["scene"], m["metric"]))
+        if not m["pass"] and (b is None or b["pass"]):
+            rows.append({"scene": m["scene"], "metric": m["metric"], "by": margin(m), "note": m.get("note", "")})
+    physical = [r for r in rows if not r["metric"].startswith("translation constants")]
+    return {"caught": bool(rows), "caught_physically": bool(physical), "metrics": rows}
+
+
+def margin(m: dict) -> float:
+    """How many tolerances the metric is off (value / tolerance, or diff / critical)."""
+    v = m.get("values") or {}
+    if "max_diff_over_critical" in v:
+        return float(v["max_diff_over_critical"])
+    if "max_diff_over_tolerance" in v:
+        return float(v["max_diff_over_tolerance"])
+    if "p" in v and v.get("p") is not None:
+        return float("nan")
+    for k in ("max_rel_diff", "max_rel"):
+        if k in v and isinstance(m.get("tolerance"), (int, float)) and m["tolerance"]:
+            return float(v[k]) / float(m["tolerance"])
+    return float("nan")

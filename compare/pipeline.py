@@ -1,0 +1,280 @@
+"""One pipeline for every comparison: entries (scene + options) -> runs in every code -> metrics.
+
+``dem compare`` (python3 -m compare scene) and the studies (the list files under
+reference_inputs/agreement/) both call ``run``. For each entry (compare/plan.py) it
+1. refuses what a reference code cannot express, before any run (PlanError, exit 2);
+2. reads each reference code's effective constants back from the code itself and compares them
+   with ``dem resolve`` (compare/probe.py: the translation check, a metric of every scene);
+3. runs the members in every code (compare/study.py's runners and readers) and judges them:
+   deterministic kinds against tolerances matched to the codes' measured agreement, ensembles
+   by tests whose level and detectable difference are stated (compare/stats.py).
+
+A *mutation* (compare/mutants.py) hands one reference code a deliberately wrong scene (one
+constant changed) while the expected constants and every other code stay as they are; results
+of unmutated runs are reused from the baseline's folders.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import collision_judge
+from . import janssen, stats, study
+from .common import SHARED_VARIANT, Case, Result, failed
+from .plan import Entry, Plan, PlanError, jittered, make_plan, member_case, refusals, start_discs
+
+# Static cases from a frozen packing: tolerances matched to the codes' agreement (at most 10x the
+# largest cross-code spread measured on the frozen packings; benchmarks/README.md is not involved:
+# `python3 -m compare scene ... --start frozen` prints the spreads as the metrics' values).
+TOL_STATIC_TOTAL = 1e-4      # wall normal totals, relative (spread measured: 3e-6 .. 1e-5)
+TOL_STATIC_SHEAR = 1e-3      # side-wall friction totals, relative (spread measured: up to 1e-4)
+TOL_STATIC_CUMULATIVE = 1e-3  # cumulative normal profile / wall total (spread measured: up to 1e-4)
+
+
+def _metric(name, scene, values, tol, passed, note="", kind="deterministic") -> dict:
+    m = study.metric(name, scene, values, tol, passed, note)
+    m["kind"] = kind
+    return m
+
+
+# ------------------------------------------------------------------------ running codes
+
+def run_code(code: str, case: Case, out: Path, timeout: float, reuse: bool = False) -> Result:
+    cached = out / "result.json"
+    if reuse and cached.exists():
+        return Result.load(cached)
+    return study.run_code(code, case, out, timeout)
+
+
+def case_for(code: str, case: Case, plan: Plan, mutation) -> Case:
+    """The case a code runs: the native side with the scene's own law when asked, then the
+    mutation (a mutant's wrong constant, or an attribution's law switch) for the code it names."""
+    if code == "native" and plan.options.native_law == "scene":
+        r = copy.deepcopy(plan.resolved)
+        r["integrator"] = dict(r["integrator"], scheme="velocity_verlet")
+        case = _with_resolved(case, r)
+    if mutation is not None and mutation.applies(code, case):
+        case = _with_resolved(case, mutation.apply(case.resolved))
+    return case
+
+
+def _with_resolved(case: Case, r: dict) -> Case:
+    c = copy.copy(case)
+    c.resolved = r
+    return c
+
+
+def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:
+    """Every code's run of one case; in a mutant run the unmutated codes reuse the baseline's."""
+    res = {}
+    for c in codes:
+        mutated = mutation is not None and mutation.code == c
+        d = mutation.folder(out, c) if mutated else out / c
+        res[c] = run_code(c, case_for(c, case, plan, mutation), d, plan.options.timeout,
+                          reuse=mutation is not None and not mutated)
+    return res
+
+
+# ------------------------------------------------------------------------ translation check
+
+def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
+    """Each reference code's constants read back from the code (compare/probe.py) against
+    ``dem resolve`` to 1e-9 relative."""
+    try:
+        from . import probe
+    except ImportError:
+        return []
+    metrics = []
+    case = member_case(plan, 0, start_discs(plan.shared))
+    expected = probe.expected_constants(plan.shared, case.discs, plan.dt)
+    for c in codes:
+        if c == "native":
+            continue
+        d = out / "probe" / c if mutation is None or mutation.code != c else mutation.folder(out / "probe", c)
+        cached = d / "probe.json"
+        if mutation is not None and mutation.code != c and cached.exists():
+            pr = json.loads(cached.read_text())
+        else:
+            pr = probe.probe(c, case_for(c, case, plan, mutation), d, plan.options.timeout)
+            d.mkdir(parents=True, exist_ok=True)
+            cached.write_text(json.dumps(pr, indent=1, default=float))
+        if pr.get("status") != "ok":
+            metrics.append(_metric(f"translation constants read back ({c})", plan.name, {}, 1e-9, False,
+                                   f"probe failed: {pr.get('reason', '')}"))
+            continue
+        rows = probe.compare_constants(expected, pr)
+        bad = [r for r in rows if not r["pass"]]
+        worst = max((r["rel_diff"] for r in rows if math.isfinite(r["rel_diff"])), default=float("nan"))
+        metrics.append(_metric(f"translation constants read back ({c})", plan.name,
+                               {"quantities": len(rows), "max_rel_diff": worst}, 1e-9, not bad,
+                               "; ".join(f"{r['quantity']}: {r['probed']!r} vs {r['expected']!r}" for r in bad[:4])))
+    return metrics
+
+
+# ------------------------------------------------------------------------ kinds
+
+def collision(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    case = member_case(plan, 0, start_discs(plan.shared))
+    res = run_all(codes, case, plan, out, mutation)
+    return collision_judge.judge(plan.name, case, res)
+
+
+def frozen_packing(plan: Plan, out: Path) -> np.ndarray:
+    """The native engine fills the scene with the shared law for --settle s; velocities zeroed."""
+    from . import native_backend
+    path = out / "frozen.npy"
+    if path.exists():
+        return np.load(path)
+    d = start_discs(plan.shared)
+    case = Case(name="fill", resolved=plan.shared, discs=d, dt=plan.dt, duration=plan.settle)
+    res = native_backend.run(case, out / "fill", 1800)
+    if not res.ok:
+        raise RuntimeError(f"frozen packing of {plan.name}: native fill failed: {res.reason}")
+    end = np.array(res.discs_end, float)
+    end[:, 3:] = 0.0
+    out.mkdir(parents=True, exist_ok=True)
+    np.save(path, end)
+    return end
+
+
+def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    pack = frozen_packing(plan, out)
+    case = Case(name=plan.name, resolved=plan.shared, discs=pack, dt=plan.dt, duration=plan.duration)
+    res = run_all(codes, case, plan, out, mutation)
+    metrics, detail = study.static_compare(case, res, tolerances=(TOL_STATIC_TOTAL, TOL_STATIC_SHEAR,
+                                                                  TOL_STATIC_CUMULATIVE))
+    if mutation is None:
+        study.save_profiles(out / "profiles.json", case, res)
+    return metrics, detail
+
+
+def ensemble_runs(plan: Plan, codes, out: Path, mutation=None) -> dict:
+    """code -> [(Result, Case)] over the members."""
+    per = {c: [] for c in codes}
+    for k in range(plan.members):
+        case = member_case(plan, k)
+        res = run_all(codes, case, plan, out / f"m{k}", mutation)
+        for c in codes:
+            per[c].append((res[c], case))
+    return per
+
+
+def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    """Independent dynamics: every code from the jittered scene start; each wall's normal total
+    (and the side walls' friction) compared as ensemble means."""
+    per = ensemble_runs(plan, codes, out, mutation)
+    tots = {c: [study.wall_totals(r) if r.ok else None for r, _ in runs] for c, runs in per.items()}
+    walls = [w for w in plan.shared["walls"] if w.get("active", True)]
+    keys = [(w["name"], "normal") for w in walls] + \
+           [(w["name"], "shear") for w in walls if w["group"].startswith("side")]
+    n_tests = len(keys) * (len(codes) - 1)
+    alpha = stats.FAMILY_ALPHA / max(n_tests, 1)
+    metrics, summary = [], {}
+    for c in codes:
+        summary[c] = {f"{w}.{k}": stats.mean_se([t[w][k] for t in tots[c] if t]) for w, k in keys}
+        summary[c]["failed"] = [r.reason for r, _ in per[c] if not r.ok]
+    for c in codes:
+        if c == "native":
+            continue
+        for w, k in keys:
+            name = f"static {w} {k} total, members from the scene's start ({c} vs native)"
+            if summary[c]["failed"] or summary["native"]["failed"]:
+                metrics.append(_metric(name, plan.name, {}, "", False, "failed members: " + "; ".join(
+                    (summary[c]["failed"] + summary["native"]["failed"])[:2]), "statistical"))
+                continue
+            t = stats.compare_means(summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], alpha)
+            metrics.append(_stat_metric(name, plan.name, t, summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], c))
+    return metrics, {"case": plan.name, "members": plan.members, "summary": summary}
+
+
+def _stat_metric(name, scene, t, a, b, code) -> dict:
+    vals = {"native": [a[0], a[1]], code: [b[0], b[1]]}
+    if "p" in t:
+        vals.update({"p": t["p"], "detectable_rel": t["detectable_rel"]})
+    tol = (f"Welch, level {t['alpha']:.2g}" if "alpha" in t else "")
+    note = t.get("reason", "")
+    if "detectable_rel" in t:
+        note = (note + "; " if note else "") + f"detects {abs(t['detectable_rel']):.1%} (80 % power)"
+    return _metric(name, scene, vals, tol, t["pass"], note, "statistical")
+
+
+def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    per = ensemble_runs(plan, codes, out, mutation)
+    return janssen.judge(plan, per)
+
+
+def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    per = ensemble_runs(plan, codes, out, mutation)
+    per_code = {c: [(r, study.discharge_measures(r, case) if r.ok else {}) for r, case in runs]
+                for c, runs in per.items()}
+    metrics, summary = study.discharge_compare(plan.name, per_code)
+    if mutation is None:
+        study.save_series(out / "series.json", per_code)
+    return metrics, summary
+
+
+KIND_RUNNERS = {"collision": collision, "janssen": janssen_column, "discharge": discharge}
+
+
+def run_plan(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    if plan.kind == "static":
+        fn = static_frozen if plan.options.start == "frozen" else static_members
+    else:
+        fn = KIND_RUNNERS[plan.kind]
+    return fn(plan, codes, out, mutation)
+
+
+# ------------------------------------------------------------------------ the whole run
+
+def plans_of(entries: list[Entry], codes) -> list[Plan]:
+    """Every entry's plan, every refusal found before any run (PlanError lists them all)."""
+    plans, refused = [], []
+    for e in entries:
+        p = make_plan(e)
+        plans.append(p)
+        refused += refusals(p, codes)
+    if refused:
+        raise PlanError("\n".join(refused))
+    return plans
+
+
+def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=None,
+        check_translation: bool = True) -> dict:
+    out.mkdir(parents=True, exist_ok=True)
+    plans = plans if plans is not None else plans_of(entries, codes)
+    report = {"codes": {}, "metrics": [], "scenes": [], "calibration": [], "static": [], "discharge": {},
+              "janssen": []}
+    for c in codes:
+        be = study.backend(c)
+        report["codes"][c] = be.version() if be.available() else "not installed"
+    t0 = time.monotonic()
+    for p in plans:
+        where = out / p.kind / p.name
+        log(f"{p.name}: {p.kind}{' (' + p.options.start + ')' if p.kind == 'static' else ''}, "
+            f"{p.members} member(s), dt {p.dt:g} s, {p.duration:g} s"
+            + (f" [mutant {mutation.name}]" if mutation else ""))
+        t1 = time.monotonic()
+        metrics = translation_check(p, codes, where, mutation) if check_translation else []
+        m, detail = run_plan(p, codes, where, mutation)
+        metrics += m
+        report["metrics"] += metrics
+        report["scenes"].append({"scene": str(p.entry.scene), "name": p.name, "kind": p.kind,
+                                 "members": p.members, "dt": p.dt, "duration": p.duration,
+                                 "native_law": p.options.native_law, "elapsed_s": time.monotonic() - t1,
+                                 "passed": all(x["pass"] for x in metrics)})
+        if p.kind == "collision":
+            report["calibration"].append(detail)
+        elif p.kind == "discharge":
+            report["discharge"][p.name] = detail
+        elif p.kind == "janssen":
+            report["janssen"].append(detail)
+        else:
+            report["static"].append(detail)
+    report["elapsed_s"] = time.monotonic() - t0
+    report["passed"] = bool(report["metrics"]) and all(m["pass"] for m in report["metrics"])
+    return report

@@ -1,0 +1,244 @@
+"""What a comparison runs: a scene file and its options become a plan (kind, cases, codes).
+
+An *entry* is one scene with its options, from the command line (``dem compare SCENE.toml ...``)
+or from one line of a list file (``reference_inputs/agreement/*.list``: a scene path relative to
+the list file, then the same options). Nothing in a study is built in Python that a user could
+not write as a scene and a line of options.
+
+Kinds (``--kind``, default from the scene):
+- ``collision``: one or two discs that meet and part (gravity may be on): every code runs the
+  scene as written (its own velocities), measured from the end state (compare/calibration.py);
+- ``static`` (a scene without ``[discharge]``): ``--start frozen`` (default) lets the native
+  engine fill the scene with the shared law, zeroes the velocities, and every code rests from that
+  same packing for ``--duration``; ``--start scene --members N`` runs every code from the scene's
+  own start, each member jittered by ``--perturb`` (independent dynamics, judged statistically);
+- ``janssen``: a tall column run as ``static --start scene`` members, the side-wall profiles
+  averaged over the members and fitted with Janssen's law (compare/janssen.py);
+- ``discharge`` (a scene with ``[discharge]``): members jittered by ``--perturb``, each settles
+  for ``--settle`` then the gate opens for the scene's ``discharge.time`` (or ``--duration``).
+
+Every code runs the shared law (common.SHARED_VARIANT) and velocity Verlet at the same dt.
+Whatever a reference code cannot express is refused before any run (exit 2), naming the scene
+field, the code and why: the refusal is the code's own translation refusing the first case.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import dataclasses
+import shlex
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve
+
+KINDS = ("collision", "static", "janssen", "discharge")
+REFERENCE_CODES = ("liggghts", "yade")
+# Defaults per profile (a scene's own values win where it has them: dt, discharge.time).
+PROFILE_DEFAULTS = {
+    "quick": {"members": 4, "static_duration": 0.3, "settle": 1.0},
+    "full": {"members": 8, "static_duration": 0.6, "settle": 1.0},
+}
+
+
+class PlanError(ValueError):
+    """A scene or option the comparison refuses (exit 2); the message names the field and why."""
+
+
+@dataclasses.dataclass
+class Options:
+    codes: tuple = ("native",) + REFERENCE_CODES
+    profile: str = "quick"
+    kind: str = ""               # "" = from the scene
+    start: str = "frozen"        # static: "frozen" | "scene"
+    members: int = 0             # 0 = the profile's default (ensembles)
+    dt: float = 0.0              # [s] 0 = the scene's integrator.dt
+    duration: float = 0.0        # [s] 0 = static: the profile's; discharge: discharge.time; collision: end.time
+    settle: float = 0.0          # [s] 0 = the profile's (discharge: before the gate opens; frozen: the fill)
+    perturb: float = 1e-3        # [cm] members' uniform jitter of x and y
+    native_law: str = "shared"   # "shared" | "scene": the native side runs the scene's own law
+    timeout: float = 900.0       # [s] per reference run
+
+    def resolved_members(self) -> int:
+        return self.members or PROFILE_DEFAULTS[self.profile]["members"]
+
+
+def add_arguments(ap: argparse.ArgumentParser) -> None:
+    """The per-scene options (the command line's and every list line's)."""
+    ap.add_argument("--kind", choices=KINDS, default="", help="what to compare (default: discharge when the "
+                    "scene has [discharge], else static)")
+    ap.add_argument("--start", choices=("frozen", "scene"), default="frozen",
+                    help="static: every code from the native engine's rested packing (frozen, deterministic) "
+                         "or from the scene's own start, as jittered members (scene, statistical)")
+    ap.add_argument("--members", type=int, default=0, help="ensemble members per code (default: quick 4, full 8)")
+    ap.add_argument("--dt", type=float, default=0.0, help="time step [s] of every code (default: the scene's)")
+    ap.add_argument("--duration", type=float, default=0.0,
+                    help="simulated time [s]: static rest after the start (default quick 0.3, full 0.6), "
+                         "discharge after the opening (default: discharge.time), collision (default: end.time)")
+    ap.add_argument("--settle", type=float, default=0.0,
+                    help="[s] discharge: settling before the opening; static frozen: the native fill (default 1)")
+    ap.add_argument("--perturb", type=float, default=1e-3, help="[cm] members' jitter of x and y (default 1e-3)")
+    ap.add_argument("--native-law", choices=("shared", "scene"), default="shared",
+                    help="scene: the native engine runs the scene's own contact law against the references' "
+                         "shared law (a failing metric is then attributed to a law option)")
+
+
+def options_from(ns: argparse.Namespace, base: Options) -> Options:
+    o = dataclasses.replace(base)
+    for f in ("kind", "start", "members", "dt", "duration", "settle", "perturb"):
+        setattr(o, f, getattr(ns, f))
+    o.native_law = ns.native_law
+    for f, lo in (("members", 0), ("dt", 0.0), ("duration", 0.0), ("settle", 0.0), ("perturb", 0.0)):
+        if getattr(o, f) < lo:
+            raise PlanError(f"--{f}: must be >= {lo}, got {getattr(o, f)!r}")
+    if o.members == 1:
+        raise PlanError("--members: an ensemble needs at least 2 members per code (a standard error)")
+    return o
+
+
+@dataclasses.dataclass
+class Entry:
+    scene: Path
+    options: Options
+    label: str = ""              # the list line, for messages
+
+
+def read_list(path: Path, base: Options) -> list[Entry]:
+    """A list file: one scene a line (relative to the file), then its options; # starts a comment."""
+    ap = argparse.ArgumentParser(prog=str(path), add_help=False, exit_on_error=False)
+    ap.add_argument("scene")
+    add_arguments(ap)
+    out = []
+    for k, line in enumerate(Path(path).read_text().splitlines(), 1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        try:
+            ns = ap.parse_args(shlex.split(text))
+        except (argparse.ArgumentError, SystemExit) as e:
+            raise PlanError(f"{path}:{k}: {e}") from None
+        scene = (Path(path).parent / ns.scene).resolve()
+        if not scene.exists():
+            raise PlanError(f"{path}:{k}: scene {ns.scene} not found")
+        out.append(Entry(scene, options_from(ns, base), f"{path}:{k}"))
+    if not out:
+        raise PlanError(f"{path}: no scenes listed")
+    return out
+
+
+# ------------------------------------------------------------------------------------ plans
+
+@dataclasses.dataclass
+class Plan:
+    entry: Entry
+    name: str
+    kind: str
+    resolved: dict               # dem resolve output (the scene's own law)
+    shared: dict                 # the same with the shared law (what every code translates)
+    dt: float
+    duration: float
+    settle: float
+    members: int                 # 1 for deterministic kinds
+
+    @property
+    def options(self) -> Options:
+        return self.entry.options
+
+
+def _kind(resolved: dict, o: Options) -> str:
+    if o.kind:
+        return o.kind
+    if "discharge" in resolved:
+        return "discharge"
+    return "static"
+
+
+def make_plan(entry: Entry) -> Plan:
+    o = entry.options
+    try:
+        r = resolve(entry.scene)
+    except CaseError as e:
+        raise PlanError(f"{entry.scene}: {e}") from None
+    kind = _kind(r, o)
+    for key, why in (("clusters", "bonded clusters"), ("shear_box", "the shear box")):
+        if key in r:
+            raise PlanError(f"{entry.scene}: [{key}]: {why} are compared by the shear study "
+                            "(bash scripts/shear_study.sh: native and YADE); LIGGGHTS has no bonds, and "
+                            "dem compare does not translate them")
+    if kind == "discharge" and "discharge" not in r:
+        raise PlanError(f"{entry.scene}: --kind discharge: the scene has no [discharge] table")
+    if kind != "discharge" and "discharge" in r:
+        raise PlanError(f"{entry.scene}: [discharge]: the scene discharges; --kind {kind} cannot run it")
+    shared = copy.deepcopy(r)
+    shared["contact"] = dict(SHARED_VARIANT)
+    shared["integrator"] = dict(r["integrator"], scheme="velocity_verlet")
+    dt = o.dt or float(r["integrator"]["dt"])
+    prof = PROFILE_DEFAULTS[o.profile]
+    settle = o.settle or prof["settle"]
+    if kind == "collision":
+        duration = o.duration or float(r["end"]["time"])
+    elif kind == "discharge":
+        duration = o.duration or float(r["discharge"]["time"])
+    else:
+        duration = o.duration or prof["static_duration"]
+    members = 1
+    if kind in ("discharge", "janssen") or (kind == "static" and o.start == "scene"):
+        members = o.resolved_members()
+    name = entry.scene.stem
+    return Plan(entry, name, kind, r, shared, dt, duration, settle, members)
+
+
+def start_discs(resolved: dict) -> np.ndarray:
+    """(n, 6) x, y, r, vx, vy, omega of the scene's start."""
+    d = np.array(resolved["discs"], float)
+    v = np.array(resolved.get("velocities", np.zeros((len(d), 3))), float).reshape(-1, 3)
+    return np.column_stack([d[:, :3], v])
+
+
+def jittered(discs: np.ndarray, member: int, perturb: float) -> np.ndarray:
+    """Member k: every x and y moved by a seeded uniform amount in [-perturb, perturb] (member 0
+    is the scene's own start)."""
+    out = np.array(discs, float, copy=True)
+    if member:
+        rng = np.random.default_rng(1000 + member)
+        out[:, :2] += rng.uniform(-perturb, perturb, size=(len(out), 2))
+    return out
+
+
+def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolved: dict | None = None) -> Case:
+    """The case of one member (or the one case of a deterministic kind)."""
+    r = resolved if resolved is not None else plan.shared
+    if discs is None:
+        discs = jittered(start_discs(r), member, plan.options.perturb)
+    suffix = f"_m{member}" if plan.members > 1 else ""
+    if plan.kind == "discharge":
+        return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
+                    mode="discharge", settle=plan.settle, seed=member)
+    return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
+                seed=member)
+
+
+def refusals(plan: Plan, codes) -> list[str]:
+    """What each reference code refuses to translate in this plan (its own translation, dry-run on
+    the first case); empty when every code can express the scene."""
+    from importlib import import_module
+    out = []
+    case = member_case(plan, 0)
+    if plan.kind == "discharge" and not plan.shared.get("discharge", {}).get("gate"):
+        out.append(f"{plan.entry.scene}: discharge.gate: the comparison opens a gate wall; the scene has none")
+    for code in codes:
+        if code == "native":
+            continue
+        be = import_module(f"compare.{code}_backend")
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                be.write_inputs(case, Path(tmp))
+            except CaseError as e:
+                out.append(f"{plan.entry.scene}: {code} cannot express it: {e}")
+    return out
+
+
+def default_list(profile: str) -> Path:
+    return ROOT / "reference_inputs" / "agreement" / f"{profile}.list"
