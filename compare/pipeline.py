@@ -95,14 +95,8 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
     for c in codes:
         if c == "native":
             continue
-        d = out / "probe" / c if mutation is None or mutation.code != c else mutation.folder(out / "probe", c)
-        cached = d / "probe.json"
-        if mutation is not None and mutation.code != c and cached.exists():
-            pr = json.loads(cached.read_text())
-        else:
-            pr = probe.probe(c, case_for(c, case, plan, mutation), d, plan.options.timeout)
-            d.mkdir(parents=True, exist_ok=True)
-            cached.write_text(json.dumps(pr, indent=1, default=float))
+        pcase = case_for(c, case, plan, mutation)
+        pr = _probe_cached(probe, c, pcase, out, plan.options.timeout)
         if pr.get("status") != "ok":
             metrics.append(_metric(f"translation constants read back ({c})", plan.name, {}, 1e-9, False,
                                    f"probe failed: {pr.get('reason', '')}"))
@@ -114,6 +108,28 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
                                {"quantities": len(rows), "max_rel_diff": worst}, 1e-9, not bad,
                                "; ".join(f"{r['quantity']}: {r['probed']!r} vs {r['expected']!r}" for r in bad[:4])))
     return metrics
+
+
+def _probe_cached(probe, code: str, case: Case, out: Path, timeout: float) -> dict:
+    """A code's probe of a case's translation, kept by the translated constants (the same constants
+    translate the same way: a list of collisions with one set of constants probes once)."""
+    import hashlib
+    r = case.resolved
+    key = json.dumps({"code": code, "pairs": r["pairs"], "materials": r["materials"], "gravity": r["gravity"],
+                      "contact": r["contact"], "dt": case.dt,
+                      "radii": sorted({float(x) for x in np.asarray(case.discs)[:, 2]})}, sort_keys=True)
+    h = hashlib.sha1(key.encode()).hexdigest()[:16]
+    root = out
+    while root.parent != root and root.name not in ("collision", "static", "janssen", "discharge"):
+        root = root.parent
+    d = root.parent / "probes" / code / h
+    cached = d / "probe.json"
+    if cached.exists():
+        return json.loads(cached.read_text())
+    pr = probe.probe(code, case, d, timeout)
+    d.mkdir(parents=True, exist_ok=True)
+    cached.write_text(json.dumps(pr, indent=1, default=float))
+    return pr
 
 
 # ------------------------------------------------------------------------ kinds
@@ -148,6 +164,9 @@ def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, di
     res = run_all(codes, case, plan, out, mutation)
     metrics, detail = study.static_compare(case, res, tolerances=(TOL_STATIC_TOTAL, TOL_STATIC_SHEAR,
                                                                   TOL_STATIC_CUMULATIVE))
+    if np.linalg.norm(plan.shared["gravity"]) > 0:
+        metrics += weight_metrics(plan.name, res, case, dict(plan.shared, discs=[list(r[:3]) + [m[3]] for r, m in
+                                                                             zip(pack, plan.shared["discs"])]))
     if mutation is None:
         study.save_profiles(out / "profiles.json", case, res)
     return metrics, detail
@@ -168,10 +187,11 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     """Independent dynamics: every code from the jittered scene start; each wall's normal total
     (and the side walls' friction) compared as ensemble means."""
     per = ensemble_runs(plan, codes, out, mutation)
-    tots = {c: [study.wall_totals(r) if r.ok else None for r, _ in runs] for c, runs in per.items()}
     walls = [w for w in plan.shared["walls"] if w.get("active", True)]
+    tots = {c: [_with_weight(study.wall_totals(r), walls, case) if r.ok else None for r, case in runs]
+            for c, runs in per.items()}
     keys = [(w["name"], "normal") for w in walls] + \
-           [(w["name"], "shear") for w in walls if w["group"].startswith("side")]
+           [(w["name"], "shear") for w in walls if w["group"].startswith("side")] + [("all walls", "weight")]
     n_tests = len(keys) * (len(codes) - 1)
     alpha = stats.FAMILY_ALPHA / max(n_tests, 1)
     metrics, summary = [], {}
@@ -190,6 +210,46 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
             t = stats.compare_means(summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], alpha)
             metrics.append(_stat_metric(name, plan.name, t, summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], c))
     return metrics, {"case": plan.name, "members": plan.members, "summary": summary}
+
+
+def _with_weight(tot: dict, walls: list, case: Case) -> dict:
+    """Adds the force the discs exert on all walls together along gravity: at rest, their weight
+    (the least noisy static quantity of an ensemble: it sees density and gravity directly)."""
+    from .common import inward_normal, tangent
+    g = np.array(case.resolved["gravity"], float)
+    gn = np.linalg.norm(g)
+    down = g / gn if gn > 0 else np.array([0.0, -1.0])
+    w_sum = 0.0
+    for w in walls:
+        if w["name"] in tot:
+            f = -tot[w["name"]]["normal"] * inward_normal(w, case.centre) + tot[w["name"]]["shear"] * tangent(w)
+            w_sum += float(f @ down)
+    return dict(tot, **{"all walls": {"weight": w_sum}})
+
+
+TOL_WEIGHT = 1e-6   # walls' load along gravity against the discs' weight at rest, relative
+
+
+def weight_metrics(name: str, results: dict, case: Case, resolved: dict) -> list:
+    """Each code at rest: the force on all walls along gravity against the discs' weight, sum of
+    rho pi r^2 |g| (the scene's, unmutated: a code with a wrong density or gravity fails here)."""
+    rho = {m["name"]: m["density"] for m in resolved["materials"]}
+    names = [m["name"] for m in resolved["materials"]]
+    d = np.array(resolved["discs"], float)
+    weight = float(sum(rho[names[int(m)]] * math.pi * r * r for r, m in zip(d[:, 2], d[:, 3]))
+                   * np.linalg.norm(resolved["gravity"]))
+    walls = [w for w in resolved["walls"] if w.get("active", True)]
+    out = []
+    for c, r in results.items():
+        mname = f"weight carried by the walls at rest ({c} vs rho pi r^2 g)"
+        if not r.ok:
+            out.append(_metric(mname, name, {}, TOL_WEIGHT, False, f"run failed: {r.reason}"))
+            continue
+        got = _with_weight(study.wall_totals(r), walls, case)["all walls"]["weight"]
+        rel = abs(got - weight) / weight if weight else float("nan")
+        out.append(_metric(mname, name, {"walls": got, "weight": weight, "rel_diff": rel}, TOL_WEIGHT,
+                           rel <= TOL_WEIGHT, "" if rel <= TOL_WEIGHT else "not at rest, or a wrong density or gravity"))
+    return out
 
 
 def _stat_metric(name, scene, t, a, b, code) -> dict:
@@ -233,9 +293,13 @@ def run_plan(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
 
 def plans_of(entries: list[Entry], codes) -> list[Plan]:
     """Every entry's plan, every refusal found before any run (PlanError lists them all)."""
-    plans, refused = [], []
+    plans, refused, names = [], [], set()
     for e in entries:
         p = make_plan(e)
+        base, k = p.name, 2
+        while p.name in names:             # the same scene twice: its own folder and metrics
+            p.name, k = f"{base}_{k}", k + 1
+        names.add(p.name)
         plans.append(p)
         refused += refusals(p, codes)
     if refused:

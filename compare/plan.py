@@ -186,7 +186,7 @@ def make_plan(entry: Entry) -> Plan:
     members = 1
     if kind in ("discharge", "janssen") or (kind == "static" and o.start == "scene"):
         members = o.resolved_members()
-    name = entry.scene.stem
+    name = entry.scene.stem + ("_members" if kind == "static" and o.start == "scene" else "")
     return Plan(entry, name, kind, r, shared, dt, duration, settle, members)
 
 

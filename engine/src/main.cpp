@@ -1,5 +1,6 @@
 // dem: command-line front end. Exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could
 // not go on (a file it could not write or read).
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -7,6 +8,8 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "checkpoint.hpp"
 #include "control.hpp"
@@ -34,6 +37,7 @@ const char* kMainHelp =
     "  dem ensemble SCENE.toml --out DIR [...]  run perturbed copies of a discharge (dem ensemble --help)\n"
     "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
     "  dem resolve SCENE.toml [--out FILE.json] the validated scene with every value resolved (JSON)\n"
+    "  dem compare SCENE.toml|LIST --out DIR     the scene in this engine, LIGGGHTS and YADE: agreement report (dem compare --help)\n"
     "\n"
     "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
     "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
@@ -486,6 +490,24 @@ int cmd_resolve(int argc, char** argv) {
   return 0;
 }
 
+// dem compare: the comparison layer (compare/, Python) with this binary as the native engine.
+// The process becomes `python3 -m compare scene ARGS` (its help: dem compare --help).
+int cmd_compare(int argc, char** argv) {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
+  const char* old = std::getenv("PYTHONPATH");
+  const std::string path = std::string(DEM_SOURCE_DIR) + (old && *old ? std::string(":") + old : "");
+  setenv("PYTHONPATH", path.c_str(), 1);
+  std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m"),
+                             const_cast<char*>("compare"), const_cast<char*>("scene")};
+  for (int k = 0; k < argc; ++k) args.push_back(argv[k]);
+  args.push_back(nullptr);
+  execv(DEM_PYTHON_EXE, args.data());
+  std::fprintf(stderr, "dem compare: cannot start %s: %s\n", DEM_PYTHON_EXE, std::strerror(errno));
+  return 4;
+}
+
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
@@ -499,6 +521,7 @@ int main(int argc, char** argv) {
     if (cmd == "params") return cmd_params(argc - 2, argv + 2);
     if (cmd == "resolve") return cmd_resolve(argc - 2, argv + 2);
     if (cmd == "ensemble") return cmd_ensemble(argc - 2, argv + 2);
+    if (cmd == "compare") return cmd_compare(argc - 2, argv + 2);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "dem: the run could not go on: %s\n", e.what());
     return 4;
