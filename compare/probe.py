@@ -1,0 +1,412 @@
+"""Each code's effective constants, read back from the code itself, against the resolved scene.
+
+For one comparison case, ``probe(code, case, out_dir, timeout)`` runs the code on a probe
+configuration built from the case through the backend's own translation (LIGGGHTS:
+``liggghts_backend.write_inputs``, the script it writes with its ``property/global`` matrices,
+``pair_style``, ``wall/gran``, ``timestep`` and ``gravity`` lines; YADE: ``yade_backend.case_data``
+and the YADE script's own ``setup``; native: ``native_backend.write_inputs`` and ``dem resolve`` of
+the scene it writes), and reads back, for every material pair that can touch (disc-disc and
+disc-wall per wall material) k_n, k_s, eta_n, eta_s, mu, each disc radius' mass and moment of
+inertia, gravity and dt. ``expected_constants(resolved, discs, dt)`` gives the same quantities
+from the resolved scene; ``compare_constants`` lists each quantity's relative difference.
+
+The probe configuration (``layout``) replaces the case's discs, keeping radius, material, walls
+and points: pairs of discs far above the container with a known overlap and relative velocity,
+discs touching a wall of each wall material, one free disc. How each code is read:
+
+- YADE (``yade -n -j1 -x``): the case's translated setup runs one step; the constants are the
+  ones YADE stored: ``phys.kn, ks, cn, cs, tangensOfFrictionAngle`` of a disc-disc interaction and
+  of a disc-facet interaction per wall material (after the series combination of the materials),
+  ``state.mass`` and ``state.inertia``, ``O.dt``, the ``NewtonIntegrator``'s gravity.
+- LIGGGHTS: the translated script runs ``run 1`` with per-atom dumps (``%.17g``) at steps 0 and 1,
+  and the constants are solved from the forces (``normal_model_hooke_stiffness``,
+  ``tangential_model_history``): at step 0 the shear history is zero and not updated, so a pair
+  at rest in the normal direction gives F_n = k_n delta and F_t = -eta_t v_t, a pair closing at
+  v_n gives eta_n = (k_n delta - F_n) / v_n; at step 1 (velocity Verlet: the shear displacement
+  is v_t(t + dt/2) dt, positions at t + dt) the sticking pair gives k_t from
+  F_t = -(k_t dt + eta_t) v_t(t + dt/2), and a sliding pair gives mu = |F_t| / F_n. The half-step
+  velocities are rebuilt from the dumped step-0 forces and the stored masses; the rotational
+  part of v_t uses the contact radius r - delta/2 (LIGGGHTS's surface model). Mass from the
+  spin pair's one-step velocity change under the dumped forces, m = dt (F_0 + F_1) / (2 dv);
+  inertia from its spin change, I = dt (T_0 + T_1) / (2 d omega); gravity from the free disc's
+  velocity change over one step; dt from ``thermo`` time at step 1.
+- native: the scene the native backend writes is resolved again by ``dem resolve`` (pairs,
+  density, gravity, dt); the engine is the reference, so its masses are rho pi r^2 and its
+  inertias m r^2 / 2 by definition (the engine prints neither).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import re
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import liggghts_backend, native_backend, yade_backend
+from .common import Case, CaseError, disc_material, inward_normal, pair, resolve, write_text_atomic
+
+CODES = ("native", "liggghts", "yade")
+FIELDS = ("kn", "ks", "eta_n", "eta_s", "mu")
+MAX_RADII = 16          # distinct radii probed for mass and inertia (evenly spaced, min and max kept)
+OVERLAP = 2e-3          # probe overlap / radius
+
+
+# ---------------------------------------------------------------------------------------------
+# What the resolved scene says
+def _radius_key(material: str, r: float) -> str:
+    return f"{material}@r={float(r)!r}"
+
+
+def _radii(discs: np.ndarray) -> list[float]:
+    rs = sorted({float(r) for r in np.asarray(discs, float).reshape(-1, 6)[:, 2]})
+    if len(rs) > MAX_RADII:
+        idx = np.unique(np.round(np.linspace(0, len(rs) - 1, MAX_RADII)).astype(int))
+        rs = [rs[i] for i in idx]
+    return rs
+
+
+def _main_radius(discs: np.ndarray) -> float:
+    r = np.asarray(discs, float).reshape(-1, 6)[:, 2]
+    vals, counts = np.unique(r, return_counts=True)
+    return float(vals[np.argmax(counts)])
+
+
+def wall_materials(resolved: dict) -> list[str]:
+    """Materials of the active walls and the points: the disc-wall pairs that can touch."""
+    return sorted({w["material"] for w in resolved["walls"] if w.get("active", True)}
+                  | {p["material"] for p in resolved["points"]})
+
+
+def expected_constants(resolved: dict, discs, dt: float) -> dict:
+    """The constants every code must have, from the resolved scene (``common.resolve``)."""
+    dm = disc_material(resolved)
+    rho = {m["name"]: m["density"] for m in resolved["materials"]}[dm]
+    pairs = {f"{dm}|{dm}": {k: float(pair(resolved, dm, dm)[k]) for k in FIELDS}}
+    for wm in wall_materials(resolved):
+        pairs[f"{dm}|{wm}"] = {k: float(pair(resolved, dm, wm)[k]) for k in FIELDS}
+    mass, inertia = {}, {}
+    for r in _radii(discs):
+        m = rho * math.pi * r * r
+        mass[_radius_key(dm, r)] = m
+        inertia[_radius_key(dm, r)] = 0.5 * m * r * r
+    return {"pairs": pairs, "mass": mass, "inertia": inertia,
+            "gravity": [float(g) for g in resolved["gravity"]], "dt": float(dt)}
+
+
+def _flatten(c: dict) -> dict:
+    out = {}
+    for p, vals in c.get("pairs", {}).items():
+        for k, v in vals.items():
+            out[f"pairs[{p}].{k}"] = v
+    for what in ("mass", "inertia"):
+        for k, v in c.get(what, {}).items():
+            out[f"{what}[{k}]"] = v
+    g = c.get("gravity")
+    if g is not None:
+        out["gravity[x]"], out["gravity[y]"] = g[0], g[1]
+    if "dt" in c:
+        out["dt"] = c["dt"]
+    return out
+
+
+def compare_constants(expected: dict, probed: dict, rel: float = 1e-9) -> list[dict]:
+    """One row per expected quantity: {quantity, expected, probed, rel_diff, pass}. rel_diff is
+    |probed - expected| / |expected|; for an expected 0 the scale is the vector's magnitude
+    (gravity) or 1 (an absolute difference). A quantity the probe did not read fails."""
+    e, p = _flatten(expected), _flatten(probed.get("constants", probed))
+    g = expected.get("gravity") or [0.0, 0.0]
+    gscale = math.hypot(*g)
+    rows = []
+    for q, ev in e.items():
+        pv = p.get(q)
+        if pv is None or not isinstance(pv, (int, float)) or not math.isfinite(pv):
+            rows.append({"quantity": q, "expected": ev, "probed": pv, "rel_diff": math.inf, "pass": False})
+            continue
+        scale = abs(ev) or (gscale if q.startswith("gravity") and gscale else 1.0)
+        d = abs(pv - ev) / scale
+        rows.append({"quantity": q, "expected": ev, "probed": pv, "rel_diff": d, "pass": bool(d <= rel)})
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------
+# The probe configuration
+@dataclasses.dataclass
+class Layout:
+    """Probe discs (rows x, y, r, vx, vy, omega) and what each one is for.
+
+    pairs: role -> (i, j) disc rows (disc-disc): "rest" (no normal velocity, sticking tangential
+    velocity), "closing" (normal velocity), "sliding" (tangential velocity beyond the Coulomb cap
+    after one step), and "spin:<r>" per other radius (like "rest", for mass and inertia);
+    walls: wall material -> {role: (row, wall name)}; free: the free disc's row."""
+    discs: np.ndarray
+    pairs: dict
+    walls: dict
+    free: int
+    radius: float
+    delta: float
+
+
+def _seg_dist(p, a, b) -> float:
+    a, b, p = np.asarray(a, float), np.asarray(b, float), np.asarray(p, float)
+    t = b - a
+    u = float(np.clip(np.dot(p - a, t) / np.dot(t, t), 0.0, 1.0))
+    return float(np.linalg.norm(p - (a + u * t)))
+
+
+def _speeds(c: dict, delta: float, dt: float) -> tuple[float, float, float]:
+    """(closing, sticking, sliding) speeds for one pair's constants: the closing dashpot force about
+    the spring force; the sticking shear spring after one step 1/5 of the Coulomb cap; the sliding
+    one 5 x the cap (design magnitudes only: the probe reads the constants, whatever they are)."""
+    kn, ks, en, mu = float(c["kn"]), float(c["ks"]), float(c["eta_n"]), float(c["mu"])
+    v_close = kn * delta / en if en > 0 else 1.0
+    cap = mu * kn * delta
+    v_stick = 0.2 * cap / (ks * dt) if ks > 0 and cap > 0 else 1.0
+    v_slide = 5.0 * cap / (ks * dt) if ks > 0 and cap > 0 else 1.0
+    return min(v_close, 1e3 * delta / dt), v_stick, v_slide
+
+
+def layout(case: Case) -> Layout:
+    """Probe discs for ``case``: disc-disc pairs and the free disc above everything, three discs
+    on a wall of each wall material (at a quarter of a LIGGGHTS strip, away from other walls,
+    points and wall ends), on the side of the case's discs."""
+    r = case.resolved
+    dm = disc_material(r)
+    r0 = _main_radius(case.discs)
+    delta = OVERLAP * r0
+    dt = float(case.dt)
+    walls = [w for w in r["walls"] if w.get("active", True)]
+    ys = [float(v) for w in walls for v in (w["from"][1], w["to"][1])] + [float(p["at"][1]) for p in r["points"]]
+    xs = [float(v) for w in walls for v in (w["from"][0], w["to"][0])] + [float(p["at"][0]) for p in r["points"]]
+    d0 = np.asarray(case.discs, float).reshape(-1, 6)
+    rmax = float(d0[:, 2].max())
+    ys += list(d0[:, 1])
+    xs += list(d0[:, 0])
+    y_row = max(ys) + 20 * rmax
+    x = min(xs)
+    rows, pairs = [], {}
+
+    def add(row):
+        rows.append([float(v) for v in row])
+        return len(rows) - 1
+
+    def disc_pair(rad, vn, vt):
+        nonlocal x
+        gap = 2 * rad - OVERLAP * rad
+        i = add([x, y_row, rad, 0.5 * vn, 0.5 * vt, 0.0])
+        j = add([x + gap, y_row, rad, -0.5 * vn, -0.5 * vt, 0.0])
+        x += gap + 8 * rmax
+        return i, j
+
+    dd = pair(r, dm, dm)
+    vc, vs, vl = _speeds(dd, delta, dt)
+    pairs["rest"] = disc_pair(r0, 0.0, vs)
+    pairs["closing"] = disc_pair(r0, vc, 0.0)
+    pairs["sliding"] = disc_pair(r0, 0.0, vl)
+    for rad in _radii(case.discs):
+        if rad != r0:
+            pairs[f"spin:{rad!r}"] = disc_pair(rad, 0.0, _speeds(dd, OVERLAP * rad, dt)[1])
+    free = add([x, y_row, r0, 0.0, 0.0, 0.0])
+
+    on_walls = {}
+    taken = [np.array(row[:2]) for row in rows]
+    centre = case.centre
+    for wm in wall_materials(r):
+        cands = sorted((w for w in walls if w["material"] == wm),
+                       key=lambda w: -float(np.linalg.norm(np.subtract(w["to"], w["from"]))))
+        vc, vs, vl = _speeds(pair(r, dm, wm), delta, dt)
+        roles = {}
+        for w in cands:
+            a, t, s = liggghts_backend._strips(w, case.profile_bin)
+            n = inward_normal(w, centre)
+            length = float(s[-1])
+            for k in range(len(s) - 1):
+                if len(roles) == 3:
+                    break
+                q = float(s[k] + 0.25 * (s[k + 1] - s[k]))
+                c = a + q * t + n * (r0 - delta)
+                if q < 2 * r0 or length - q < 2 * r0:
+                    continue
+                if any(_seg_dist(c, o["from"], o["to"]) < 2 * r0 for o in walls if o is not w):
+                    continue
+                if any(np.linalg.norm(c - np.asarray(p["at"], float)) < 2 * r0 for p in r["points"]):
+                    continue
+                if any(np.linalg.norm(c - o) < 4 * rmax for o in taken):
+                    continue
+                role = ("rest", "closing", "sliding")[len(roles)]
+                v = {"rest": t * vs, "closing": -n * vc, "sliding": t * vl}[role]
+                roles[role] = (add([c[0], c[1], r0, v[0], v[1], 0.0]), w["name"])
+                taken.append(c)
+            if len(roles) == 3:
+                break
+        if len(roles) < 3:
+            raise CaseError(f"probe: no room for three probe discs on the walls of material {wm!r} "
+                            f"(radius {r0!r}, away from other walls, points and wall ends)")
+        on_walls[wm] = roles
+    return Layout(discs=np.array(rows, float), pairs=pairs, walls=on_walls, free=free, radius=r0, delta=delta)
+
+
+def _probe_case(case: Case, lay: Layout) -> Case:
+    return dataclasses.replace(case, name=case.name + "_probe", discs=lay.discs, mode="static", settle=0.0,
+                               duration=case.dt, series_interval=case.dt, snapshot_interval=0.0)
+
+
+def _result(code: str, constants: dict, method: dict, status: str = "ok", reason: str = "", **extra) -> dict:
+    return dict({"code": code, "constants": constants, "method": method, "status": status, "reason": reason},
+                **extra)
+
+
+def _run(cmd: list[str], cwd: Path, timeout: float, log: Path) -> tuple[int | None, str]:
+    with open(log, "w") as f:
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                             start_new_session=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+        try:
+            rc = p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+            return None, f"timed out after {timeout:.0f} s"
+    return rc, log.read_text(errors="replace")
+
+
+# ---------------------------------------------------------------------------------------------
+# native
+def probe_native(case: Case, out_dir: Path, timeout: float = 60) -> dict:
+    out_dir = Path(out_dir)
+    scene = native_backend.write_inputs(case, out_dir)
+    r = resolve(scene)
+    dm = disc_material(r)
+    rho = {m["name"]: m["density"] for m in r["materials"]}[dm]
+    pairs = {f"{dm}|{dm}": {k: float(pair(r, dm, dm)[k]) for k in FIELDS}}
+    for wm in wall_materials(r):
+        pairs[f"{dm}|{wm}"] = {k: float(pair(r, dm, wm)[k]) for k in FIELDS}
+    mass, inertia = {}, {}
+    for rad in _radii(case.discs):
+        m = rho * math.pi * rad * rad
+        mass[_radius_key(dm, rad)] = m
+        inertia[_radius_key(dm, rad)] = 0.5 * m * rad * rad
+    how = "dem resolve of the scene native_backend writes"
+    return _result("native", {"pairs": pairs, "mass": mass, "inertia": inertia,
+                              "gravity": [float(g) for g in r["gravity"]], "dt": float(r["integrator"]["dt"])},
+                   {"pairs": how, "gravity": how, "dt": how + " (integrator.dt)",
+                    "mass": "rho pi r^2 from the resolved density (the engine's definition; not printed)",
+                    "inertia": "m r^2 / 2 (the engine's definition; not printed)"})
+
+
+# ---------------------------------------------------------------------------------------------
+# YADE
+YADE_PROBE_SCRIPT = "yade_probe.py"
+YADE_PROBE_OUT = "yade_probe.json"
+YADE_ROLES = "probe_roles.json"
+
+_YADE_PROBE = '''# Probe of the effective constants: the translated case's own setup (yade_script.py), one step,
+# then what YADE stored. Run as `yade -n -j1 -x yade_probe.py` next to yade_case.json.
+import json
+_src = open("yade_script.py").read()
+globals()["__name__"] = "yade_case_script"
+exec(compile(_src, "yade_script.py", "exec"), globals())
+globals()["__name__"] = "__main__"
+setup()
+for _e in O.engines:
+    if isinstance(_e, PyRunner):
+        _e.dead = True
+O.run(1, True)
+_roles = json.load(open("probe_roles.json"))
+_ids = S["disc_ids"]
+_walls = {w["name"]: w["id"] for w in S["walls"]}
+
+
+def _phys(a, b):
+    if not O.interactions.has(a, b):
+        return None
+    i = O.interactions[a, b]
+    if not i.isReal:
+        return None
+    p = i.phys
+    return {"kn": p.kn, "ks": p.ks, "cn": p.cn, "cs": p.cs, "tan_phi": p.tangensOfFrictionAngle,
+            "penetration": i.geom.penetrationDepth}
+
+
+_out = {"dt": O.dt, "gravity": [O.engines[-1].gravity[0], O.engines[-1].gravity[1], O.engines[-1].gravity[2]],
+        "integrator": type(O.engines[-1]).__name__, "iter": O.iter, "pairs": {}, "bodies": {}}
+for _key, (_i, _j) in _roles["disc_pairs"].items():
+    _out["pairs"][_key] = _phys(_ids[_i], _ids[_j])
+for _key, (_i, _w) in _roles["wall_pairs"].items():
+    _out["pairs"][_key] = _phys(_walls[_w], _ids[_i])
+for _key, _i in _roles["bodies"].items():
+    _s = O.bodies[_ids[_i]].state
+    _out["bodies"][_key] = {"mass": _s.mass, "inertia": [_s.inertia[0], _s.inertia[1], _s.inertia[2]]}
+with open("yade_probe.json", "w") as _f:
+    json.dump(_out, _f, indent=1)
+'''
+
+
+def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    lay = layout(case)
+    pc = _probe_case(case, lay)
+    data = yade_backend.case_data(pc)
+    yade_backend._write(data, out_dir, 1)
+    r = case.resolved
+    dm = disc_material(r)
+    roles = {"disc_pairs": {f"{dm}|{dm}": lay.pairs["rest"]},
+             "wall_pairs": {f"{dm}|{wm}": roles["rest"] for wm, roles in lay.walls.items()},
+             "bodies": {}}
+    radius_row = {lay.radius: lay.pairs["rest"][0]}
+    for key, (i, _j) in lay.pairs.items():
+        if key.startswith("spin:"):
+            radius_row[float(lay.discs[i, 2])] = i
+    for rad in _radii(case.discs):
+        roles["bodies"][_radius_key(dm, rad)] = radius_row[rad]
+    write_text_atomic(out_dir / YADE_ROLES, json.dumps(roles) + "\n")
+    write_text_atomic(out_dir / YADE_PROBE_SCRIPT, _YADE_PROBE)
+    (out_dir / YADE_PROBE_OUT).unlink(missing_ok=True)
+    rc, log = _run(["yade", "-n", "-j1", "-x", YADE_PROBE_SCRIPT], out_dir, timeout, out_dir / "yade_probe.log")
+    if rc != 0 or not (out_dir / YADE_PROBE_OUT).exists():
+        tail = " | ".join(log.strip().splitlines()[-5:])
+        return _result("yade", {}, {}, "failed", f"yade probe failed (exit {rc}): {tail}")
+    got = json.loads((out_dir / YADE_PROBE_OUT).read_text())
+    pairs, missing = {}, []
+    for key, p in got["pairs"].items():
+        if p is None:
+            missing.append(key)
+            continue
+        pairs[key] = {"kn": p["kn"], "ks": p["ks"], "eta_n": p["cn"], "eta_s": p["cs"], "mu": p["tan_phi"]}
+    mass = {k: b["mass"] for k, b in got["bodies"].items()}
+    inertia = {k: b["inertia"][2] for k, b in got["bodies"].items()}
+    consts = {"pairs": pairs, "mass": mass, "inertia": inertia, "gravity": got["gravity"][:2], "dt": got["dt"]}
+    how = "ViscElPhys of a real {} interaction after one step (kn, ks, cn, cs, tangensOfFrictionAngle)"
+    method = {"pairs": {k: how.format("disc-disc" if k == f"{dm}|{dm}" else "disc-facet") for k in roles["disc_pairs"]
+                        | roles["wall_pairs"]},
+              "mass": "body.state.mass", "inertia": "body.state.inertia[2] (z: the disc's spin axis)",
+              "gravity": f"{got['integrator']}.gravity", "dt": "O.dt"}
+    if missing:
+        return _result("yade", consts, method, "failed", f"no interaction formed for {missing}")
+    return _result("yade", consts, method)
+
+
+# ---------------------------------------------------------------------------------------------
+def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
+    """The effective constants of ``code`` for ``case`` (see the module doc); never raises for a
+    failed probe: status "failed" and the reason."""
+    out_dir = Path(out_dir)
+    t0 = time.perf_counter()
+    try:
+        if code == "native":
+            res = probe_native(case, out_dir, timeout)
+        elif code == "yade":
+            res = probe_yade(case, out_dir, timeout)
+        elif code == "liggghts":
+            res = probe_liggghts(case, out_dir, timeout)
+        else:
+            raise ValueError(f"code: {code!r} is not one of {CODES}")
+    except (CaseError, OSError, ValueError, KeyError, json.JSONDecodeError) as e:
+        res = _result(code, {}, {}, "failed", f"{type(e).__name__}: {e}")
+    res["wall_time_s"] = time.perf_counter() - t0
+    return res
