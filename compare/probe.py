@@ -392,6 +392,183 @@ def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
 
 
 # ---------------------------------------------------------------------------------------------
+# LIGGGHTS
+LIGGGHTS_DUMP = "probe_*.dump"
+_DUMP_COLS = ("id", "mass", "radius", "x", "y", "vx", "vy", "omegaz", "fx", "fy", "tqz")
+
+
+def liggghts_script(base: str) -> str:
+    """The backend's script for the probe case with its dumps and run replaced by per-atom dumps
+    at full precision, thermo every step and ``run 1``; every other line is the backend's."""
+    keep = [l for l in base.splitlines() if not re.match(r"\s*(dump|dump_modify|run|thermo)\s", l)]
+    keep += ["thermo_style custom step time atoms",
+             "thermo_modify format float %.17g lost error norm no",
+             "thermo 1",
+             f"dump probe all custom 1 {LIGGGHTS_DUMP} {' '.join(_DUMP_COLS)}",
+             'dump_modify probe format "%d' + " %.17g" * (len(_DUMP_COLS) - 1) + '" sort id',
+             "run 1"]
+    return "\n".join(keep) + "\n"
+
+
+def _read_probe_dump(path: Path) -> dict:
+    lines = path.read_text().splitlines()
+    k = next(i for i, l in enumerate(lines) if l.startswith("ITEM: ATOMS"))
+    cols = lines[k].split()[2:]
+    out = {}
+    for l in lines[k + 1:]:
+        if l.strip():
+            v = dict(zip(cols, (float(x) for x in l.split())))
+            out[int(v["id"]) - 1] = v
+    return out
+
+
+def _zcross(e: np.ndarray) -> np.ndarray:
+    """z x e for an in-plane vector e."""
+    return np.array([-e[1], e[0]])
+
+
+def _kinematics(xi, vi, wi, ri, other) -> dict:
+    """Contact normal (towards disc i), overlap, normal and tangential relative velocity at the
+    contact (rotation with the contact radius r - delta/2) of disc i against ``other``: a disc
+    (x, v, omega, r) or a wall ("wall", a point of it, unit normal towards the disc side)."""
+    xi, vi = np.asarray(xi, float), np.asarray(vi, float)
+    if isinstance(other[0], str):
+        a, n = np.asarray(other[1], float), np.asarray(other[2], float)
+        dist = float(np.dot(xi - a, n))
+        en, delta, vr = n, ri - dist, vi
+        spin = (ri - 0.5 * delta) * wi
+    else:
+        xj, vj, wj, rj = other
+        d = xi - np.asarray(xj, float)
+        dist = float(np.hypot(d[0], d[1]))
+        en, delta, vr = d / dist, ri + rj - dist, vi - np.asarray(vj, float)
+        spin = (ri - 0.5 * delta) * wi + (rj - 0.5 * delta) * wj
+    vn = float(np.dot(vr, en))
+    vtr = vr - vn * en - spin * _zcross(en)
+    return {"en": en, "delta": delta, "vn": vn, "vtr": vtr}
+
+
+def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
+    out_dir = Path(out_dir)
+    lay = layout(case)
+    pc = _probe_case(case, lay)
+    script = liggghts_backend.write_inputs(pc, out_dir)
+    probe_in = out_dir / "in.probe"
+    write_text_atomic(probe_in, liggghts_script(script.read_text()))
+    for old in out_dir.glob(LIGGGHTS_DUMP):
+        old.unlink()
+    rc, log = _run(liggghts_backend.command(probe_in), out_dir, timeout, out_dir / "liggghts_probe.log")
+    if rc != 0 or "ERROR" in log:
+        err = next((l for l in log.splitlines() if "ERROR" in l), f"exit code {rc}")
+        return _result("liggghts", {}, {}, "failed", f"liggghts probe failed: {err.strip()}")
+    dumps = {int(re.findall(r"(\d+)", p.name)[-1]): p for p in out_dir.glob(LIGGGHTS_DUMP)}
+    if set(dumps) != {0, 1}:
+        return _result("liggghts", {}, {}, "failed", f"probe dumps at steps {sorted(dumps)}, expected 0 and 1")
+    s0, s1 = _read_probe_dump(dumps[0]), _read_probe_dump(dumps[1])
+    times = [float(m.group(1)) for m in re.finditer(r"^\s*1\s+(\S+)\s+\d+\s*$", log, re.M)]
+    if not times:
+        return _result("liggghts", {}, {}, "failed", "no thermo line at step 1 in the probe log")
+    dt = times[-1]
+    dtf = 0.5 * dt
+    r = case.resolved
+    dm = disc_material(r)
+
+    def vec(s, k, a, b):
+        return np.array([s[k][a], s[k][b]])
+
+    fr = lay.free
+    gforce = vec(s0, fr, "fx", "fy") / s0[fr]["mass"]       # gravity force per mass, as applied
+    gravity = (vec(s1, fr, "vx", "vy") - vec(s0, fr, "vx", "vy")) / dt
+
+    def contact_force(s, k):
+        return vec(s, k, "fx", "fy") - s[k]["mass"] * gforce
+
+    def state(s, k):
+        return vec(s, k, "x", "y"), vec(s, k, "vx", "vy"), s[k]["omegaz"], s[k]["radius"]
+
+    def partner(i):
+        for a, b in lay.pairs.values():
+            if i == a:
+                return b
+        raise KeyError(i)
+
+    # mass and inertia of each radius: the spin pair's first disc (normal force along the pair)
+    mass, inertia = {}, {}
+    spin_rows = {lay.radius: lay.pairs["rest"][0]}
+    for key, (i, _j) in lay.pairs.items():
+        if key.startswith("spin:"):
+            spin_rows[float(lay.discs[i, 2])] = i
+    inertia_of = {}
+    for rad, i in spin_rows.items():
+        e = vec(s0, partner(i), "x", "y") - vec(s0, i, "x", "y")
+        e /= np.linalg.norm(e)
+        df = float(np.dot(vec(s0, i, "fx", "fy") + vec(s1, i, "fx", "fy"), e))
+        dv = float(np.dot(vec(s1, i, "vx", "vy") - vec(s0, i, "vx", "vy"), e))
+        key = _radius_key(dm, rad)
+        mass[key] = dtf * df / dv
+        inertia_of[i] = dtf * (s0[i]["tqz"] + s1[i]["tqz"]) / (s1[i]["omegaz"] - s0[i]["omegaz"])
+        inertia[key] = inertia_of[i]
+    i_main = inertia_of[lay.pairs["rest"][0]]
+
+    def half_step(k):
+        """x(t + dt) as dumped; v and omega at t + dt/2 from the step-0 forces (velocity Verlet)."""
+        x1, _v, _w, rad = state(s1, k)
+        m = s0[k]["mass"]
+        v = vec(s0, k, "vx", "vy") + (dtf / m) * vec(s0, k, "fx", "fy")
+        w = s0[k]["omegaz"] + dtf * s0[k]["tqz"] / i_main     # every contact probe disc has radius lay.radius
+        return x1, v, w, rad
+
+    def solve(role_rows, other_of):
+        """role_rows: role -> disc row; other_of(row, step) -> the other body for _kinematics."""
+        k0 = {role: _kinematics(*state(s0, i)[:4], other_of(i, 0)) for role, i in role_rows.items()}
+        fn = {role: float(np.dot(contact_force(s0, i), k0[role]["en"])) for role, i in role_rows.items()}
+        # F_n = k_n delta - eta_n v_n (rest and closing discs)
+        A = np.array([[k0[q]["delta"], -k0[q]["vn"]] for q in ("rest", "closing")])
+        kn, eta_n = np.linalg.solve(A, np.array([fn["rest"], fn["closing"]]))
+        i = role_rows["rest"]
+        ft0 = contact_force(s0, i) - fn["rest"] * k0["rest"]["en"]
+        vt0 = k0["rest"]["vtr"]
+        eta_t = -float(np.dot(ft0, vt0)) / float(np.dot(vt0, vt0))
+        x1, vh, wh, rad = half_step(i)
+        k1 = _kinematics(x1, vh, wh, rad, other_of(i, 1))
+        shear = k1["vtr"] * dt
+        shear = shear - float(np.dot(shear, k1["en"])) * k1["en"]
+        fc1 = contact_force(s1, i)
+        ft1 = fc1 - float(np.dot(fc1, k1["en"])) * k1["en"]
+        kt = -float(np.dot(ft1 + eta_t * k1["vtr"], shear)) / float(np.dot(shear, shear))
+        j = role_rows["sliding"]
+        x1, _v, _w, rad = state(s1, j)
+        ks_ = _kinematics(x1, np.zeros(2), 0.0, rad, other_of(j, 1))
+        fc = contact_force(s1, j)
+        fnl = float(np.dot(fc, ks_["en"]))
+        mu = float(np.linalg.norm(fc - fnl * ks_["en"])) / fnl
+        return {"kn": float(kn), "ks": kt, "eta_n": float(eta_n), "eta_s": eta_t, "mu": mu}
+
+    pairs = {f"{dm}|{dm}": solve({q: lay.pairs[q][0] for q in ("rest", "closing", "sliding")},
+                                 lambda i, st: half_step(partner(i)) if st else state(s0, partner(i)))}
+    walls = {w["name"]: w for w in r["walls"]}
+    for wm, roles in lay.walls.items():
+        def wall_of(i, _st, roles=roles):
+            name = next(n for q, (row, n) in roles.items() if row == i)
+            return ("wall", walls[name]["from"], inward_normal(walls[name], case.centre))
+        pairs[f"{dm}|{wm}"] = solve({q: row for q, (row, _n) in roles.items()}, wall_of)
+    consts = {"pairs": pairs, "mass": mass, "inertia": inertia, "gravity": [float(g) for g in gravity], "dt": dt}
+    method = {
+        "kn, eta_n": "step 0 (no shear history): F_n = k_n delta - eta_n v_n of a pair at rest and a closing pair",
+        "eta_s": "step 0: F_t = -eta_t v_t (zero shear history) of the pair at rest",
+        "ks": "step 1: F_t = -(k_t dt + eta_t) v_t(t + dt/2), sticking pair, half-step velocities rebuilt "
+              "from the step-0 forces",
+        "mu": "step 1: |F_t| / F_n of a pair sliding beyond the Coulomb cap",
+        "mass": "m = dt (F_0 + F_1) / (2 dv) along the pair normal of a spin pair disc",
+        "inertia": "I = dt (T_0 + T_1) / (2 d omega) of a spin pair disc",
+        "gravity": "(v_1 - v_0) / dt of the free disc",
+        "dt": "thermo time at step 1 (%.17g)",
+        "contact forces": "per-atom f minus m g (g as applied to the free disc), dumped with %.17g",
+    }
+    return _result("liggghts", consts, method)
+
+
+# ---------------------------------------------------------------------------------------------
 def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
     """The effective constants of ``code`` for ``case`` (see the module doc); never raises for a
     failed probe: status "failed" and the reason."""
