@@ -118,19 +118,22 @@ def _flatten(c: dict) -> dict:
 def compare_constants(expected: dict, probed: dict, rel: float = 1e-9) -> list[dict]:
     """One row per expected quantity: {quantity, expected, probed, rel_diff, pass}. rel_diff is
     |probed - expected| / |expected|; for an expected 0 the scale is the vector's magnitude
-    (gravity) or 1 (an absolute difference). A quantity the probe did not read fails."""
+    (gravity) or 1 (an absolute difference). A quantity the probe did not read fails. The probe's
+    second readings (``probed["checks"]``, same quantity names) add rows named "<quantity> (check)"."""
     e, p = _flatten(expected), _flatten(probed.get("constants", probed))
+    checks = probed.get("checks", {})
     g = expected.get("gravity") or [0.0, 0.0]
     gscale = math.hypot(*g)
     rows = []
-    for q, ev in e.items():
-        pv = p.get(q)
+    todo = [(q, q, ev) for q, ev in e.items()] + [(f"{q} (check)", q, e[q]) for q in checks if q in e]
+    for name, q, ev in todo:
+        pv = p.get(q) if name == q else checks[q]
         if pv is None or not isinstance(pv, (int, float)) or not math.isfinite(pv):
-            rows.append({"quantity": q, "expected": ev, "probed": pv, "rel_diff": math.inf, "pass": False})
+            rows.append({"quantity": name, "expected": ev, "probed": pv, "rel_diff": math.inf, "pass": False})
             continue
         scale = abs(ev) or (gscale if q.startswith("gravity") and gscale else 1.0)
         d = abs(pv - ev) / scale
-        rows.append({"quantity": q, "expected": ev, "probed": pv, "rel_diff": d, "pass": bool(d <= rel)})
+        rows.append({"quantity": name, "expected": ev, "probed": pv, "rel_diff": d, "pass": bool(d <= rel)})
     return rows
 
 
@@ -143,7 +146,8 @@ class Layout:
     pairs: role -> (i, j) disc rows (disc-disc): "rest" (no normal velocity, sticking tangential
     velocity), "closing" (normal velocity), "sliding" (tangential velocity beyond the Coulomb cap
     after one step), and "spin:<r>" per other radius (like "rest", for mass and inertia);
-    walls: wall material -> {role: (row, wall name)}; free: the free disc's row."""
+    walls: wall material -> {role: (row, wall name)}; free: the free disc's row. Tangential
+    slip comes from spin, closing from translation."""
     discs: np.ndarray
     pairs: dict
     walls: dict
@@ -196,10 +200,12 @@ def layout(case: Case) -> Layout:
         return len(rows) - 1
 
     def disc_pair(rad, vn, vt):
+        """Closing at vn; slipping at vt by spin (both discs turning alike: the contact normal
+        does not turn during the step, so no normal velocity appears)."""
         nonlocal x
         gap = 2 * rad - OVERLAP * rad
-        i = add([x, y_row, rad, 0.5 * vn, 0.5 * vt, 0.0])
-        j = add([x + gap, y_row, rad, -0.5 * vn, -0.5 * vt, 0.0])
+        i = add([x, y_row, rad, 0.5 * vn, 0.0, 0.5 * vt / rad])
+        j = add([x + gap, y_row, rad, -0.5 * vn, 0.0, 0.5 * vt / rad])
         x += gap + 8 * rmax
         return i, j
 
@@ -239,8 +245,9 @@ def layout(case: Case) -> Layout:
                 if any(np.linalg.norm(c - o) < 4 * rmax for o in taken):
                     continue
                 role = ("rest", "closing", "sliding")[len(roles)]
-                v = {"rest": t * vs, "closing": -n * vc, "sliding": t * vl}[role]
-                roles[role] = (add([c[0], c[1], r0, v[0], v[1], 0.0]), w["name"])
+                v = -n * vc if role == "closing" else np.zeros(2)
+                spin = {"rest": vs, "closing": 0.0, "sliding": vl}[role] / r0
+                roles[role] = (add([c[0], c[1], r0, v[0], v[1], spin]), w["name"])
                 taken.append(c)
             if len(roles) == 3:
                 break
@@ -329,7 +336,7 @@ def _phys(a, b):
         return None
     p = i.phys
     return {"kn": p.kn, "ks": p.ks, "cn": p.cn, "cs": p.cs, "tan_phi": p.tangensOfFrictionAngle,
-            "penetration": i.geom.penetrationDepth}
+            "penetration": i.geom.penetrationDepth, "fn": i.phys.normalForce.norm()}
 
 
 _out = {"dt": O.dt, "gravity": [O.engines[-1].gravity[0], O.engines[-1].gravity[1], O.engines[-1].gravity[2]],
@@ -388,7 +395,10 @@ def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
               "gravity": f"{got['integrator']}.gravity", "dt": "O.dt"}
     if missing:
         return _result("yade", consts, method, "failed", f"no interaction formed for {missing}")
-    return _result("yade", consts, method)
+    # The stored kn is the one the law used: |F_n| / overlap of the same contact (no normal velocity).
+    checks = {f"pairs[{k}].kn": p["fn"] / p["penetration"] for k, p in got["pairs"].items()}
+    method["checks"] = "kn again as |F_n| / overlap of the same contact (no normal velocity: spin only)"
+    return _result("yade", consts, method, checks=checks)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -553,6 +563,7 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
             return ("wall", walls[name]["from"], inward_normal(walls[name], case.centre))
         pairs[f"{dm}|{wm}"] = solve({q: row for q, (row, _n) in roles.items()}, wall_of)
     consts = {"pairs": pairs, "mass": mass, "inertia": inertia, "gravity": [float(g) for g in gravity], "dt": dt}
+    checks = {f"mass[{_radius_key(dm, rad)}]": s0[i]["mass"] for rad, i in spin_rows.items()}
     method = {
         "kn, eta_n": "step 0 (no shear history): F_n = k_n delta - eta_n v_n of a pair at rest and a closing pair",
         "eta_s": "step 0: F_t = -eta_t v_t (zero shear history) of the pair at rest",
@@ -564,8 +575,9 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
         "gravity": "(v_1 - v_0) / dt of the free disc",
         "dt": "thermo time at step 1 (%.17g)",
         "contact forces": "per-atom f minus m g (g as applied to the free disc), dumped with %.17g",
+        "checks": "mass again as the stored per-atom mass (dump custom mass)",
     }
-    return _result("liggghts", consts, method)
+    return _result("liggghts", consts, method, checks=checks)
 
 
 # ---------------------------------------------------------------------------------------------
