@@ -551,7 +551,11 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
         ks_ = _kinematics(x1, np.zeros(2), 0.0, rad, other_of(j, 1))
         fc = contact_force(s1, j)
         fnl = float(np.dot(fc, ks_["en"]))
+        if not fnl > 0:
+            raise ValueError(f"the sliding probe pair has normal force {fnl!r} after one step (no contact)")
         mu = float(np.linalg.norm(fc - fnl * ks_["en"])) / fnl
+        if mu < 1e-12:    # mu = 0 (to the rounding of f - m g) caps every shear force at 0: k_t never acts
+            kt = None
         return {"kn": float(kn), "ks": kt, "eta_n": float(eta_n), "eta_s": eta_t, "mu": mu}
 
     pairs = {f"{dm}|{dm}": solve({q: lay.pairs[q][0] for q in ("rest", "closing", "sliding")},
@@ -569,7 +573,8 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
         "eta_s": "step 0: F_t = -eta_t v_t (zero shear history) of the pair at rest",
         "ks": "step 1: F_t = -(k_t dt + eta_t) v_t(t + dt/2), sticking pair, half-step velocities rebuilt "
               "from the step-0 forces",
-        "mu": "step 1: |F_t| / F_n of a pair sliding beyond the Coulomb cap",
+        "mu": "step 1: |F_t| / F_n of a pair sliding beyond the Coulomb cap (mu = 0: k_t is not read, "
+              "the cap holds every shear force at 0)",
         "mass": "m = dt (F_0 + F_1) / (2 dv) along the pair normal of a spin pair disc",
         "inertia": "I = dt (T_0 + T_1) / (2 d omega) of a spin pair disc",
         "gravity": "(v_1 - v_0) / dt of the free disc",
@@ -595,7 +600,7 @@ def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
             res = probe_liggghts(case, out_dir, timeout)
         else:
             raise ValueError(f"code: {code!r} is not one of {CODES}")
-    except (CaseError, OSError, ValueError, KeyError, json.JSONDecodeError) as e:
+    except (CaseError, OSError, ValueError, KeyError, ArithmeticError, np.linalg.LinAlgError) as e:
         res = _result(code, {}, {}, "failed", f"{type(e).__name__}: {e}")
     res["wall_time_s"] = time.perf_counter() - t0
     return res
