@@ -172,7 +172,7 @@ def _speeds(c: dict, delta: float, dt: float) -> tuple[float, float, float]:
     cap = mu * kn * delta
     v_stick = 0.2 * cap / (ks * dt) if ks > 0 and cap > 0 else 1.0
     v_slide = 5.0 * cap / (ks * dt) if ks > 0 and cap > 0 else 1.0
-    return min(v_close, 1e3 * delta / dt), v_stick, v_slide
+    return min(v_close, 0.5 * delta / dt), v_stick, v_slide
 
 
 def layout(case: Case) -> Layout:
@@ -604,3 +604,45 @@ def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
         res = _result(code, {}, {}, "failed", f"{type(e).__name__}: {e}")
     res["wall_time_s"] = time.perf_counter() - t0
     return res
+
+
+def check_case(case: Case, out_root: Path, codes=CODES, timeout: float = 120, rel: float = 1e-9) -> dict:
+    """Probes ``case`` in each code against ``expected_constants``: {code: {status, reason,
+    wall_time_s, rows (compare_constants), max_rel_diff, pass}}; a failed probe does not pass."""
+    expected = expected_constants(case.resolved, case.discs, case.dt)
+    out = {}
+    for code in codes:
+        res = probe(code, case, Path(out_root) / code, timeout)
+        rows = compare_constants(expected, res, rel)
+        out[code] = {"status": res["status"], "reason": res["reason"], "wall_time_s": res["wall_time_s"],
+                     "method": res["method"], "rows": rows,
+                     "max_rel_diff": max((r["rel_diff"] for r in rows), default=math.inf),
+                     "pass": res["status"] == "ok" and all(r["pass"] for r in rows)}
+    return out
+
+
+def main(argv=None) -> int:
+    """python3 -m compare.probe [--out DIR] [--codes ...]: probes the paper's translated cases
+    (compare.translate.cases) and prints each code's largest relative difference and wall time."""
+    import argparse
+    import tempfile
+
+    from . import translate
+    ap = argparse.ArgumentParser(prog="python3 -m compare.probe")
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--codes", default=",".join(CODES))
+    a = ap.parse_args(argv)
+    root = a.out or Path(tempfile.mkdtemp(prefix="probe_"))
+    codes = [c for c in a.codes.split(",") if c]
+    ok = True
+    for case in translate.cases():
+        for code, r in check_case(case, root / case.name, codes).items():
+            worst = max(r["rows"], key=lambda x: x["rel_diff"]) if r["rows"] else {"quantity": "-"}
+            print(f"{case.name:18s} {code:9s} {'PASS' if r['pass'] else 'FAIL'} max rel {r['max_rel_diff']:.2e} "
+                  f"({worst['quantity']}) {r['wall_time_s']:.2f} s {r['reason']}", flush=True)
+            ok &= r["pass"]
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
