@@ -398,6 +398,16 @@ def flow_profile_metric(scene_name: str, code: str, group: str, ref: dict, other
                   f"{mde_rel:.1%} of the wall total (80 % power)")
 
 
+def _members_for(a: tuple, b: tuple, alpha: float, rel: float = 0.05) -> int | None:
+    """Members per code that would detect a relative difference ``rel`` (80 % power), from the
+    pooled member-to-member spread of both codes relative to the mean of ``a``."""
+    (ma, sa, na), (mb, sb, nb) = a, b
+    if na < 2 or nb < 2 or not ma or not (math.isfinite(sa) and math.isfinite(sb)):
+        return None
+    sd = math.sqrt(((na - 1) * na * sa ** 2 + (nb - 1) * nb * sb ** 2) / (na + nb - 2))
+    return stats.members_for(rel, sd / abs(ma), alpha)
+
+
 DISCHARGE_MEANS = ("discs_out", "flow_rate") + FLOW_TOTALS + ("peak_window_side", "peak_window_bottom")
 
 
@@ -445,7 +455,8 @@ def discharge_compare(scene_name: str, per_code: dict) -> tuple[list, dict]:
             elif key.startswith("peak_window"):
                 note = f"largest {PEAK_WINDOW:g} s average of the group total / its value at the opening"
             m = metric(name, scene_name, {"native": [ma, sa], c: [mb, sb], "p": t.get("p"),
-                                          "detectable_rel": t.get("detectable_rel")},
+                                          "detectable_rel": t.get("detectable_rel"),
+                                          "members_for_5pct": _members_for(ref[key], s[key], alpha)},
                        f"Welch, level {alpha:.2g}", t["pass"],
                        "; ".join(x for x in (note, t.get("reason", ""),
                                              f"detects {abs(t['detectable_rel']):.1%} (80 % power)"
@@ -461,8 +472,10 @@ def discharge_compare(scene_name: str, per_code: dict) -> tuple[list, dict]:
         m = metric(f"discharge jam fraction ({c} vs native)", scene_name,
                    {"native": [t.get("a"), t.get("ci_a")], c: [t.get("b"), t.get("ci_b")], "p": t.get("p")},
                    f"Fisher's exact test, level {alpha:.2g}", t["pass"],
-                   f"Wilson 95 % intervals; detects a difference of {t.get('detectable', float('nan')):.2f} "
-                   "in the fraction (80 % power)")
+                   "Wilson 95 % intervals; " + (
+                       f"detects a difference of {t['detectable']:.2f} in the fraction (80 % power)"
+                       if math.isfinite(t.get("detectable", float("nan"))) else
+                       "these members cannot detect any difference in the fraction at this level"))
         m["kind"] = "statistical"
         metrics.append(m)
     return metrics, summary

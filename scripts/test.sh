@@ -16,5 +16,7 @@ cmake --build build-asan -j "$(nproc)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 
-# The quick agreement report: native vs the real LIGGGHTS and YADE (fails on any disagreement).
-DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m compare report --out out/agreement
+# The quick agreement study: native vs the real LIGGGHTS and YADE (fails on any disagreement),
+# then the mutants (deliberately wrong translations; fails unless every one is caught).
+build/dem compare reference_inputs/agreement/quick.list --out out/agreement
+build/dem compare reference_inputs/agreement/mutants.list --mutants --out out/mutants
