@@ -29,8 +29,11 @@ PYTHON = "/usr/bin/python3"
 
 # The contact variant every code expresses: e_n = K_n * overlap (LIGGGHTS hooke/stiffness,
 # YADE ViscEl), the total normal force clamped >= 0 (LIGGGHTS limitForce on, YADE), the Coulomb
-# cap on the total normal force, shear dashpot off while sliding (all three).
-SHARED_VARIANT = {"normal_spring": "overlap", "no_tension": "total", "friction_cap": "total"}
+# cap on the total normal force, shear dashpot off while sliding (all three), and the shear force
+# acting at the middle of the overlap, r - overlap/2 from each centre (LIGGGHTS' contact radius
+# cri = radi - deltan/2 in surface_model_default.h, YADE's ScGeom contactPoint).
+SHARED_VARIANT = {"normal_spring": "overlap", "no_tension": "total", "friction_cap": "total",
+                  "lever_arm": "contact_point"}
 
 
 class CaseError(ValueError):

@@ -8,7 +8,9 @@ What the translation does (see ../shared/docs/reference-codes.md for the measure
   ``fix nve/sphere`` in 2D gives the disc inertia m r^2 / 2 (checked by the calibration runs);
 - law: ``hooke/stiffness``, ``tangential history``, ``absolute_damping on`` (eta absolute),
   ``limitForce on`` (total normal force clamped >= 0): the engine's SHARED_VARIANT
-  (e_n = K_n overlap, no_tension = total, Coulomb cap on the total normal force);
+  (e_n = K_n overlap, no_tension = total, Coulomb cap on the total normal force; the shear
+  force and the contact's rotational velocity at the contact radius r - overlap/2, disc-disc and
+  disc-wall: lever_arm = contact_point);
 - walls: every wall segment is a mesh of strips (2 triangles each, z = +-2, at most
   profile_bin / 2 long, aligned with the profile bins from the wall's ``from`` end); the strip
   forces (``mesh/surface/stress``, dumped with ``dump mesh/vtk``) give the binned profile;

@@ -7,7 +7,9 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
 - law: ``ViscElMat`` + ``Ip2_ViscElMat_ViscElMat_ViscElPhys`` + ``Law2_ScGeom_ViscElPhys_Basic``:
   F_n = kn overlap + cn v_n, the TOTAL normal force clamped >= 0, elastic shear history
   (ks dt v_s increments, rotated with the contact), Coulomb cap mu |F_n| on the total normal force,
-  shear dashpot cs v_s only while sticking: the engine's SHARED_VARIANT;
+  shear dashpot cs v_s only while sticking, velocities and torques at the contact point (the
+  middle of the overlap, r - overlap/2 from the centre, on spheres and facets alike): the
+  engine's SHARED_VARIANT;
 - constants: materials combine IN SERIES, k = k1 k2 / (k1 + k2), a 0 meaning "absent" (the
   contact then takes the other material's value). Disc material = 2 x the disc-disc pair, so
   disc-disc contacts get the pair exactly; each wall material is solved so that series(disc,

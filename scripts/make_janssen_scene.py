@@ -36,7 +36,7 @@ scheme = "velocity_verlet"
 dt = 2e-5                        # s (the run header prints the bounds)
 force_dt = false
 
-[contact]                        # the law all three codes share (compare/common.py)
+[contact]                        # SHARED_VARIANT of compare/common.py, less its lever_arm (the comparison sets it)
 normal_spring = "overlap"
 no_tension = "total"
 friction_cap = "total"

@@ -103,8 +103,9 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
               w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy);
   std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d\n", to_string(w.scheme), w.dt,
               s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
-  std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s\n", to_string(w.options.normal_spring),
-              to_string(w.options.no_tension), to_string(w.options.friction_cap));
+  std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s, lever_arm %s\n",
+              to_string(w.options.normal_spring), to_string(w.options.no_tension), to_string(w.options.friction_cap),
+              to_string(w.options.lever_arm));
   std::printf("  kernel: shear %s, dashpots %s, bonds %s, moving walls %s (compiled out when off); %d doubles a vector\n",
               w.kernel_shear ? "on" : "off", w.kernel_dashpots ? "on" : "off", w.bonds.empty() ? "off" : "on",
               w.moving.empty() ? "off" : "on", World::vector_width);

@@ -25,6 +25,13 @@ enum class FrictionCap {
   total     // |e_s| <= mu |f_n| (LIGGGHTS, YADE)
 };
 
+// The lever arm of a contact: the distance from a disc's centre at which the shear force acts
+// (torque, eq. 15c) and at which the disc's rotation moves the contact (the r dphi of eq. 5b).
+enum class LeverArm {
+  radius,        // paper eqs. (5b), (15c): r_i
+  contact_point  // r_i - overlap/2: the middle of the overlap (LIGGGHTS' contact radius, YADE's contact point)
+};
+
 // Time integration, chosen per scene.
 enum class Scheme {
   paper_eq18,      // eqs. (17)-(18): v += a dt; du = v dt (symplectic Euler)
@@ -36,6 +43,7 @@ struct ContactOptions {
   NormalSpring normal_spring = NormalSpring::incremental;
   NoTension no_tension = NoTension::elastic;
   FrictionCap friction_cap = FrictionCap::elastic;
+  LeverArm lever_arm = LeverArm::radius;
 };
 
 // Constants of one material pair, per unit thickness (cgs: dyn/cm per cm, g/s per cm).
@@ -50,6 +58,7 @@ struct PairProps {
 const char* to_string(NormalSpring v);
 const char* to_string(NoTension v);
 const char* to_string(FrictionCap v);
+const char* to_string(LeverArm v);
 const char* to_string(Scheme v);
 
 }  // namespace dem

@@ -366,7 +366,8 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   if (unstable) js["reason"] = res.reason;
   js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt},
                    {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},
-                   {"friction_cap", to_string(w.options.friction_cap)}, {"gravity", {w.gx, w.gy}},
+                   {"friction_cap", to_string(w.options.friction_cap)}, {"lever_arm", to_string(w.options.lever_arm)},
+                   {"gravity", {w.gx, w.gy}},
                    {"skin", w.neighbors.skin}, {"cell", w.neighbors.cell_size()}, {"profile_bin", spec.profile_bin}};
   js["n_discs"] = d.size();
   js["steps"] = w.steps;

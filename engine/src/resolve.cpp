@@ -17,7 +17,8 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
   j["integrator"] = {{"scheme", to_string(s.scheme)}, {"dt", s.dt}, {"force_dt", s.force_dt}};
   j["contact"] = {{"normal_spring", to_string(s.contact.normal_spring)},
                   {"no_tension", to_string(s.contact.no_tension)},
-                  {"friction_cap", to_string(s.contact.friction_cap)}};
+                  {"friction_cap", to_string(s.contact.friction_cap)},
+                  {"lever_arm", to_string(s.contact.lever_arm)}};
   json mats = json::array();
   for (std::size_t m = 0; m < s.material_names.size(); ++m)
     mats.push_back({{"name", s.material_names[m]}, {"density", s.density[m]}});

@@ -605,6 +605,8 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     s.contact.no_tension = nt == "elastic" ? NoTension::elastic : nt == "total" ? NoTension::total : NoTension::overlap;
     s.contact.friction_cap = t.choice("friction_cap", {"elastic", "total"}, "elastic") == "total"
                                  ? FrictionCap::total : FrictionCap::elastic;
+    s.contact.lever_arm = t.choice("lever_arm", {"radius", "contact_point"}, "radius") == "contact_point"
+                              ? LeverArm::contact_point : LeverArm::radius;
     t.finish();
   }
   {

@@ -339,14 +339,14 @@ std::size_t World::touching_pairs(std::size_t p0, std::size_t p1) const {
   return n;
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH>
 double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                             PairTotals::Force* record) {
   if (record)
-    return one_kind() ? pair_pass<NS, NT, FC, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
-                     : pair_pass<NS, NT, FC, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
-  return one_kind() ? pair_pass<NS, NT, FC, SHEAR, DASH, false, true>(p0, p1, own_end, later, nullptr)
-                   : pair_pass<NS, NT, FC, SHEAR, DASH, false, false>(p0, p1, own_end, later, nullptr);
+    return one_kind() ? pair_pass<NS, NT, FC, LA, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
+                     : pair_pass<NS, NT, FC, LA, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
+  return one_kind() ? pair_pass<NS, NT, FC, LA, SHEAR, DASH, false, true>(p0, p1, own_end, later, nullptr)
+                   : pair_pass<NS, NT, FC, LA, SHEAR, DASH, false, false>(p0, p1, own_end, later, nullptr);
 }
 
 // The law for n touching pairs of a block, in the block's arrays (pair_pass): no branch and no
@@ -354,7 +354,7 @@ double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::ve
 // pairs' square roots and divisions overlap. The same operations, in the same order, as the
 // law applied pair by pair: the same bits. One kind of disc: r_i + r_j is `sum1` (not gathered
 // pair by pair).
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, int n, const PairProps* __restrict props,
                                                                  double inv_dt, double sum1) {
   for (int k = 0; k < n; ++k) {
@@ -362,9 +362,17 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
     const double nx = b.dx[k] / R, ny = b.dy[k] / R;  // (4): cos(alpha), sin(alpha), from i to j
     const double ddx = b.ddx[k], ddy = b.ddy[k];
     const double du_n = ddx * nx + ddy * ny;                                          // (5a)
-    double du_s = 0;
-    if constexpr (SHEAR) du_s = -ddx * ny + ddy * nx + b.rot_i[k] + b.rot_j[k];       // (5b)
     const double overlap = (ONE_KIND ? sum1 : b.sum[k]) - R;
+    double du_s = 0;
+    if constexpr (SHEAR && LA == LeverArm::contact_point) {
+      // (5b) with the arms r - overlap/2 (one kind: sum1 / 2 is r exactly)
+      const double ai = (ONE_KIND ? 0.5 * sum1 : b.arm_i[k]) - 0.5 * overlap;
+      const double aj = (ONE_KIND ? 0.5 * sum1 : b.arm_j[k]) - 0.5 * overlap;
+      du_s = -ddx * ny + ddy * nx + ai * b.rot_i[k] + aj * b.rot_j[k];
+      b.arm_i[k] = ai; b.arm_j[k] = aj;
+    } else if constexpr (SHEAR) {
+      du_s = -ddx * ny + ddy * nx + b.rot_i[k] + b.rot_j[k];  // (5b)
+    }
     double fn, fs;
     contact_law<NS, NT, FC, SHEAR, DASH>(props[ONE_KIND ? 0 : b.prop[k]], overlap, du_n, du_s, inv_dt, b.en[k],
                                          b.es[k], fn, fs);
@@ -384,24 +392,24 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
 // same bits at any width, and no contraction into FMA (-ffp-contract=off, and the AVX2 version
 // does not enable FMA).
 #if defined(__x86_64__) && defined(__GNUC__)
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt,
                                                 double sum1) {
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const PairProps* __restrict props,
                                                     double inv_dt, double sum1) {
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 #endif
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool ONE_KIND>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::vector_width >= 8) return pair_block_law_avx512<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
-  if (World::vector_width >= 4) return pair_block_law_avx2<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  if (World::vector_width >= 8) return pair_block_law_avx512<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  if (World::vector_width >= 4) return pair_block_law_avx2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 #endif
-  pair_block_law<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 
 // Disc-disc contacts [p0, p1) of the sorted pair list, a block of touching pairs at a time: the
@@ -412,7 +420,7 @@ static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict
 // order. RECORD: the totals of the touching pairs are written from `record` on, room for
 // touching_pairs(p0, p1) of them, and each touching pair's bit set in pair_totals' bits over the
 // list. Returns the largest overlap.
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
 double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                         PairTotals::Force* record) {
   Discs& d = discs;
@@ -459,7 +467,11 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       if constexpr (!ONE_KIND) b.sum[n] = sum;
       b.ddx[n] = ux[i] * uf - ux[j] * uf;  // the relative increment of (5)
       b.ddy[n] = uy[i] * uf - uy[j] * uf;
-      if constexpr (SHEAR) {
+      if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
+        b.rot_i[n] = uphi[i] * uf;
+        b.rot_j[n] = uphi[j] * uf;
+        if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
+      } else if constexpr (SHEAR) {
         b.rot_i[n] = ri * (uphi[i] * uf);
         b.rot_j[n] = rj * (uphi[j] * uf);
       }
@@ -467,7 +479,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       b.en[n] = c.en; b.es[n] = c.es;
       ++n;
     }
-    pair_block_law_best<NS, NT, FC, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, sum1);
+    pair_block_law_best<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, sum1);
     // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
     // is never the current i): the same additions in the same order, without a store and a
     // reload of fx[i], fy[i], torque[i] between two pairs of one disc.
@@ -501,8 +513,9 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
         if constexpr (SHEAR) at = tq[i];
       }
       ax += fx; ay += fy;
-      if constexpr (SHEAR) at -= kr[ONE_KIND ? 0 : kd[i]] * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
-      const double rj = kr[ONE_KIND ? 0 : kd[j]];
+      constexpr bool CP = LA == LeverArm::contact_point;
+      if constexpr (SHEAR) at -= (CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]]) * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+      const double rj = CP ? b.arm_j[k] : kr[ONE_KIND ? 0 : kd[j]];
       if (j < own_end) {
         fxa[j] -= fx; fya[j] -= fy;
         if constexpr (SHEAR) tq[j] -= rj * fs;
@@ -518,7 +531,7 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
 
 // Disc-obstacle contacts [w0, w1) of the wall list (whole groups of one disc), with the
 // per-thread scratch `slot`. Returns the largest overlap.
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
 double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
@@ -562,6 +575,10 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
       if (!c.touching) { c.en = c.es = c.fn = c.fs = 0; continue; }
       const double dist = dist_scratch[a - b];
       const double nx = c.nx, ny = c.ny;
+      const double overlap = d.r(i) - dist;
+      // The lever arm of (5b), (15c): r, or r - overlap/2 (the middle of the overlap). A moving
+      // wall's own point stays the closest point (px, py) of its surface.
+      const double arm = LA == LeverArm::contact_point ? d.r(i) - 0.5 * overlap : d.r(i);
       double du_n, du_s;
       if constexpr (MOVING) {
         // The wall's material point at the contact moved too: (5) with j the wall.
@@ -569,13 +586,12 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
         const double ddx = u.x[i] * u.factor - (m.dux - m.dtheta * (c.py - m.pivot_y));
         const double ddy = u.y[i] * u.factor - (m.duy + m.dtheta * (c.px - m.pivot_x));
         du_n = ddx * nx + ddy * ny;                                      // (5a)
-        du_s = -ddx * ny + ddy * nx + d.r(i) * (u.phi[i] * u.factor);    // (5b)
+        du_s = -ddx * ny + ddy * nx + arm * (u.phi[i] * u.factor);       // (5b)
       } else {
         const double uxi = u.x[i] * u.factor, uyi = u.y[i] * u.factor;
         du_n = uxi * nx + uyi * ny;                                      // (5a)
-        du_s = -uxi * ny + uyi * nx + d.r(i) * (u.phi[i] * u.factor);    // (5b)
+        du_s = -uxi * ny + uyi * nx + arm * (u.phi[i] * u.factor);       // (5b)
       }
-      const double overlap = d.r(i) - dist;
       worst = std::max(worst, overlap);
       const int km = c.k < n_walls ? geometry.walls[c.k].material
                                    : geometry.points[c.k - n_walls].material;
@@ -583,7 +599,7 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
                                            c.en, c.es, c.fn, c.fs);
       d.fx[i] += -c.fn * nx + c.fs * ny;  // (15a)
       d.fy[i] += -c.fn * ny - c.fs * nx;  // (15b)
-      d.torque[i] -= d.r(i) * c.fs;       // (15c)
+      d.torque[i] -= arm * c.fs;          // (15c)
       if constexpr (MOVING) {  // the reaction on the obstacle
         ObstacleMotion& m = moving.motion[c.k];
         const double wx = c.fn * nx - c.fs * ny, wy = c.fn * ny + c.fs * nx;
@@ -597,7 +613,7 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
   return worst;
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
 bool World::compute_forces(Then then, double h) {
   Discs& d = discs;
   const int n = static_cast<int>(d.size());
@@ -609,7 +625,7 @@ bool World::compute_forces(Then then, double h) {
     start_resultants(0, n);
     const std::size_t np = neighbors.pairs.size();
     if (record) size_pair_forces(touching_pairs(0, np));
-    worst = pair_pass_for<NS, NT, FC, SHEAR, DASH>(0, np, n, nullptr, record ? pair_totals.forces() : nullptr);
+    worst = pair_pass_for<NS, NT, FC, LA, SHEAR, DASH>(0, np, n, nullptr, record ? pair_totals.forces() : nullptr);
   } else {
     // Threads own contiguous blocks of discs (force_blocks: of equal work, set every
     // kRebalanceEvery steps); a pair is computed by the owner of its i. What a thread adds to a later block's
@@ -651,8 +667,8 @@ bool World::compute_forces(Then then, double h) {
       }
       // Walls before pairs: the order (and the bits) that gcc gave the former
       // std::max(pairs(), walls()), whose arguments it evaluates right to left; now explicit.
-      const double ww = wall_forces<NS, NT, FC, false, SHEAR, DASH>(w0, w1, t);
-      const double pw = pair_pass_for<NS, NT, FC, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value, mine);
+      const double ww = wall_forces<NS, NT, FC, LA, false, SHEAR, DASH>(w0, w1, t);
+      const double pw = pair_pass_for<NS, NT, FC, LA, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value, mine);
       part[t] = std::max(pw, ww);
 #pragma omp barrier
       for (int u = 0; u < t; ++u)  // earlier threads' reactions on this block, in their order
@@ -698,7 +714,7 @@ bool World::compute_forces(Then then, double h) {
   }
   if constexpr (MOVING)
     for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
-  worst = std::max(worst, wall_forces<NS, NT, FC, MOVING, SHEAR, DASH>(0, neighbors.walls.size(), 0));
+  worst = std::max(worst, wall_forces<NS, NT, FC, LA, MOVING, SHEAR, DASH>(0, neighbors.walls.size(), 0));
   max_overlap = worst;
   return then_block(then, h, 0, n);
 }
@@ -718,18 +734,24 @@ void World::select_kernel() {
   if (has_bonds || has_moving) shear = dash = true;
   kernel_shear = shear;
   kernel_dashpots = dash;
-#define DEM_KB(NS, NT, FC, B, M, S, D)                                                              \
-  if (has_bonds == B && has_moving == M && shear == S && dash == D) {                               \
-    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC, B, M, S, D>; \
-    return;                                                                                         \
+  // The lever arm matters only where there is shear: a shear-free scene runs the radius kernel
+  // (the same result). The contact-point arm comes with the kernels that have shear.
+  const LeverArm lever = shear ? options.lever_arm : LeverArm::radius;
+#define DEM_KB(NS, NT, FC, LA, B, M, S, D)                                                                 \
+  if (lever == LeverArm::LA && has_bonds == B && has_moving == M && shear == S && dash == D) {              \
+    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC, LeverArm::LA, B, M, S, D>; \
+    return;                                                                                                \
   }
-#define DEM_K(NS, NT, FC)                                                                   \
-  if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT &&      \
-      options.friction_cap == FrictionCap::FC) {                                             \
-    DEM_KB(NS, NT, FC, false, false, true, true) DEM_KB(NS, NT, FC, true, false, true, true)   \
-    DEM_KB(NS, NT, FC, false, true, true, true) DEM_KB(NS, NT, FC, true, true, true, true)     \
-    DEM_KB(NS, NT, FC, false, false, false, true) DEM_KB(NS, NT, FC, false, false, true, false) \
-    DEM_KB(NS, NT, FC, false, false, false, false)                                           \
+#define DEM_K(NS, NT, FC)                                                                                          \
+  if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT &&                             \
+      options.friction_cap == FrictionCap::FC) {                                                                    \
+    DEM_KB(NS, NT, FC, radius, false, false, true, true) DEM_KB(NS, NT, FC, radius, true, false, true, true)        \
+    DEM_KB(NS, NT, FC, radius, false, true, true, true) DEM_KB(NS, NT, FC, radius, true, true, true, true)          \
+    DEM_KB(NS, NT, FC, radius, false, false, false, true) DEM_KB(NS, NT, FC, radius, false, false, true, false)     \
+    DEM_KB(NS, NT, FC, radius, false, false, false, false)                                                          \
+    DEM_KB(NS, NT, FC, contact_point, false, false, true, true) DEM_KB(NS, NT, FC, contact_point, true, false, true, true) \
+    DEM_KB(NS, NT, FC, contact_point, false, true, true, true) DEM_KB(NS, NT, FC, contact_point, true, true, true, true)   \
+    DEM_KB(NS, NT, FC, contact_point, false, false, true, false)                                                    \
   }
 #define DEM_K2(NS, NT) DEM_K(NS, NT, elastic) DEM_K(NS, NT, total)
 #define DEM_K3(NS) DEM_K2(NS, elastic) DEM_K2(NS, total) DEM_K2(NS, overlap)
@@ -848,6 +870,7 @@ const char* to_string(NoTension v) {
   return v == NoTension::elastic ? "elastic" : v == NoTension::total ? "total" : "overlap";
 }
 const char* to_string(FrictionCap v) { return v == FrictionCap::elastic ? "elastic" : "total"; }
+const char* to_string(LeverArm v) { return v == LeverArm::radius ? "radius" : "contact_point"; }
 const char* to_string(Scheme v) {
   return v == Scheme::paper_eq18 ? "paper_eq18" : v == Scheme::paper_eq19 ? "paper_eq19" : "velocity_verlet";
 }

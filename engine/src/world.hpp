@@ -25,6 +25,9 @@ struct alignas(64) PairBlock {
   int prop[kSize];  // index of the pair's constants (several kinds of disc)
   double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j (several kinds)
   double ddx[kSize], ddy[kSize], rot_i[kSize], rot_j[kSize];  // (5): du_i - du_j, r_i dphi_i, r_j dphi_j
+  // LeverArm::contact_point: rot_i, rot_j hold dphi_i, dphi_j; arm_i, arm_j the radii in (several
+  // kinds) and the lever arms r - overlap/2 out.
+  double arm_i[kSize], arm_j[kSize];
   double en[kSize], es[kSize];  // history in, history out
   double overlap[kSize], fn[kSize], fs[kSize], fx[kSize], fy[kSize];  // out: fx, fy on i
 };
@@ -157,17 +160,17 @@ class World {
   // What the selected kernel skips (for the header and the skip benchmark).
   bool kernel_shear = true, kernel_dashpots = true;
  private:
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
   bool compute_forces(Then then, double h);  // then's drift result
   struct Deferred {  // a pair's reaction on a disc of another thread's block
     int j;
     double fx, fy, tq;
   };
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
   double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                    PairTotals::Force* record);
   // pair_pass for this pass: recording or not (record null), one kind of disc or several.
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR, bool DASH>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH>
   double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
                        PairTotals::Force* record);
   // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).
@@ -179,7 +182,7 @@ class World {
   // Every disc of one kind: the kernels keep its constants in registers instead of reading them
   // through each disc's kind.
   bool one_kind() const { return discs.kinds.size() == 1; }
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, bool MOVING, bool SHEAR, bool DASH>
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
   double wall_forces(std::size_t w0, std::size_t w1, int slot);
   enum class Drift { none, eq18, eq19 };
   bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region

@@ -82,11 +82,15 @@ Result by_pairs(World w) {
       const double nx = dx / R, ny = dy / R;  // (4)
       const double ddx = (d.vx[i] - d.vx[j]) * w.dt, ddy = (d.vy[i] - d.vy[j]) * w.dt;
       const double du_n = ddx * nx + ddy * ny;                                                  // (5a)
-      const double du_s = -ddx * ny + ddy * nx + (d.r(i) * d.omega[i] + d.r(j) * d.omega[j]) * w.dt;  // (5b)
-      contact_law<NS, NT, FC>(w.pair(0, 0), d.r(i) + d.r(j) - R, du_n, du_s, 1.0 / w.dt, c.en, c.es, fn, fs);
+      const double overlap = d.r(i) + d.r(j) - R;
+      // The lever arms: r, or r - overlap/2 (lever_arm = contact_point)
+      const bool mid = w.options.lever_arm == LeverArm::contact_point;
+      const double ai = mid ? d.r(i) - overlap / 2 : d.r(i), aj = mid ? d.r(j) - overlap / 2 : d.r(j);
+      const double du_s = -ddx * ny + ddy * nx + (ai * d.omega[i] + aj * d.omega[j]) * w.dt;  // (5b)
+      contact_law<NS, NT, FC>(w.pair(0, 0), overlap, du_n, du_s, 1.0 / w.dt, c.en, c.es, fn, fs);
       const double fx = -fn * nx + fs * ny, fy = -fn * ny - fs * nx;  // (15a), (15b)
-      r.fx[i] += fx; r.fy[i] += fy; r.tq[i] -= d.r(i) * fs;            // (15c)
-      r.fx[j] -= fx; r.fy[j] -= fy; r.tq[j] -= d.r(j) * fs;
+      r.fx[i] += fx; r.fy[i] += fy; r.tq[i] -= ai * fs;                // (15c)
+      r.fx[j] -= fx; r.fy[j] -= fy; r.tq[j] -= aj * fs;
       r.totals.push_back({i, j, fn, fs});
     }
   }
@@ -117,7 +121,8 @@ std::vector<ContactOptions> all_options() {
   std::vector<ContactOptions> v;
   for (NormalSpring ns : {NormalSpring::incremental, NormalSpring::overlap})
     for (NoTension nt : {NoTension::elastic, NoTension::total, NoTension::overlap})
-      for (FrictionCap fc : {FrictionCap::elastic, FrictionCap::total}) v.push_back({ns, nt, fc});
+      for (FrictionCap fc : {FrictionCap::elastic, FrictionCap::total})
+        for (LeverArm la : {LeverArm::radius, LeverArm::contact_point}) v.push_back({ns, nt, fc, la});
   return v;
 }
 
@@ -155,7 +160,7 @@ TEST(PairBlock, ForcesAndHistoryAreThoseOfThePairByPairLaw) {
       for (std::size_t i = 0; i < got.fx.size(); ++i)
         bad += !close(got.fx[i], want.fx[i]) || !close(got.fy[i], want.fy[i]) || !close(got.tq[i], want.tq[i]);
       EXPECT_EQ(bad, 0u) << to_string(o.normal_spring) << " / " << to_string(o.no_tension) << " / "
-                         << to_string(o.friction_cap) << ", " << threads << " threads";
+                         << to_string(o.friction_cap) << " / " << to_string(o.lever_arm) << ", " << threads << " threads";
     }
 }
 

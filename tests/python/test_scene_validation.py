@@ -37,6 +37,8 @@ CASES = [
     ("zero radius", edit(BASE, "radius = 1.0 ", "radius = 0.0 "), ["fill.radius", "> 0"]),
     ("list radius", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[12.5, 5.0, -1.0]")), ["disc 1", "radius", "> 0"]),
     ("bad scheme", edit(BASE, '"paper_eq19"', '"rk4"'), ["integrator.scheme", "rk4", "one of"]),
+    ("bad lever arm", edit(BASE, 'friction_cap = "elastic"\n', 'friction_cap = "elastic"\nlever_arm = "centre"\n'),
+     ["contact.lever_arm", "centre", "one of"]),
     ("overlap", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[11.5, 5.0, 1.0]")), ["overlaps", "disc 0", "disc 1"]),
     ("outside", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[55.0, 5.0, 1.0]")), ["disc 1", "outside the walls"]),
     ("through wall", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[0.5, 5.0, 1.0]")), ["disc 1", "overlaps wall", "left"]),
