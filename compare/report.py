@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import janssen  # noqa: E402
+from . import calibration, janssen  # noqa: E402
 from .common import write_text_atomic  # noqa: E402
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green"}
@@ -91,24 +91,24 @@ def plot_janssen(fits: dict, png: Path, name: str) -> None:
 
 
 def plot_calibration(rows: list, png: Path) -> None:
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8))
-    names = [r["case"] for r in rows]
+    """Each code's largest deviation from the reference per scene, in units of its tolerance."""
+    fig, ax = plt.subplots(figsize=(12, 4))
+    names = [r["scene"] for r in rows]
     x = np.arange(len(names))
-    for k, (key, label) in enumerate((("e", "restitution e"), ("t_c", "contact duration t_c [ms]"),
-                                      ("omega_end", "rebound spin ω [1/s]"))):
-        ax = axes[k]
-        for j, code in enumerate(("native", "liggghts", "yade")):
-            vals = [r["codes"].get(code, {}).get(key, np.nan) for r in rows]
-            vals = np.array(vals, float) * (1e3 if key == "t_c" else 1)
-            ax.bar(x + (j - 1) * 0.27, vals, 0.27, color=COLORS[code], label=code)
-        if key in ("e", "t_c"):
-            ode = [(r["ode"] or {}).get(key, np.nan) for r in rows]
-            ax.plot(x, np.array(ode, float) * (1e3 if key == "t_c" else 1), "k_", ms=18, mew=2, label="ODE (head-on)")
-        ax.set_xticks(x)
-        ax.set_xticklabels([n.replace("_", "\n", 2) for n in names], fontsize=7)
-        ax.set_title(label, fontsize=9)
-        ax.grid(alpha=0.3, axis="y")
-    axes[0].legend(fontsize=7)
+    for j, code in enumerate(("native", "liggghts", "yade")):
+        vals = []
+        for r in rows:
+            m = r["codes"].get(code, {})
+            dev = [abs(m[q] - r["reference"][q]) / t for q, t in r["tolerance"].items() if q in m and t > 0]
+            vals.append(max(dev) if dev else np.nan)
+        ax.bar(x + (j - 1) * 0.27, vals, 0.27, color=COLORS[code], label=code)
+    ax.axhline(1.0, color="k", lw=1, ls="--", label="tolerance")
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=60, ha="right", fontsize=7)
+    ax.set_ylabel("max |code - reference| / tolerance")
+    ax.set_yscale("symlog", linthresh=1e-3)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=7)
     fig.tight_layout()
     _savefig(fig, png)
 
@@ -183,7 +183,7 @@ def write(report: dict, out: Path) -> None:
     pngs = []
     if report.get("calibration"):
         plot_calibration(report["calibration"], out / "calibration.png")
-        pngs.append(("Calibration collisions", "calibration.png"))
+        pngs.append(("Calibration: deviation from the reference / tolerance", "calibration.png"))
     for st in report.get("static", []):
         pj = out / "static" / st["case"] / "profiles.json"
         if pj.exists():
@@ -233,15 +233,9 @@ def write(report: dict, out: Path) -> None:
         L.append(f"| {m['scene']} | {m['metric']} | {_fmt(m['values'])} | {_fmt(m['tolerance'])} | "
                  f"{'PASS' if m['pass'] else '**FAIL**'} | {m['note']} |")
     if report.get("calibration"):
-        L += ["", "## Calibration collisions", "", "| case | code | e | t_c [s] | v_t end [cm/s] | ω end [1/s] |",
-              "|---|---|---|---|---|---|"]
-        for r in report["calibration"]:
-            if r["ode"]:
-                L.append(f"| {r['case']} | ODE | {r['ode']['e']:.5f} | {r['ode']['t_c']:.4e} | | |")
-            for c, v in r["codes"].items():
-                L.append(f"| {r['case']} | {c} | {v['e']:.5f} | {v['t_c']:.4e} | {v['v_t_end']:.4f} | {v['omega_end']:.4f} |")
-            if r["failures"]:
-                L.append(f"| {r['case']} | FAILED | {r['failures']} | | | |")
+        L += ["", "## Calibration (Chung & Ooi's tests as scenes, compare/calibration.py)", "",
+              calibration.table(report["calibration"], [c for c in ("native", "liggghts", "yade")
+                                                        if c in report["calibration"][0]["codes"]])]
     if report.get("static"):
         L += ["", "## Static cases: wall totals (force by the discs on each wall)", "",
               "| case | code | status | wall | normal | shear | wall time [s] |", "|---|---|---|---|---|---|---|"]

@@ -2,13 +2,13 @@
 by metric against stated tolerances (issue 4). ``python3 -m compare report --out DIR`` runs it.
 
 Profiles
-- quick (CI, a few minutes on 2 cores): the calibration collisions; the 17/18 silo and the
+- quick (CI, a few minutes on 2 cores): one calibration scene of each kind; the 17/18 silo and the
   Janssen bin re-resting from frozen packings; a 4-member discharge of 11/12 per code (2 members
   were too few: the standard error of two members has one degree of freedom, and the raw peak
   ratio at the slit ends is heavy-tailed, 3.5 to 22 between members of one code in the 8-member
   ensembles, so two members that happened to be the engine's two largest of eight (7.75, 6.73)
   failed against LIGGGHTS' 3.9, 4.5 while the 8-member means agree: 5.2 +- 0.5, 4.9 +- 0.6).
-- full: the calibration; all eight lattices 11/12 ... 18/19; the Janssen bin; 8-member
+- full: every calibration scene; all eight lattices 11/12 ... 18/19; the Janssen bin; 8-member
   discharge ensembles of 11/12 and 17/18 per code; LIGGGHTS under ``mpirun -np 2``.
 
 Every code starts a static case from the SAME frozen packing, written by the native engine
@@ -92,43 +92,28 @@ def failures(results: dict) -> str:
 
 # ---------------------------------------------------------------- calibration
 
-def calibration(out: Path, codes, timeout: float) -> tuple[list, dict]:
-    r = resolve(SCENES / "silo_17_18.toml")
+def calibration(out: Path, codes, timeout: float, names=None) -> tuple[list, dict]:
+    """Chung & Ooi's tests as scenes (compare.calibration): each code against the scene's
+    closed-form or integrated reference, and each pair of codes against each other."""
     rows, metrics = [], []
-    for case, geo in cal.cases(r):
-        res = {c: run_code(c, case, out / "calibration" / case.name / c, timeout) for c in codes}
-        meas = {}
-        for c, rr in res.items():
-            if rr.ok:
-                try:
-                    meas[c] = cal.measure(case, geo, rr.discs_end)
-                except ValueError as e:
-                    res[c] = failed(c, case.name, str(e))
-        ode = cal.ode_reference(case, geo) if geo["v_t"] == 0 else None
-        row = {"case": case.name, "ode": ode, "codes": meas, "failures": failures(res)}
+    for name in names or cal.scene_names():
+        row = cal.run_scene(name, codes, out / "calibration", timeout)
         rows.append(row)
-        ref = meas.get("native")
+        ref = {q: row["reference"][q] for q in row["tolerance"]}
         for c in codes:
-            if c == "native":
+            m = row["codes"][c]
+            if "failed" in m:
+                metrics.append(metric(f"calibration vs reference ({c})", name, {"reference": ref, c: m},
+                                      row["tolerance"], False, "run failed: " + m["failed"]))
                 continue
-            vals = {k: meas.get(k) for k in ("native", c)}
-            if c not in meas or ref is None:
-                metrics.append(metric(f"calibration e, t_c, spin ({c})", case.name, vals, cal.TOL, False,
-                                      "run failed: " + failures(res)))
-                continue
-            m = meas[c]
-            ok_e = abs(m["e"] - ref["e"]) <= cal.TOL["e"]
-            ok_t = abs(m["t_c"] - ref["t_c"]) <= cal.TOL["t_c_steps"] * case.dt
-            scale = max(abs(ref["omega_end"]), 1e-9)
-            ok_w = abs(m["omega_end"] - ref["omega_end"]) <= cal.TOL["omega_rel"] * scale if scale > 1e-6 else True
-            vscale = max(abs(ref["v_t_end"]), 1e-9)
-            ok_v = abs(m["v_t_end"] - ref["v_t_end"]) <= cal.TOL["v_t_rel"] * vscale if vscale > 1e-6 else True
-            metrics.append(metric(f"calibration e, t_c, spin ({c} vs native)", case.name, vals, cal.TOL,
-                                  ok_e and ok_t and ok_w and ok_v))
-        if ode and ref:
-            ok = abs(ref["e"] - ode["e"]) <= 0.02 and abs(ref["t_c"] - ode["t_c"]) <= case.dt
-            metrics.append(metric("calibration head-on vs ODE (native)", case.name,
-                                  {"native": ref, "ode": ode}, {"e": 0.02, "t_c_steps": 1.0}, ok))
+            bad = [q for q, ok in row["pass"][c].items() if not ok]
+            metrics.append(metric(f"calibration vs reference ({c})", name, {"reference": ref, c: m}, row["tolerance"],
+                                  not bad, "outside the tolerance: " + ", ".join(bad) if bad else ""))
+        for pair_, ok in row["agree"].items():
+            a, b = pair_.split(" vs ")
+            bad = [q for q, good in ok.items() if not good]
+            metrics.append(metric(f"calibration {pair_}", name, {a: row["codes"][a], b: row["codes"][b]},
+                                  f"{cal.CODE_REL:g} x scale", not bad, "differ: " + ", ".join(bad) if bad else ""))
     return metrics, {"calibration": rows}
 
 
@@ -521,10 +506,13 @@ def discharge_compare(scene_name: str, per_code: dict) -> tuple[list, dict]:
 
 # ---------------------------------------------------------------- the study
 
+# one scene of each kind of calibration test (the full profile runs them all)
+QUICK_CALIBRATION = ["head_on_disc_disc", "head_on_disc_wall_steel", "restitution_zeta_090", "oblique_wall_20deg",
+                     "oblique_wall_60deg", "oblique_disc_disc", "floor_launch", "rest_on_floor"]
 PROFILES = {
-    "quick": {"lattices": [18], "static_duration": 0.3, "janssen": True, "janssen_duration": 0.25,
+    "quick": {"calibration": QUICK_CALIBRATION, "lattices": [18], "static_duration": 0.3, "janssen": True, "janssen_duration": 0.25,
               "discharge": {12: 4}, "discharge_duration": 0.6, "mpi": False},
-    "full": {"lattices": [12, 13, 14, 15, 16, 17, 18, 19], "static_duration": 0.6, "janssen": True,
+    "full": {"calibration": None, "lattices": [12, 13, 14, 15, 16, 17, 18, 19], "static_duration": 0.6, "janssen": True,
              "janssen_duration": 0.6, "discharge": {12: 8, 18: 8}, "discharge_duration": 1.0, "mpi": True},
 }
 
@@ -540,8 +528,8 @@ def run_study(out: Path, profile: str = "quick", codes=CODES, timeout: float = 9
         except ImportError as e:
             report["codes"][c] = f"backend missing: {e}"
     t0 = time.monotonic()
-    log("calibration collisions ...")
-    m, d = calibration(out, codes, timeout)
+    log("calibration scenes ...")
+    m, d = calibration(out, codes, timeout, cfg["calibration"])
     report["metrics"] += m
     report.update(d)
     for s in cfg["lattices"]:
