@@ -39,8 +39,8 @@ def cases(dem_binary):
 # ------------------------------------------------------------------------------- the generator
 
 def test_committed_scenes_are_what_the_generator_writes(tmp_path, monkeypatch):
-    p = subprocess.run([sys.executable if "python3" in sys.executable else "/usr/bin/python3",
-                        str(ROOT / "scripts" / "make_calibration_scenes.py"), "--check"], capture_output=True, text=True)
+    p = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_calibration_scenes.py"), "--check"],
+                       capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     stale = tmp_path / "calibration"
     shutil.copytree(gen.OUT, stale)
