@@ -14,13 +14,14 @@ gives the value of every measured quantity from the scene alone:
   Reference: head-on, the closed form of the clamped spring-dashpot (Schwager & Poeschel 2007:
   the total force vanishes at omega t* = atan2(c omega, -(k - c gamma)), e = -v(t*)/v0, and the
   discs part geometrically x(t*)/|v(t*)| later); oblique impacts, the continuous one-contact
-  equations of the shared law integrated with RK4 at dt / 1000 (``integrate``): normal spring-dashpot clamped >= 0, tangential spring (its
-  displacement accumulating the contact point's slip) + dashpot, the spring capped at
-  mu |F_n| with the dashpot off while capped, torques -r F_t, I = m r^2 / 2. Beside it, for
-  disc-wall impacts, Coulomb's impulse limits (normal impulse m (1 + e) v_n, tangential impulse
-  mu times it, which the contact point's slip exhausts unless |slip| >= 3 mu (1 + e) v_n): the
-  shared law exceeds them, because its tangential dashpot acts, uncapped, while the spring is
-  below the cap (the first steps of a contact, where F_n is small).
+  equations of the shared law integrated with RK4 at dt / 1000 (``integrate``): normal
+  spring-dashpot clamped >= 0, tangential spring (its displacement accumulating the contact
+  point's slip) + dashpot, the spring capped at mu |F_n| with the dashpot off while capped,
+  torque -r F_t on each disc, I = m r^2 / 2. Beside it, for disc-wall impacts, Coulomb's impulse
+  limits (normal impulse m (1 + e) v_n, tangential impulse mu times it if the contact point
+  slides throughout, i.e. |slip| >= 3 mu (1 + e) v_n) as ``coulomb_limit``: the shared law
+  exceeds them, because its tangential dashpot acts, uncapped, while the spring is below the cap
+  (the first moments of a contact, where F_n is small).
 - a disc launched along the floor (gravity on, moving at the start): it slides with deceleration
   mu g until its contact point stops, after t_roll = |slip_0| / (3 mu g), then rolls at
   v0 - mu g t_roll (2 v0 / 3 without spin). Measured from the end state: v_end and omega_end, and
@@ -129,8 +130,8 @@ def _pair_of(resolved: dict, geo: dict) -> dict:
 
 
 def _relative(d: np.ndarray, geo: dict):
-    """Relative position (disc 1 - disc 0, or the disc's height above the wall along n) and
-    velocity of the centres, and the contact distance."""
+    """Relative position and velocity of the centres (disc 1 - disc 0; for a wall, the disc's)
+    and the distance at which they touch (r0 + r1; for a wall, r)."""
     if geo["kind"] == "disc_disc":
         return d[1, :2] - d[0, :2], d[1, 3:5] - d[0, 3:5], d[0, 2] + d[1, 2]
     return d[0, :2], d[0, 3:5], d[0, 2]
