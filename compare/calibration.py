@@ -17,11 +17,13 @@ gives the value of every measured quantity from the scene alone:
   equations of the shared law integrated with RK4 at dt / 1000 (``integrate``): normal
   spring-dashpot clamped >= 0, tangential spring (its displacement accumulating the contact
   point's slip) + dashpot, the spring capped at mu |F_n| with the dashpot off while capped,
-  torque -r F_t on each disc, I = m r^2 / 2. Beside it, for disc-wall impacts, Coulomb's impulse
-  limits (normal impulse m (1 + e) v_n, tangential impulse mu times it if the contact point
-  slides throughout, i.e. |slip| >= 3 mu (1 + e) v_n) as ``coulomb_limit``: the shared law
-  exceeds them, because its tangential dashpot acts, uncapped, while the spring is below the cap
-  (the first moments of a contact, where F_n is small).
+  torque -r F_t on each disc, I = m r^2 / 2. Beside it, for disc-wall impacts, the rigid-body
+  Coulomb impact as ``coulomb_limit`` (normal impulse m (1 + e) v_n; tangential impulse mu times
+  it if the contact point slides throughout, i.e. |slip| >= 3 mu (1 + e) v_n, else the impulse
+  m |slip| / 3 that stops the slip): the shared law departs from it, by its tangential spring
+  (the slip reverses) and by its tangential dashpot, which acts uncapped while the spring is below
+  the cap (the first moments of a contact, where F_n is small), so that a sliding impact takes
+  more than mu times the normal impulse.
 - a disc launched along the floor (gravity on, moving at the start): it slides with deceleration
   mu g until its contact point stops, after t_roll = |slip_0| / (3 mu g), then rolls at
   v0 - mu g t_roll (2 v0 / 3 without spin). Measured from the end state: v_end and omega_end, and
@@ -328,12 +330,11 @@ def reference(resolved: dict, discs_start: np.ndarray, dt: float, lever: str = "
         out.update({f"omega_end_{k}": float(d[k, 5]) for k in range(len(d))})
         return out
     if not two:
-        # Coulomb's impulse limit (tangential impulse mu x normal impulse while sliding): what the
-        # law would give if the tangential force never exceeded mu F_n. The shared law caps the
-        # spring only and adds the dashpot while the spring is below the cap (at the start of
-        # the contact, where F_n is small), so its tangential impulse is larger: the reference
-        # is the integration, and this limit is reported beside it.
-        jt = -math.copysign(p["mu"] * j_n, slip)               # along tt, on the disc
+        # Rigid-body Coulomb impact: tangential impulse mu x the normal impulse if the contact
+        # point slides throughout, else what stops its slip (m |slip| / 3). The shared law's
+        # tangential spring and its uncapped dashpot at the first touch (module text) depart
+        # from it: the reference is the integration, this limit is reported beside it.
+        jt = -math.copysign(min(p["mu"] * j_n, m[0] * abs(slip) / 3), slip)   # along tt, on the disc
         v1 = d[0, 3:5] + (j_n * n + jt * tt) / m[0]
         out["coulomb_limit"] = {"v_t_end": float(v1 @ t),
                                 "omega_end_0": float(d[0, 5] - d[0, 2] * jt / (m[0] * d[0, 2] ** 2 / 2)),
@@ -405,8 +406,9 @@ def run_scene(name: str, codes, out: Path, timeout: float = 300, reuse: bool = F
 
 
 def table(rows: list, codes) -> str:
-    """Markdown: scene, quantity, reference, tolerance, each code (x: outside the tolerance);
-    then the code pairs that differ by more than CODE_REL x the scale."""
+    """Markdown: scene, quantity, reference, tolerance, each code (x: outside the tolerance), and
+    for disc-wall impacts Coulomb's impulse limits; then the code pairs that differ by more than
+    CODE_REL x the scale."""
     lines = ["| scene | quantity | reference | tol | " + " | ".join(codes) + " |",
              "|---|---|---|---|" + "---|" * len(codes)]
     for row in rows:
@@ -422,6 +424,10 @@ def table(rows: list, codes) -> str:
                 else:
                     cells.append("")
             lines.append(f"| {row['scene']} | {q} | {ref[q]:.6g} | {tol:.2g} | " + " | ".join(cells) + " |")
+        if "coulomb_limit" in ref:
+            cl = ref["coulomb_limit"]
+            lines.append(f"| {row['scene']} | rigid Coulomb impact ({'slides' if cl['slides_throughout'] else 'sticks'}): "
+                         f"v_t_end {cl['v_t_end']:.6g}, omega_end_0 {cl['omega_end_0']:.6g} | | |" + " |" * len(codes))
     diff = [f"{row['scene']} {pair_}: {', '.join(q for q, ok in a.items() if not ok)}"
             for row in rows for pair_, a in row["agree"].items() if not all(a.values())]
     lines += ["", f"Code pairs differing by more than {CODE_REL:g} x the scale: " + ("; ".join(diff) or "none")]

@@ -106,6 +106,10 @@ def test_integration_of_a_dashpot_free_sliding_impact_gives_coulomb_impulse_limi
     assert got["v_t_end"] == pytest.approx(vt - 2 * mu * vn, abs=1e-3 * vn)
     assert got["omega_end_0"] == pytest.approx(-2 * (2 * mu * vn) / 1.0, abs=2e-3 * vn)
     assert got["v_t_end"] != pytest.approx(vt - 2 * 1.1 * mu * vn, abs=1e-3 * vn)
+    rigid = cal.reference(r, c.discs, c.dt)["coulomb_limit"]
+    assert rigid["slides_throughout"]
+    assert rigid["v_t_end"] == pytest.approx(got["v_t_end"], abs=1e-3 * vn)
+    assert rigid["omega_end_0"] == pytest.approx(got["omega_end_0"], abs=2e-3 * vn)
 
 
 def test_floor_references_are_the_hand_formulas(cases):
