@@ -1,9 +1,7 @@
-"""The verdict on a collision scene: each code's measured rebound (compare/calibration.py) against
-the analytic or independent reference, and each reference code against the native engine.
-
-Two tolerances (calibration.TOL): against the reference, the explicit schemes' first-order error
-in dt / t_c; between codes, which run the same discrete law at the same dt, the codes' own
-measured agreement.
+"""The verdict on a collision scene (compare/calibration.py measures it): each code against the
+analytic or independent reference within the scheme's first-order error in dt / t_c
+(calibration.tolerances), and each reference code against the native engine within
+calibration.CODE_REL of each quantity's scale (the codes run the same discrete law at the same dt).
 """
 from __future__ import annotations
 
@@ -16,61 +14,57 @@ from .common import Case
 from .study import failures, metric
 
 
-def _close(a: float, b: float, rel: float, abs_: float) -> bool:
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return a == b or (math.isnan(a) and math.isnan(b))
-    return abs(a - b) <= max(abs_, rel * max(abs(a), abs(b)))
+def _worst(measured: dict, target: dict, tol: dict) -> float:
+    """Largest |measured - target| / tolerance over the quantities both have."""
+    w = 0.0
+    for q, t in tol.items():
+        if q in measured and q in target and t > 0:
+            a, b = measured[q], target[q]
+            w = max(w, abs(a - b) / t if math.isfinite(a) and math.isfinite(b) else math.inf)
+    return w
 
 
 def judge(name: str, case: Case, results: dict) -> tuple[list, dict]:
     start = np.asarray(case.discs, float)
-    ref = cal.reference(case.resolved, start, case.dt)
-    meas = {}
+    lever = case.resolved["contact"].get("lever_arm", "radius")
+    ref = cal.reference(case.resolved, start, case.dt, lever=lever)
+    tol = cal.tolerances(ref, case.dt)
+    row = {"scene": name, "reference": ref, "tolerance": tol, "codes": {}}
     for c, r in results.items():
-        if r.ok:
-            try:
-                meas[c] = cal.measure(case.resolved, start, np.asarray(r.discs_end, float), case.duration, result=r)
-            except ValueError as e:
-                r.status, r.reason = "failed", str(e)
+        if not r.ok:
+            row["codes"][c] = {"failed": r.reason}
+            continue
+        try:
+            row["codes"][c] = cal.measure(case.resolved, start, np.asarray(r.discs_end, float), case.duration,
+                                          r.profiles)
+        except ValueError as e:
+            row["codes"][c] = {"failed": str(e)}
+    ok = {c: m for c, m in row["codes"].items() if "failed" not in m}
+    row["pass"] = {c: cal.within(m, ref, case.dt) for c, m in ok.items()}
+    row["agree"] = {f"{c} vs native": cal.within(ok[c], ref, case.dt, other=ok["native"])
+                    for c in ok if c != "native" and "native" in ok}
+    row["failures"] = failures(results)
     metrics = []
     for c in results:
-        if c not in meas:
-            metrics.append(metric(f"collision against the reference ({c})", name, {}, "", False,
-                                  "run failed: " + failures(results)))
+        mname = f"collision against the reference ({c})"
+        if c not in ok:
+            metrics.append(metric(mname, name, {}, "calibration.tolerances", False,
+                                  f"run failed: {row['codes'][c]['failed']}"))
             continue
-        bad, worst = [], 0.0
-        for q, v in ref.items():
-            if q not in meas[c] or not isinstance(v, (int, float)):
-                continue
-            tol = cal.tolerance(q, case, against="reference")
-            if tol is None:
-                continue
-            ok = _close(meas[c][q], v, *tol)
-            scale = max(tol[0] * max(abs(v), abs(meas[c][q])), tol[1])
-            worst = max(worst, abs(meas[c][q] - v) / scale if scale > 0 else 0.0)
-            if not ok:
-                bad.append(f"{q} {meas[c][q]:.6g} vs {v:.6g}")
-        metrics.append(metric(f"collision against the reference ({c})", name,
-                              {"max_diff_over_tolerance": worst}, "calibration.TOL (reference)", not bad,
-                              "; ".join(bad)))
-    nat = meas.get("native")
+        bad = [f"{q} {ok[c][q]:.7g} vs {ref[q]:.7g} (tol {tol[q]:.2g})" for q, p in row["pass"][c].items() if not p]
+        metrics.append(metric(mname, name, {"max_diff_over_tolerance": _worst(ok[c], ref, tol)},
+                              "K dt/t_c x the quantity's change (+ sliding term)", not bad, "; ".join(bad)))
+    code_tol = {q: cal.CODE_REL * s for q, s in ref["scale"].items()}
     for c in results:
-        if c == "native" or c not in meas or nat is None:
-            if c != "native" and (c not in meas or nat is None):
-                metrics.append(metric(f"collision ({c} vs native)", name, {}, "", False,
-                                      "run failed: " + failures(results)))
+        if c == "native":
             continue
-        bad, worst = [], 0.0
-        for q, v in nat.items():
-            if q not in meas[c] or not isinstance(v, (int, float)):
-                continue
-            tol = cal.tolerance(q, case, against="code")
-            if tol is None:
-                continue
-            scale = max(tol[0] * max(abs(v), abs(meas[c][q])), tol[1])
-            worst = max(worst, abs(meas[c][q] - v) / scale if scale > 0 else 0.0)
-            if not _close(meas[c][q], v, *tol):
-                bad.append(f"{q} {meas[c][q]:.8g} vs {v:.8g}")
-        metrics.append(metric(f"collision ({c} vs native)", name, {"max_diff_over_tolerance": worst},
-                              "calibration.TOL (between codes)", not bad, "; ".join(bad)))
-    return metrics, {"case": name, "reference": ref, "codes": meas, "failures": failures(results)}
+        mname = f"collision ({c} vs native)"
+        if c not in ok or "native" not in ok:
+            metrics.append(metric(mname, name, {}, f"{cal.CODE_REL:g} x scale", False,
+                                  "run failed: " + row["failures"]))
+            continue
+        agree = row["agree"][f"{c} vs native"]
+        bad = [f"{q} {ok[c][q]:.9g} vs {ok['native'][q]:.9g}" for q, p in agree.items() if not p]
+        metrics.append(metric(mname, name, {"max_diff_over_tolerance": _worst(ok[c], ok["native"], code_tol)},
+                              f"{cal.CODE_REL:g} x the quantity's change", not bad, "; ".join(bad)))
+    return metrics, row

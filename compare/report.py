@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import janssen  # noqa: E402
+from . import calibration, janssen  # noqa: E402
 from .common import write_text_atomic  # noqa: E402
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green"}
@@ -91,31 +91,25 @@ def plot_janssen(fits: dict, png: Path, name: str) -> None:
 
 
 def plot_calibration(rows: list, png: Path) -> None:
-    """Each collision quantity of each code relative to its reference value (1 = the reference)."""
-    qs = sorted({q for r in rows for q, v in (r.get("reference") or {}).items() if isinstance(v, (int, float))
-                 and v != 0 and any(q in m for m in r["codes"].values())})
-    if not qs:
-        return
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.45 * len(rows) * len(qs) / 2), 4.2))
-    labels, x = [], 0
-    for r in rows:
-        for q in qs:
-            ref = (r.get("reference") or {}).get(q)
-            if not isinstance(ref, (int, float)) or ref == 0 or not any(q in m for m in r["codes"].values()):
-                continue
-            for j, code in enumerate(("native", "liggghts", "yade")):
-                v = r["codes"].get(code, {}).get(q)
-                if isinstance(v, (int, float)):
-                    ax.plot(x + (j - 1) * 0.2, v / ref, MARKERS[code], color=COLORS[code], ms=5,
-                            label=code if x == 0 else None)
-            labels.append(f"{r['case']}: {q}")
-            x += 1
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_xticks(range(len(labels)))
-    ax.set_xticklabels(labels, rotation=75, ha="right", fontsize=6)
-    ax.set_ylabel("measured / reference")
-    ax.set_title("Calibration collisions: every code against the analytic or independent reference", fontsize=10)
-    ax.grid(alpha=0.3)
+    """Each code's largest deviation from the reference per scene, in units of its tolerance."""
+    fig, ax = plt.subplots(figsize=(12, 4))
+    names = [r["scene"] for r in rows]
+    x = np.arange(len(names))
+    for j, code in enumerate(("native", "liggghts", "yade")):
+        vals = []
+        for r in rows:
+            m = r["codes"].get(code, {})
+            dev = [abs(m[q] - r["reference"][q]) / t for q, t in r["tolerance"].items() if q in m and t > 0]
+            vals.append(max(dev) if dev else np.nan)
+        ax.bar(x + (j - 1) * 0.27, vals, 0.27, color=COLORS[code], label=code)
+    ax.axhline(1.0, color="k", lw=1, ls="--", label="tolerance")
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=60, ha="right", fontsize=7)
+    ax.set_ylabel("max |code - reference| / tolerance")
+    ax.set_yscale("symlog", linthresh=1e-3)
+    ax.set_title("Calibration collisions: each code's largest deviation from the analytic or independent reference",
+                 fontsize=10)
+    ax.grid(alpha=0.3, axis="y")
     ax.legend(fontsize=7)
     fig.tight_layout()
     _savefig(fig, png)
@@ -224,7 +218,7 @@ def write(report: dict, out: Path) -> None:
     if report.get("calibration"):
         plot_calibration(report["calibration"], out / "calibration.png")
         if (out / "calibration.png").exists():
-            pngs.append(("Calibration collisions", "calibration.png"))
+            pngs.append(("Calibration: deviation from the reference / tolerance", "calibration.png"))
     for st in report.get("static", []):
         pj = out / "static" / st["case"] / "profiles.json"
         if pj.exists():
@@ -286,17 +280,10 @@ def write(report: dict, out: Path) -> None:
                 L.append(f"| {a['scene']} | {row['option']} | {a['failing']} | {row['failing']} |")
             L.append(f"| {a['scene']} | **verdict** | {a['verdict']} | |")
     if report.get("calibration"):
-        L += ["", "## Collisions", "", "| scene | quantity | reference | native | liggghts | yade |",
-              "|---|---|---|---|---|---|"]
-        for r in report["calibration"]:
-            for q, ref in (r.get("reference") or {}).items():
-                if not isinstance(ref, (int, float)):
-                    continue
-                vals = [r["codes"].get(c, {}).get(q) for c in ("native", "liggghts", "yade")]
-                L.append(f"| {r['case']} | {q} | {ref:.7g} | " + " | ".join(
-                    f"{v:.7g}" if isinstance(v, (int, float)) else "" for v in vals) + " |")
-            if r.get("failures"):
-                L.append(f"| {r['case']} | FAILED | {r['failures']} | | | |")
+        codes = [c for c in ("native", "liggghts", "yade") if c in report["codes"]]
+        L += ["", "## Collisions (Chung & Ooi's tests as scenes: compare/calibration.py)", "",
+              "Each code against the reference (**x**: outside the tolerance), and the reference codes against "
+              "the native engine.", "", calibration.table(report["calibration"], codes)]
     if report.get("static"):
         L += ["", "## Static cases: wall totals (force by the discs on each wall)", ""]
         for st in report["static"]:

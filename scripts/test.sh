@@ -7,6 +7,7 @@ bash scripts/install_deps.sh
 bash scripts/build.sh
 /usr/bin/python3 scripts/make_paper_scenes.py --check
 /usr/bin/python3 scripts/make_janssen_scene.py --check
+/usr/bin/python3 scripts/make_calibration_scenes.py --check
 DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m compare translate --check
 ctest --test-dir build --output-on-failure -j "$(nproc)"
 
