@@ -107,19 +107,26 @@ def main(argv=None) -> int:
     verdict = rep["passed"] and (not a.mutants or rep["mutants"]["all_caught"])
     print(f"{a.out / 'report.md'}: {'PASS' if rep['passed'] else 'FAIL'} "
           f"({len(rep['metrics']) - n_fail} of {len(rep['metrics'])} metrics within tolerance)"
-          + (f"; mutants caught: {rep['mutants']['n_caught']} of {len(rep['mutants']['rows'])}" if a.mutants else ""))
+          + (f"; mutants caught: {rep['mutants']['n_caught']} of {rep['mutants']['n_applicable']}" if a.mutants else ""))
     return 0 if verdict else 1
 
 
 def run_mutants(plans, baseline: dict, out: Path, codes, log) -> dict:
     rows = []
     for mu in mutants.mutations(codes):
+        if not any(mu.applies(mu.code, plan.member_case(p, 0)) for p in plans):
+            rows.append({"mutant": mu.name, "code": mu.code, "applicable": False, "caught": False,
+                         "caught_physically": False, "metrics": []})
+            log(f"mutant {mu.label}: changes nothing in these scenes (left out)")
+            continue
         rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=plans)
         c = mutants.caught(baseline, rep)
-        rows.append({"mutant": mu.name, "code": mu.code, **c})
+        rows.append({"mutant": mu.name, "code": mu.code, "applicable": True, **c})
         log(f"mutant {mu.label}: {'caught by ' + ', '.join(sorted({r['metric'] for r in c['metrics']})) if c['caught'] else 'NOT CAUGHT'}")
-    n = sum(r["caught"] for r in rows)
-    res = {"rows": rows, "n_caught": n, "all_caught": n == len(rows) and baseline["passed"]}
+    live = [r for r in rows if r["applicable"]]
+    n = sum(r["caught"] for r in live)
+    res = {"rows": rows, "n_caught": n, "n_applicable": len(live),
+           "all_caught": bool(live) and n == len(live) and baseline["passed"]}
     (out / "mutants.json").write_text(json.dumps(res, indent=1, default=float))
     return res
 

@@ -250,8 +250,9 @@ def write(report: dict, out: Path) -> None:
          f"within tolerance; {report.get('elapsed_s', float('nan')):.0f} s."]
     mu = report.get("mutants")
     if mu:
-        L.append(f"**Mutants: {mu['n_caught']} of {len(mu['rows'])} caught** "
-                 f"({sum(r['caught_physically'] for r in mu['rows'])} by a physical metric, the translation check aside).")
+        L.append(f"**Mutants: {mu['n_caught']} of {mu['n_applicable']} caught** "
+                 f"({sum(r['caught_physically'] for r in mu['rows'])} by a physical metric, the translation check aside; "
+                 f"{len(mu['rows']) - mu['n_applicable']} change nothing in these scenes).")
     L += ["", "Codes: " + "; ".join(f"{c}: {v}" for c, v in report["codes"].items()), "", "## Method", ""] + METHOD
     if report.get("scenes"):
         L += ["", "## Scenes", "", "| scene | kind | members | dt [s] | duration [s] | native law | time [s] | verdict |",
@@ -269,6 +270,9 @@ def write(report: dict, out: Path) -> None:
               "|---|---|---|---|---|"]
         for r in mu["rows"]:
             by = "; ".join(f"{x['scene']}: {x['metric']} ({_fmt(x['by'])})" for x in r["metrics"][:6])
+            if not r.get("applicable", True):
+                L.append(f"| {r['mutant']} | {r['code']} | n/a: changes nothing in these scenes | | |")
+                continue
             L.append(f"| {r['mutant']} | {r['code']} | {'yes' if r['caught'] else '**NO**'} | "
                      f"{'yes' if r['caught_physically'] else 'no'} | {by} |")
     if report.get("attribution"):

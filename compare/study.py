@@ -444,9 +444,13 @@ def discharge_compare(scene_name: str, per_code: dict) -> tuple[list, dict]:
             name = f"discharge {key} ({c} vs native)"
             if na == 0 and nb == 0:
                 continue  # e.g. no flow rate in a jammed ensemble: judged by discs out and jams
-            if na == 0 or nb == 0:
-                metrics.append(metric(name, scene_name, {"native": ref[key], c: s[key]}, "", False,
-                                      "defined in one code only"))
+            if na < 2 or nb < 2:
+                why = " (a flow rate needs 10 removals: the other members jammed)" if key == "flow_rate" else ""
+                m = metric(name, scene_name, {"native": ref[key], c: s[key]}, "", False,
+                           f"defined in {na} native and {nb} {c} member(s){why}: the codes behave differently, "
+                           "or too few members to judge")
+                m["kind"] = "statistical"
+                metrics.append(m)
                 continue
             t = stats.compare_means(ref[key], s[key], alpha)
             note = ""
