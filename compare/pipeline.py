@@ -28,12 +28,13 @@ from . import janssen, stats, study
 from .common import SHARED_VARIANT, Case, Result, failed
 from .plan import Entry, Plan, PlanError, jittered, make_plan, member_case, refusals, start_discs
 
-# Static cases from a frozen packing: tolerances matched to the codes' agreement (at most 10x the
-# largest cross-code spread measured on the frozen packings; benchmarks/README.md is not involved:
-# `python3 -m compare scene ... --start frozen` prints the spreads as the metrics' values).
-TOL_STATIC_TOTAL = 1e-4      # wall normal totals, relative (spread measured: 3e-6 .. 1e-5)
-TOL_STATIC_SHEAR = 1e-3      # side-wall friction totals, relative (spread measured: up to 1e-4)
-TOL_STATIC_CUMULATIVE = 1e-3  # cumulative normal profile / wall total (spread measured: up to 1e-4)
+# Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
+# the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
+# codes agree to 1e-12 .. 1e-4 in the wall normal totals, 1e-11 .. 9.5e-4 in the side-wall
+# friction totals and 1e-12 .. 1.7e-4 in the cumulative profiles, the largest on 11/12 .. 13/14.
+TOL_STATIC_TOTAL = 1e-3       # wall normal totals, relative
+TOL_STATIC_SHEAR = 1e-2       # side-wall friction totals, relative
+TOL_STATIC_CUMULATIVE = 2e-3  # cumulative normal profile / wall total
 
 
 def _metric(name, scene, values, tol, passed, note="", kind="deterministic") -> dict:
