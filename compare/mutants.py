@@ -38,11 +38,13 @@ class Mutation:
     scope: str
 
     def applies(self, code: str, case) -> bool:
+        """For this code, in a case its scope covers, and changing something there (gravity x 1.01
+        changes nothing without gravity)."""
         if code != self.code:
             return False
-        if self.scope == "gravity":
-            return float(np.hypot(*case.resolved["gravity"])) > 0
-        return True
+        if self.scope == "gravity" and not float(np.hypot(*case.resolved["gravity"])) > 0:
+            return False
+        return self.apply(case.resolved) != case.resolved
 
     def apply(self, resolved: dict) -> dict:
         r = copy.deepcopy(resolved)

@@ -43,6 +43,7 @@ def test_mutants_are_caught_and_a_mutant_with_nothing_to_change_is_not_counted(d
     mu = json.loads((out / "mutants.json").read_text())
     rows = {r["mutant"]: r for r in mu["rows"]}
     assert rows["liggghts_mu_disc_wall_x0.9_gravity_cases"]["applicable"] is False
+    assert rows["liggghts_gravity_x1.01"]["applicable"] is False            # no gravity to scale
     for name in ("kn_x1.05", "eta_n_x1.2", "density_x1.01"):
         r = rows[f"liggghts_{name}"]
         assert r["caught"] and r["caught_physically"], r        # t_c and e of the head-on collision
