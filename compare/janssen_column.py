@@ -19,7 +19,12 @@ the radius and the wall time of the code.
     /usr/bin/python3 -m compare.janssen_column CODE MEMBERS OUT_DIR [FIRST]
 
 runs members FIRST .. FIRST+MEMBERS-1 of CODE (native, liggghts or yade) and writes
-OUT_DIR/CODE/member_NN.json (a member already written is kept).
+OUT_DIR/CODE/member_NN.json (a member already written is kept);
+
+    /usr/bin/python3 -m compare.janssen_column analyse OUT_DIR
+
+fits every code's ensemble found there (``analyse``), compares each with native and writes
+OUT_DIR/janssen_column.json and OUT_DIR/janssen_column.png.
 """
 from __future__ import annotations
 
@@ -177,8 +182,44 @@ def load_members(out_dir: Path, code: str) -> list[dict]:
     return [json.loads(p.read_text()) for p in sorted((Path(out_dir) / code).glob("member_*.json"))]
 
 
+MERGE = 3   # 2 cm profile bins joined three by three: 6 cm = 0.3 W per fitted point
+
+
+def analyse(out_dir: Path, codes=("native", "liggghts", "yade"), merge: int = MERGE) -> dict:
+    """Ensemble fit per code (members with status ok), comparison of each code with native,
+    wall time per member; writes janssen_column.json and janssen_column.png in ``out_dir``."""
+    from . import janssen_figure
+    out_dir = Path(out_dir)
+    fits, summary = {}, {"codes": {}, "comparisons": {}}
+    for code in codes:
+        recs = load_members(out_dir, code)
+        ok = [m for m in recs if m.get("status") == "ok"]
+        if len(ok) < 2:
+            continue
+        f = janssen.ensemble_fit(ok, merge)
+        fits[code] = f
+        summary["codes"][code] = {
+            "members": len(ok), "failed": [m.get("reason", "") for m in recs if m.get("status") != "ok"],
+            "wall_time_per_member_s": float(np.mean([m["wall_time_s"] for m in ok])),
+            "n_discs_mean": float(np.mean([m["n_discs"] for m in ok])),
+            "phi_mean": float(np.mean([m["phi"] for m in ok])),
+            **{k: f[k] for k in janssen.FIT_KEYS}, "ci": f["ci"], "r2": f["r2"], "chi2_red": f["chi2_red"],
+            "fit_counts": f["r2"] >= janssen.R2_MIN, "checks": f["checks"]}
+    if "native" in fits:
+        for code, f in fits.items():
+            if code != "native":
+                summary["comparisons"][f"{code} vs native"] = janssen.compare_fits(fits["native"], f)
+    write_text_atomic(out_dir / "janssen_column.json", json.dumps(summary, indent=1) + "\n")
+    if fits:
+        janssen_figure.plot_ensemble_fits(fits, out_dir / "janssen_column.png")
+    return summary
+
+
 if __name__ == "__main__":
     a = sys.argv[1:]
+    if len(a) == 2 and a[0] == "analyse":
+        analyse(Path(a[1]))
+        sys.exit(0)
     if len(a) not in (3, 4):
         print(__doc__, file=sys.stderr)
         sys.exit(2)
