@@ -117,8 +117,18 @@ R2_MIN = 0.95             # a fit counts only with r^2 at least this
 FIT_KEYS = ("p_inf", "lambda", "z0", "K", "mu_w_eff")
 
 
-def ensemble_profile(members: list[dict], merge: int = 2) -> dict:
-    """Mean side-wall pressure over members, bin by bin, and each bin's standard error.
+POOLED_BELOW = 8          # ensembles smaller than this use the pooled relative scatter
+
+
+def ensemble_profile(members: list[dict], merge: int = 2, sigma: str = "auto") -> dict:
+    """Mean side-wall pressure over members, bin by bin, and each bin's standard error ``se``.
+
+    ``sigma``: "bin": each bin's own standard error (sample standard deviation over members /
+    sqrt(n)); "pooled": the relative scatter (standard deviation over mean) pooled over the kept
+    bins as an RMS, times each bin's mean, / sqrt(n) -- the force-chain scatter grows with the
+    pressure, and with 2-4 members a bin's own standard deviation (1-3 degrees of freedom) can be
+    near zero by chance and would dominate a weighted fit; "auto": "bin" from POOLED_BELOW
+    members up, else "pooled".
 
     ``members``: records with the same bins (``y_lo``, ``y_hi``: height of each bin, ``p``: mean
     side-wall pressure there), ``surface``, ``floor``, ``width``. ``merge`` neighbouring bins are
@@ -139,10 +149,20 @@ def ensemble_profile(members: list[dict], merge: int = 2) -> dict:
     floor, width = float(members[0]["floor"]), float(members[0]["width"])
     keep = (y_hi <= min(m["surface"] for m in members)) & (y_lo >= floor + width / 2)
     y_mid = 0.5 * (y_lo + y_hi)
-    se = P.std(axis=0, ddof=1) / math.sqrt(len(members))
+    n = len(members)
+    mean, sd = P.mean(axis=0), P.std(axis=0, ddof=1)
+    mode = sigma if sigma != "auto" else ("bin" if n >= POOLED_BELOW else "pooled")
+    if mode == "bin":
+        se = sd / math.sqrt(n)
+    elif mode == "pooled":
+        ok = keep & (mean > 0)
+        cv = math.sqrt(float(np.mean((sd[ok] / mean[ok]) ** 2)))
+        se = cv * np.abs(mean) / math.sqrt(n)
+    else:
+        raise ValueError(f"sigma: 'bin', 'pooled' or 'auto', not {sigma!r}")
     order = np.argsort(surface - y_mid[keep])
-    return {"z": (surface - y_mid[keep])[order], "p": P.mean(axis=0)[keep][order], "se": se[keep][order],
-            "members": len(members), "surface": surface}
+    return {"z": (surface - y_mid[keep])[order], "p": mean[keep][order], "se": se[keep][order],
+            "members": n, "surface": surface, "sigma": mode}
 
 
 def fit_ci(z, p, sigma, level_z: float = Z95) -> dict:
@@ -191,10 +211,10 @@ def derived_ci(f: dict, rho_b: float, rho_b_se: float, g: float, width: float, l
     return f
 
 
-def ensemble_fit(members: list[dict], merge: int = 2) -> dict:
+def ensemble_fit(members: list[dict], merge: int = 2, sigma: str = "auto") -> dict:
     """The fit of the ensemble-averaged profile with derived K and mu_w,eff (rho_b from the
     members' packing fractions: mean and standard error), and the per-member cross-checks."""
-    prof = ensemble_profile(members, merge)
+    prof = ensemble_profile(members, merge, sigma)
     f = fit_ci(prof["z"], prof["p"], prof["se"])
     phi = np.array([m["phi"] for m in members], float)
     rho_s = float(members[0]["rho_s"])

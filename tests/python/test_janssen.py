@@ -149,3 +149,16 @@ def test_scene_generator_is_up_to_date():
     assert abs(r.mean() - 0.5) < 0.01 and W >= 20 * 2 * 0.5       # W >= 20 mean diameters
     # the packed fill (about 0.8 of the area) is at least 6 W deep
     assert np.sum(math.pi * r ** 2) / (0.84 * W) >= 6 * W
+
+
+def test_small_ensembles_use_the_pooled_scatter_and_still_cover_the_truth():
+    truth = janssen_truth()
+    hits, trials = 0, 40
+    for s in range(trials):
+        f = janssen.ensemble_fit(synthetic_members(truth, n=2, noise=0.1, seed=100 + s), merge=3)
+        assert f["profile"]["sigma"] == "pooled"
+        hits += all(abs(f[k] - truth[k]) <= f["ci"][k] for k in ("p_inf", "lambda"))
+    assert hits / trials >= 0.8, hits / trials
+    assert janssen.ensemble_profile(synthetic_members(truth, n=8), sigma="auto")["sigma"] == "bin"
+    with pytest.raises(ValueError):
+        janssen.ensemble_profile(synthetic_members(truth, n=2), sigma="median")
