@@ -162,3 +162,56 @@ def test_small_ensembles_use_the_pooled_scatter_and_still_cover_the_truth():
     assert janssen.ensemble_profile(synthetic_members(truth, n=8), sigma="auto")["sigma"] == "bin"
     with pytest.raises(ValueError):
         janssen.ensemble_profile(synthetic_members(truth, n=2), sigma="median")
+
+
+# ------------------------------------------------------------------ the column's members
+
+@pytest.fixture
+def column(dem_binary, monkeypatch):
+    monkeypatch.setenv("DEM_BINARY", str(dem_binary))
+    from compare import janssen_column
+    return janssen_column, janssen_column.resolved_scene()
+
+
+def test_member_starts_are_seeded_jittered_and_apart(column):
+    jc, r = column
+    base = np.array(r["discs"], float)
+    a, a2, b = jc.member_start(r, 0), jc.member_start(r, 0), jc.member_start(r, 1)
+    assert np.array_equal(a, a2) and not np.array_equal(a, b)
+    assert np.max(np.abs(a[:, :2] - base[:, :2])) <= jc.JITTER
+    assert np.max(np.abs(a[:, :2] - base[:, :2])) > 0.9 * jc.JITTER
+    geo = jc.geometry(r)
+    assert jc.max_overlap_ratio(a, geo["width"], geo["floor"]) == 0.0   # every disc apart
+
+
+def test_max_overlap_ratio_and_floor_cut(column):
+    jc, _ = column
+    d = np.array([[5.0, 5.0, 0.5, 0, 0, 0], [5.99, 5.0, 0.5, 0, 0, 0], [10.0, 0.395, 0.4, 0, 0, 0]])
+    # pair: overlap 0.01 cm over r 0.5 = 0.02; floor: 0.005 cm over r 0.4 = 0.0125
+    assert jc.max_overlap_ratio(d, 20.0, 0.0) == pytest.approx(0.02, abs=1e-12)
+    assert jc.max_overlap_ratio(d[2:], 20.0, 0.0) == pytest.approx(0.0125, abs=1e-12)
+    cut = jc.cut_floor_layer(np.vstack([d, [[3.0, 1.2, 0.5, 1, 1, 1]]]), 0.0)
+    assert len(cut) == 2 and np.all(cut[:, 3:] == 0)        # the disc at 0.395 is taken away
+
+
+def test_member_record_balance_and_mobilised_friction(column):
+    from compare.common import Result
+    jc, r = column
+    geo = jc.geometry(r)
+    discs = np.array([[10.0, 50.0 + k, 0.5, 0, 0, 0] for k in range(40)])
+    weight = float(np.sum(geo["rho_s"] * math.pi * discs[:, 2] ** 2) * geo["g"])
+    n_bins = 120
+    prof = lambda normal, shear: {"s_lo": list(np.arange(n_bins) * 2.0), "s_hi": list(np.arange(1, n_bins + 1) * 2.0),
+                                  "normal": list(normal), "shear": list(shear)}
+    normal = np.full(n_bins, 1000.0)
+    shear = 0.3 * normal                                   # every bin at 0.3 of its normal force
+    friction = 2 * shear.sum()
+    good = Result(code="x", case="c", discs_end=discs.tolist(),
+                  profiles={"left": prof(normal, shear), "right": prof(normal, shear),
+                            "bottom": {"s_lo": [0.0], "s_hi": [20.0], "normal": [weight - friction], "shear": [0.0]}})
+    rec = jc.member_record(r, good, "x", 0, 1.0)
+    assert rec["balance"] == pytest.approx(0.0, abs=1e-12)
+    assert rec["mobilised_upper"] == pytest.approx(0.3) and rec["mobilised_all"] == pytest.approx(0.3)
+    assert rec["p"][0] == pytest.approx(500.0)            # mean of both walls per cm of wall
+    good.profiles["bottom"]["normal"] = [weight - 0.5 * friction]   # half the friction missing
+    assert jc.member_record(r, good, "x", 0, 1.0)["balance"] == pytest.approx(0.5 * friction / weight)
