@@ -191,7 +191,8 @@ def test_max_overlap_ratio_and_floor_cut(column):
     assert jc.max_overlap_ratio(d, 20.0, 0.0) == pytest.approx(0.02, abs=1e-12)
     assert jc.max_overlap_ratio(d[2:], 20.0, 0.0) == pytest.approx(0.0125, abs=1e-12)
     cut = jc.cut_floor_layer(np.vstack([d, [[3.0, 1.2, 0.5, 1, 1, 1]]]), 0.0)
-    assert len(cut) == 2 and np.all(cut[:, 3:] == 0)        # the disc at 0.395 is taken away
+    assert len(cut) == 3 and np.all(cut[:, 3:] == 0)        # the disc touching the floor is taken away
+    assert 0.395 not in cut[:, 1] and 1.2 in cut[:, 1]      # one resting 0.2 cm above it is kept
 
 
 def test_member_record_balance_and_mobilised_friction(column):
