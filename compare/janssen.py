@@ -108,3 +108,158 @@ def packing_fraction(discs: np.ndarray, width: float, floor_y: float, surface_y:
     d = np.asarray(discs, float)
     below = d[:, 1] <= surface_y
     return float(np.sum(math.pi * d[below, 2] ** 2) / (width * (surface_y - floor_y)))
+
+
+# ---------------------------------------------------------------- ensembles with intervals
+
+Z95 = 1.959963984540054   # two-sided 95 % quantile of the normal distribution
+R2_MIN = 0.95             # a fit counts only with r^2 at least this
+FIT_KEYS = ("p_inf", "lambda", "z0", "K", "mu_w_eff")
+
+
+POOLED_BELOW = 8          # ensembles smaller than this use the pooled relative scatter
+
+
+def ensemble_profile(members: list[dict], merge: int = 2, sigma: str = "auto") -> dict:
+    """Mean side-wall pressure over members, bin by bin, and each bin's standard error ``se``.
+
+    ``sigma``: "bin": each bin's own standard error (sample standard deviation over members /
+    sqrt(n)); "pooled": the relative scatter (standard deviation over mean) pooled over the kept
+    bins as an RMS, times each bin's mean, / sqrt(n) -- the force-chain scatter grows with the
+    pressure, and with 2-4 members a bin's own standard deviation (1-3 degrees of freedom) can be
+    near zero by chance and would dominate a weighted fit; "auto": "bin" from POOLED_BELOW
+    members up, else "pooled".
+
+    ``members``: records with the same bins (``y_lo``, ``y_hi``: height of each bin, ``p``: mean
+    side-wall pressure there), ``surface``, ``floor``, ``width``. ``merge`` neighbouring bins are
+    joined first (their pressures averaged). Depth z is measured below the members' mean surface;
+    bins are kept when they lie wholly below the lowest member surface and more than W/2 above
+    the floor (validation.md).
+    """
+    if len(members) < 2:
+        raise ValueError("an ensemble profile needs at least 2 members")
+    y_lo = np.array(members[0]["y_lo"], float)
+    y_hi = np.array(members[0]["y_hi"], float)
+    P = np.array([m["p"] for m in members], float)
+    n = (len(y_lo) // merge) * merge
+    y_lo = y_lo[:n].reshape(-1, merge).min(axis=1)
+    y_hi = y_hi[:n].reshape(-1, merge).max(axis=1)
+    P = P[:, :n].reshape(len(members), -1, merge).mean(axis=2)
+    surface = float(np.mean([m["surface"] for m in members]))
+    floor, width = float(members[0]["floor"]), float(members[0]["width"])
+    keep = (y_hi <= min(m["surface"] for m in members)) & (y_lo >= floor + width / 2)
+    y_mid = 0.5 * (y_lo + y_hi)
+    n = len(members)
+    mean, sd = P.mean(axis=0), P.std(axis=0, ddof=1)
+    mode = sigma if sigma != "auto" else ("bin" if n >= POOLED_BELOW else "pooled")
+    if mode == "bin":
+        se = sd / math.sqrt(n)
+    elif mode == "pooled":
+        ok = keep & (mean > 0)
+        cv = math.sqrt(float(np.mean((sd[ok] / mean[ok]) ** 2)))
+        se = cv * np.abs(mean) / math.sqrt(n)
+    else:
+        raise ValueError(f"sigma: 'bin', 'pooled' or 'auto', not {sigma!r}")
+    order = np.argsort(surface - y_mid[keep])
+    return {"z": (surface - y_mid[keep])[order], "p": mean[keep][order], "se": se[keep][order],
+            "members": n, "surface": surface, "sigma": mode}
+
+
+def fit_ci(z, p, sigma, level_z: float = Z95) -> dict:
+    """Weighted least squares of p = p_inf (1 - exp(-(z - z0)/lambda)) (scipy curve_fit with
+    ``sigma`` as absolute standard errors); 95 % half-widths ``ci`` = 1.96 x the standard errors
+    from pcov, which is scaled by the reduced chi^2 when that exceeds 1 (scatter the given sigma
+    does not explain widens the intervals, never narrows them). r^2 is the unweighted share of
+    the profile's variance that the model explains."""
+    from scipy.optimize import curve_fit
+    z, p, sigma = (np.asarray(a, float) for a in (z, p, sigma))
+    if len(z) < 4:
+        raise ValueError(f"Janssen fit needs at least 4 points, got {len(z)}")
+    sigma = np.where(sigma > 0, sigma, np.max(sigma[sigma > 0]) if np.any(sigma > 0) else 1.0)
+    start = fit(z, p)
+    p0 = [start["p_inf"], start["lambda"], start["z0"] if math.isfinite(start["z0"]) else 0.0]
+    popt, pcov = curve_fit(model, z, p, p0=p0, sigma=sigma, absolute_sigma=True, maxfev=20000)
+    res = p - model(z, *popt)
+    dof = max(len(z) - 3, 1)
+    chi2_red = float(np.sum((res / sigma) ** 2) / dof)
+    pcov = pcov * max(1.0, chi2_red)
+    se = np.sqrt(np.diag(pcov))
+    ss_tot = float(np.sum((p - p.mean()) ** 2))
+    names = ("p_inf", "lambda", "z0")
+    return {**{k: float(v) for k, v in zip(names, popt)},
+            "se": {k: float(s) for k, s in zip(names, se)},
+            "ci": {k: float(level_z * s) for k, s in zip(names, se)},
+            "cov": pcov.tolist(), "r2": 1 - float(res @ res) / ss_tot if ss_tot > 0 else float("nan"),
+            "chi2_red": chi2_red, "n_points": int(len(z))}
+
+
+def derived_ci(f: dict, rho_b: float, rho_b_se: float, g: float, width: float, level_z: float = Z95) -> dict:
+    """mu_w,eff = rho_b g W / (2 p_inf) and K = p_inf / (rho_b g lambda) with standard errors
+    propagated to first order from the fit's covariance of (p_inf, lambda) and rho_b's standard
+    error (independent of the fit); adds them to ``f`` and returns it."""
+    p_inf, lam = f["p_inf"], f["lambda"]
+    cov = np.array(f["cov"], float)
+    vp, vl, cpl = cov[0, 0], cov[1, 1], cov[0, 1]
+    vr = (rho_b_se / rho_b) ** 2
+    mu = rho_b * g * width / (2 * p_inf)
+    K = p_inf / (rho_b * g * lam)
+    mu_se = abs(mu) * math.sqrt(vp / p_inf ** 2 + vr)
+    K_se = abs(K) * math.sqrt(max(vp / p_inf ** 2 + vl / lam ** 2 - 2 * cpl / (p_inf * lam) + vr, 0.0))
+    f.update({"mu_w_eff": mu, "K": K, "rho_b": rho_b})
+    f["se"].update({"mu_w_eff": mu_se, "K": K_se, "rho_b": rho_b_se})
+    f["ci"].update({"mu_w_eff": level_z * mu_se, "K": level_z * K_se, "rho_b": level_z * rho_b_se})
+    return f
+
+
+def ensemble_fit(members: list[dict], merge: int = 2, sigma: str = "auto") -> dict:
+    """The fit of the ensemble-averaged profile with derived K and mu_w,eff (rho_b from the
+    members' packing fractions: mean and standard error), and the per-member cross-checks."""
+    prof = ensemble_profile(members, merge, sigma)
+    f = fit_ci(prof["z"], prof["p"], prof["se"])
+    phi = np.array([m["phi"] for m in members], float)
+    rho_s = float(members[0]["rho_s"])
+    derived_ci(f, rho_s * phi.mean(), rho_s * phi.std(ddof=1) / math.sqrt(len(phi)),
+               float(members[0]["g"]), float(members[0]["width"]))
+    f["profile"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in prof.items()}
+    f["checks"] = member_checks(members)
+    return f
+
+
+def member_checks(members: list[dict], balance_tol: float = 0.01) -> dict:
+    """Per member: global balance (floor force + wall friction - weight) / weight within
+    ``balance_tol``; mobilised wall friction (signed shear over normal on the side walls) in the
+    upper half and overall, against the Coulomb coefficient mu_w."""
+    bal = [m["balance"] for m in members]
+    up = np.array([m["mobilised_upper"] for m in members], float)
+    return {"balance": bal, "balance_ok": bool(all(abs(b) <= balance_tol for b in bal)),
+            "mobilised_upper": up.tolist(), "mobilised_upper_mean": float(up.mean()),
+            "mobilised_upper_se": float(up.std(ddof=1) / math.sqrt(len(up))) if len(up) > 1 else float("nan"),
+            "mobilised_all_mean": float(np.mean([m["mobilised_all"] for m in members])),
+            "mu_w": float(members[0]["mu_w"]),
+            "max_overlap_ratio": float(max(m["max_overlap_ratio"] for m in members))}
+
+
+def compare_fits(a: dict, b: dict, keys=FIT_KEYS, r2_min: float = R2_MIN, level_z: float = Z95) -> dict:
+    """Two fits agree when both have r^2 >= r2_min and, for every parameter, the difference lies
+    within the combined interval level_z sqrt(se_a^2 + se_b^2)."""
+    out, ok = {}, a["r2"] >= r2_min and b["r2"] >= r2_min
+    for k in keys:
+        diff = b[k] - a[k]
+        tol = level_z * math.hypot(a["se"][k], b["se"][k])
+        agree = bool(abs(diff) <= tol)
+        out[k] = {"a": a[k], "b": b[k], "diff": diff, "tol": tol, "agree": agree}
+        ok = ok and agree
+    return {"params": out, "r2": [a["r2"], b["r2"]], "r2_ok": bool(a["r2"] >= r2_min and b["r2"] >= r2_min),
+            "agree": bool(ok)}
+
+
+def band(f: dict, z, level_z: float = Z95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Model and its pointwise confidence band (first-order, from the fit's covariance)."""
+    z = np.asarray(z, float)
+    p_inf, lam, z0 = f["p_inf"], f["lambda"], f["z0"]
+    e = np.exp(-(z - z0) / lam)
+    J = np.column_stack([1 - e, -p_inf * e * (z - z0) / lam ** 2, -p_inf * e / lam])
+    cov = np.array(f["cov"], float)
+    s = np.sqrt(np.einsum("ij,jk,ik->i", J, cov, J))
+    m = model(z, p_inf, lam, z0)
+    return m, m - level_z * s, m + level_z * s
