@@ -95,6 +95,8 @@ def main(argv=None) -> int:
         print(f"dem compare: {e}", file=sys.stderr)
         return 2
     log = lambda m: print(m, flush=True)  # noqa: E731
+    for old in a.out.glob("*.png") if a.out.is_dir() else ():   # no pictures of an earlier scene
+        old.unlink()
     rep = pipeline.run(entries, a.out, codes, log=log, plans=plans)
     rep["profile"] = base.profile
     if any(p.options.native_law == "scene" for p in plans):

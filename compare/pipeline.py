@@ -265,8 +265,77 @@ def _stat_metric(name, scene, t, a, b, code) -> dict:
 
 
 def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
-    per = ensemble_runs(plan, codes, out, mutation)
-    return janssen.judge(plan, per)
+    """Members of a tall column in every code, each in two stages in that code (compare/
+    janssen_column.py): the jittered start falls and settles for --settle s; the floor layer is
+    taken away and the column settles onto the next one for --duration s, its discs sliding down
+    the walls. The ensemble-averaged side-wall pressure of each code is fitted with Janssen's law
+    (95 % intervals); each code's fit is compared with the native one (both r^2 >= 0.95, every
+    parameter within the combined interval); each member's floor force + wall friction = weight."""
+    from . import janssen_column as jc
+    from . import janssen_figure
+    floor = jc.geometry(plan.shared)["floor"]
+    records = {c: [] for c in codes}
+    for k in range(plan.members):
+        start = jittered(start_discs(plan.shared), k, plan.options.perturb)
+        fill = Case(name=f"{plan.name}_m{k}_fill", resolved=plan.shared, discs=start, dt=plan.dt,
+                    duration=plan.settle, seed=k)
+        first = run_all(codes, fill, plan, out / f"m{k}" / "fill", mutation)
+        for c in codes:
+            r1 = first[c]
+            if not r1.ok:
+                records[c].append({"status": "failed", "reason": f"fill: {r1.reason}"})
+                continue
+            cut = jc.cut_floor_layer(np.array(r1.discs_end, float), floor)
+            case2 = Case(name=f"{plan.name}_m{k}", resolved=plan.shared, discs=cut, dt=plan.dt,
+                         duration=plan.duration, seed=k)
+            mutated = mutation is not None and mutation.code == c
+            d = mutation.folder(out / f"m{k}" / "settle", c) if mutated else out / f"m{k}" / "settle" / c
+            r2 = run_code(c, case_for(c, case2, plan, mutation), d, plan.options.timeout,
+                          reuse=mutation is not None and not mutated)
+            if not r2.ok:
+                records[c].append({"status": "failed", "reason": f"settle: {r2.reason}"})
+                continue
+            records[c].append(jc.member_record(plan.shared, r2, c, k, r1.wall_time_s + r2.wall_time_s))
+    fits, metrics, table = {}, [], []
+    for c in codes:
+        ok = [m for m in records[c] if m.get("status") == "ok"]
+        fails = [m["reason"] for m in records[c] if m.get("status") != "ok"]
+        if fails or len(ok) < 2:
+            metrics.append(_metric(f"Janssen fit ({c})", plan.name, {}, "", False,
+                                   "failed members: " + "; ".join(fails[:2]) if fails else "fewer than 2 members"))
+            continue
+        fits[c] = janssen.ensemble_fit(ok, jc.MERGE)
+        chk = fits[c]["checks"]
+        bal = max(abs(b) for b in chk["balance"])
+        metrics.append(_metric(f"Janssen column: floor force + wall friction = weight, every member ({c})",
+                               plan.name, {"max_rel": bal}, 0.01, chk["balance_ok"]))
+    if "native" in fits:
+        for c, f in fits.items():
+            if c == "native":
+                continue
+            cmp = janssen.compare_fits(fits["native"], f)
+            worst = max(abs(v["diff"]) / v["tol"] if v["tol"] > 0 else math.inf for v in cmp["params"].values())
+            note = "" if cmp["r2_ok"] else (f"r^2 {cmp['r2'][0]:.3f} (native), {cmp['r2'][1]:.3f} ({c}): a fit counts "
+                                            f"only with r^2 >= {janssen.R2_MIN}; more members or wider bins")
+            metrics.append(_metric(f"Janssen p_inf, lambda, z0, K, mu_w,eff within the combined 95 % intervals, "
+                                   f"both fits r^2 >= {janssen.R2_MIN} ({c} vs native)", plan.name,
+                                   {"max_diff_over_interval": worst, "r2": cmp["r2"]}, "combined 95 % interval",
+                                   cmp["agree"], note, "statistical"))
+    table += ["| code | members | r² | p_inf | lambda [cm] | K | mu_w,eff | mobilised F_t/F_n (top half) | "
+              "balance (max) |", "|---|---|---|---|---|---|---|---|---|"]
+    for c, f in fits.items():
+        ci = {k: 1.959963984540054 * f["se"][k] for k in janssen.FIT_KEYS}
+        chk = f["checks"]
+        table.append(f"| {c} | {len([m for m in records[c] if m.get('status') == 'ok'])} | {f['r2']:.3f} | "
+                     f"{f['p_inf']:.4g} ± {ci['p_inf']:.2g} | {f['lambda']:.3g} ± {ci['lambda']:.2g} | "
+                     f"{f['K']:.3g} ± {ci['K']:.2g} | {f['mu_w_eff']:.3g} ± {ci['mu_w_eff']:.2g} | "
+                     f"{chk['mobilised_upper_mean']:.3f} (mu_w {chk['mu_w']:g}) | {max(abs(b) for b in chk['balance']):.2g} |")
+    png = None
+    if fits and mutation is None:
+        png = f"janssen_{plan.name}.png"
+        janssen_figure.plot_ensemble_fits(fits, out.parent.parent / png,
+                                          f"{plan.name}: ensemble-averaged side-wall pressure, Janssen fits, 95 % bands")
+    return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png}
 
 
 def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:

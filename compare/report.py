@@ -212,8 +212,6 @@ METHOD = [
 
 def write(report: dict, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    for old in out.glob("*.png"):
-        old.unlink()
     pngs = []
     if report.get("calibration"):
         plot_calibration(report["calibration"], out / "calibration.png")
@@ -225,7 +223,7 @@ def write(report: dict, out: Path) -> None:
             plot_profiles(pj, out / f"profiles_{st['case']}.png")
             pngs.append((f"Wall profiles, {st['case']}", f"profiles_{st['case']}.png"))
     for jd in report.get("janssen", []):
-        if jd.get("png"):
+        if jd.get("png") and (out / jd["png"]).exists():
             pngs.append((f"Janssen column, {jd['case']}", jd["png"]))
     for name in report.get("discharge", {}):
         sj = out / "discharge" / name / "series.json"
