@@ -198,12 +198,12 @@ def start_discs(resolved: dict) -> np.ndarray:
 
 
 def jittered(discs: np.ndarray, member: int, perturb: float) -> np.ndarray:
-    """Member k: every x and y moved by a seeded uniform amount in [-perturb, perturb] (member 0
-    is the scene's own start)."""
+    """Member k: every x and y moved by a uniform amount in [-perturb, perturb] seeded with k.
+    Every member is jittered alike, so that the members are independent draws of one start (the
+    scene's own start can be a degenerate one: discs stacked in exact columns never buckle)."""
     out = np.array(discs, float, copy=True)
-    if member:
-        rng = np.random.default_rng(1000 + member)
-        out[:, :2] += rng.uniform(-perturb, perturb, size=(len(out), 2))
+    rng = np.random.default_rng(1000 + member)
+    out[:, :2] += rng.uniform(-perturb, perturb, size=(len(out), 2))
     return out
 
 
