@@ -192,7 +192,7 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     tots = {c: [_with_weight(study.wall_totals(r), walls, case) if r.ok else None for r, case in runs]
             for c, runs in per.items()}
     keys = [(w["name"], "normal") for w in walls] + \
-           [(w["name"], "shear") for w in walls if w["group"].startswith("side")] + [("all walls", "weight")]
+           [(w["name"], "shear") for w in walls if w["group"].startswith("side")]
     n_tests = len(keys) * (len(codes) - 1)
     alpha = stats.FAMILY_ALPHA / max(n_tests, 1)
     metrics, summary = [], {}
@@ -210,6 +210,18 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
                 continue
             t = stats.compare_means(summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], alpha)
             metrics.append(_stat_metric(name, plan.name, t, summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], c))
+    if np.linalg.norm(plan.shared["gravity"]) > 0:       # every member at rest carries its weight
+        for c in codes:
+            worst = None
+            for r, case in per[c]:
+                m = weight_metrics(plan.name, {c: r}, case, plan.shared)[0]
+                if worst is None or not m["pass"] or m["values"].get("rel_diff", 0) > worst["values"].get("rel_diff", 0):
+                    worst = m
+                if not m["pass"]:
+                    break
+            if worst is not None:
+                worst["metric"] += f", worst of {plan.members} members"
+                metrics.append(worst)
     return metrics, {"case": plan.name, "members": plan.members, "summary": summary}
 
 
