@@ -280,11 +280,12 @@ def integrate(resolved: dict, discs_start: np.ndarray, duration: float, h: float
     return d
 
 
-def reference(resolved: dict, discs_start: np.ndarray, dt: float, lever: str = "radius",
+def reference(resolved: dict, discs_start: np.ndarray, dt: float, lever: str | None = None,
               integrate_all: bool = False) -> dict:
     """The closed-form or independent value of every quantity ``measure`` gives (module text),
     with ``how`` (which formula) and ``scale`` (per quantity: the change the test makes, for the
     tolerances) and ``t_c_ref``."""
+    lever = lever or resolved["contact"].get("lever_arm", "radius")
     d = np.asarray(discs_start, float).reshape(-1, 6)
     geo = geometry(resolved, d)
     n, t = geo["n"], geo["t"]

@@ -62,7 +62,7 @@ def scene(name, test, description, discs, duration, walls, points=(), gravity=(0
          "[physics]", f"gravity = [{gravity[0]!r}, {gravity[1]!r}]          # cm/s^2", "",
          "[integrator]", 'scheme = "velocity_verlet"', f"dt = {DT!r}                        # s", "",
          "[contact]                        # the law LIGGGHTS, YADE and the engine share",
-         'normal_spring = "overlap"', 'no_tension = "total"', 'friction_cap = "total"', "",
+         'normal_spring = "overlap"', 'no_tension = "total"', 'friction_cap = "total"', 'lever_arm = "contact_point"', "",
          "[materials.sand]", f"density = {RHO!r}                   # g/cm^3", "",
          f"[materials.{wall_material}]", "",
          pair_block("sand", "sand", SAND, MASS / 2, zeta, "Table 2 springs and friction, disc-disc"),

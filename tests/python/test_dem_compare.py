@@ -55,12 +55,14 @@ def test_mutants_are_caught_and_a_mutant_with_nothing_to_change_is_not_counted(d
 @needs_liggghts
 def test_a_law_difference_is_attributed_to_the_option_that_closes_it(dem_binary, tmp_path):
     """The native side runs the scene's own law (no-tension on the elastic force, so the dashpot
-    pulls the discs together as they part, and they part slower) against LIGGGHTS' shared law;
-    the collision fails, and setting no_tension to the shared value alone closes it."""
+    pulls the discs together as they part, and they part slower; the cap on the elastic force)
+    against LIGGGHTS' shared law; the collision fails, and setting no_tension to the shared value
+    alone closes it."""
     scene = tmp_path / "pull.toml"
     shutil.copy(CAL / "head_on_disc_disc.csv", tmp_path / "head_on_disc_disc.csv")
-    scene.write_text((CAL / "head_on_disc_disc.toml").read_text().replace('no_tension = "total"',
-                                                                           'no_tension = "elastic"'))
+    scene.write_text((CAL / "head_on_disc_disc.toml").read_text()
+                     .replace('no_tension = "total"', 'no_tension = "elastic"')
+                     .replace('friction_cap = "total"', 'friction_cap = "elastic"'))
     out = tmp_path / "out"
     p = compare(dem_binary, scene, "--kind", "collision", "--codes", "native,liggghts", "--native-law", "scene",
                 "--out", out)
@@ -69,6 +71,7 @@ def test_a_law_difference_is_attributed_to_the_option_that_closes_it(dem_binary,
     att = rep["attribution"][0]
     assert att["failing"] >= 1
     rows = {r["option"]: r["failing"] for r in att["rows"]}
-    assert rows["no_tension = total"] == 0 and rows["lever_arm = contact_point"] >= 1
+    # a head-on collision has no shear: the friction cap's variant alone changes nothing
+    assert rows == {"no_tension = total": 0, "friction_cap = total": att["failing"]}
     assert att["verdict"] == "no_tension = total alone closes every failing metric"
     assert "## Attribution" in (out / "report.md").read_text()
