@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve
+from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
 KINDS = ("collision", "static", "janssen", "discharge")
 REFERENCE_CODES = ("liggghts", "yade")
@@ -191,7 +191,8 @@ def make_plan(entry: Entry) -> Plan:
 
 
 def start_discs(resolved: dict) -> np.ndarray:
-    """(n, 6) x, y, r, vx, vy, omega of the scene's start."""
+    """(n, 6) x, y, r, vx, vy, omega of the scene's start (each disc's material:
+    ``common.scene_material_index``, the same order)."""
     d = np.array(resolved["discs"], float)
     v = np.array(resolved.get("velocities", np.zeros((len(d), 3))), float).reshape(-1, 3)
     return np.column_stack([d[:, :3], v])
@@ -213,11 +214,12 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
     if discs is None:
         discs = jittered(start_discs(r), member, plan.options.perturb)
     suffix = f"_m{member}" if plan.members > 1 else ""
+    mats = scene_material_index(r)      # the discs are the scene's, in its order (jittered or rested)
     if plan.kind == "discharge":
         return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
-                    mode="discharge", settle=plan.settle, seed=member)
+                    mode="discharge", settle=plan.settle, seed=member, materials=mats)
     return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
-                seed=member)
+                seed=member, materials=mats)
 
 
 def refusals(plan: Plan, codes) -> list[str]:
