@@ -11,6 +11,7 @@ import csv
 import dataclasses
 import json
 import math
+import os
 import subprocess
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import numpy as np
 import pytest
 
 from compare import liggghts_backend, native_backend, probe as P, yade_backend
-from compare.common import SHARED_VARIANT, Case, CaseError, dem_binary, kinetic_energy, resolve
+from compare.common import PYTHON, ROOT, SHARED_VARIANT, Case, CaseError, dem_binary, kinetic_energy, resolve
 
 needs_liggghts = pytest.mark.skipif(not liggghts_backend.available(), reason="liggghts is not on PATH")
 needs_yade = pytest.mark.skipif(not yade_backend.available(), reason="yade is not on PATH")
@@ -33,7 +34,8 @@ OWN = {("glass", "glass"): (1.0e7, 4.0e6, 2.0e3, 8.0e2, 0.5), ("steel", "steel")
 FREE = {("glass", "steel"): (1.5e7, 5.0e6, 3.0e3, 1.0e3, 0.4), ("steel", "steelwall"): (3.5e7, 1.2e7, 6.0e3, 2.2e3, 0.25),
         ("steel", "rubber"): (8.0e6, 2.5e6, 1.8e3, 7.0e2, 0.7)}
 WALLS = [("floor", (0.0, 0.0), (24.0, 0.0), "steelwall"), ("left", (0.0, 20.0), (0.0, 0.0), "steelwall"),
-         ("right", (24.0, 0.0), (24.0, 20.0), "steelwall"), ("ledge", (0.0, 8.0), (16.0, 8.0), "rubber")]
+         ("right", (24.0, 0.0), (24.0, 20.0), "steelwall"), ("ledge", (0.0, 1.5), (13.0, 1.5), "rubber"),
+         ("stop", (13.0, 1.5), (13.0, 4.0), "steelwall")]
 
 
 def series(a: float, b: float) -> float:
@@ -55,10 +57,13 @@ def series_pairs() -> dict:
 
 
 def discs() -> list[tuple]:
-    """x, y, r, material: a row of glass and steel on the ledge, two rows on the floor."""
-    rows = [(1.0 + 1.05 * i, 8.6, 0.5, "glass" if i % 2 == 0 else "steel") for i in range(8)]
-    rows += [(2.0 + 1.8 * i, 0.6 + (0.9 if i % 2 else 0.0), 0.5 if i % 3 else 0.4, "steel" if i % 2 == 0 else "glass")
-             for i in range(10)]
+    """x, y, r, material: a row of glass and steel jammed on the ledge between the left wall and
+    the stop (overlapping by 1e-3 cm), four discs in its grooves, four apart on the floor beside
+    it (the discs' centroid stays above the ledge: the comparison judges a wall on the discs'
+    side)."""
+    rows = [(0.5005 + 0.999 * i, 2.1, 0.5, "glass" if i % 2 == 0 else "steel") for i in range(13)]
+    rows += [(0.5005 + 0.999 * (i + 0.5), 2.9, 0.4, "glass" if i % 4 == 0 else "steel") for i in (0, 2, 4, 6)]
+    rows += [(17.0 + 1.5 * i, 0.6, 0.5 if i in (0, 3) else 0.4, "steel" if i % 2 == 0 else "glass") for i in range(4)]
     return rows
 
 
@@ -77,7 +82,8 @@ def write_scene(folder: Path, cross: dict, name: str = "two_materials") -> Path:
                      + "\n".join(f"{k} = {v!r}" for k, v in zip(FIELDS, vals)))
     for wname, a, b, m in WALLS:
         lines.append(f'[[walls]]\nname = "{wname}"\nfrom = {list(a)}\nto = {list(b)}\nmaterial = "{m}"')
-    lines += [f'[fill]\ntype = "file"\nfile = "{name}.csv"\nmaterial = "glass"\ncount = {len(discs())}',
+    lines += [f'[fill]\ntype = "file"\nfile = "{name}.csv"\nmaterial = "glass"\ncount = {len(discs())}\n'
+              "max_initial_overlap = 0.01",
               "[end]\ntime = 1.0", "[output]\nprofile_bin = 2.0"]
     path = folder / f"{name}.toml"
     path.write_text("\n".join(lines) + "\n")
@@ -274,17 +280,24 @@ def test_yade_probe_sees_a_wrong_disc_material(series_case, tmp_path, monkeypatc
 
 
 # ------------------------------------------------------------------------------------------
+def _compare(*args, timeout):
+    """`dem compare ARGS` as the binary runs it: this tree's comparison layer (python3 -m compare
+    scene) with the engine as the native code."""
+    env = dict(os.environ, DEM_BINARY=str(dem_binary()), PYTHONPATH=str(ROOT))
+    return subprocess.run([PYTHON, "-m", "compare", "scene", *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, env=env, cwd=ROOT)
+
+
 @needs_liggghts
 def test_two_materials_static_frozen_through_dem_compare(tmp_path):
     scene = write_scene(tmp_path / "scene", FREE)
     out = tmp_path / "out"
-    p = subprocess.run([str(dem_binary()), "compare", str(scene), "--codes", "native,liggghts", "--settle", "0.5",
-                        "--duration", "0.05", "--out", str(out)], capture_output=True, text=True, timeout=900)
+    p = _compare(scene, "--codes", "native,liggghts", "--settle", "1.0", "--duration", "0.1", "--out", out,
+                 timeout=900)
     rep = json.loads((out / "agreement.json").read_text())
     assert p.returncode == 0, [m for m in rep["metrics"] if not m["pass"]] or p.stderr[-2000:]
     names = {m["metric"] for m in rep["metrics"]}
     assert "translation constants read back (liggghts)" in names
     assert any(n.startswith("weight carried by the walls") for n in names)
-    refused = subprocess.run([str(dem_binary()), "compare", str(scene), "--codes", "native,yade", "--out",
-                              str(tmp_path / "refused")], capture_output=True, text=True, timeout=300)
+    refused = _compare(scene, "--codes", "native,yade", "--out", tmp_path / "refused", timeout=300)
     assert refused.returncode == 2 and "yade cannot express it: pairs[glass,steel].eta_n" in refused.stderr
