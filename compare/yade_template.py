@@ -60,9 +60,9 @@ def setup():
     O.reset()
     O.dt = C["dt"]
     disc_mat = {}
-    for name, m in sorted(C["disc_materials"].items()):
-        disc_mat[name] = O.materials.append(ViscElMat(kn=m["kn"], cn=m["cn"], ks=m["ks"], cs=m["cs"],
-                                                      density=m["density"], label="disc_" + name))
+    for name, d in sorted(C["disc_materials"].items()):
+        disc_mat[name] = O.materials.append(ViscElMat(kn=d["kn"], cn=d["cn"], ks=d["ks"], cs=d["cs"],
+                                                      density=d["density"], label="disc_" + name))
     wall_mat = {}
     for name, m in sorted(C["wall_materials"].items()):
         wall_mat[name] = O.materials.append(ViscElMat(kn=m["kn"], cn=m["cn"], ks=m["ks"], cs=m["cs"],
