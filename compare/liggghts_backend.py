@@ -3,8 +3,15 @@ meshio, input script), runner (serial or ``mpirun -np N``) and reader.
 
 What the translation does (see ../shared/docs/reference-codes.md for the measured facts):
 - true 2D: ``dimension 2``, ``boundary f f p``, z in [-2, 2], ``fix enforce2d``;
-- discs: atom type 1; with ``dimension 2`` LIGGGHTS sets mass = density x pi r^2 (checked: a
-  disc resting on the floor loads it with exactly rho pi r^2 g), the engine's mass per 1 cm;
+- materials: one atom type per disc material of the case (1..nd, in the order of the resolved
+  materials) and one per wall material (nd+1..: the ``type`` of each wall's mesh fix); the
+  ``property/global ... peratomtypepair`` matrices of kn, kt, gamman_abs, gammat_abs and
+  coefficientFriction hold every disc-disc and disc-wall pair of the scene (a missing one is a
+  CaseError naming ``pairs`` and both materials); wall-wall entries never act. A scene point is
+  the mesh edge of the walls ending there, so it must have their material;
+- discs: each of its material's type and density; with ``dimension 2`` LIGGGHTS sets mass =
+  density x pi r^2 (checked: a disc resting on the floor loads it with exactly rho pi r^2 g,
+  and the probe reads each type's mass back), the engine's mass per 1 cm;
   ``fix nve/sphere`` in 2D gives the disc inertia m r^2 / 2 (checked by the calibration runs);
 - law: ``hooke/stiffness``, ``tangential history``, ``absolute_damping on`` (eta absolute),
   ``limitForce on`` (total normal force clamped >= 0): the engine's SHARED_VARIANT

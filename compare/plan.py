@@ -167,6 +167,10 @@ def make_plan(entry: Entry) -> Plan:
             raise PlanError(f"{entry.scene}: [{key}]: {why} are compared by the shear study "
                             "(bash scripts/shear_study.sh: native and YADE); LIGGGHTS has no bonds, and "
                             "dem compare does not translate them")
+    if kind in ("collision", "janssen") and len(set(scene_material_index(r).tolist())) > 1:
+        raise PlanError(f"{entry.scene}: fill: --kind {kind} judges discs of one material (its reference "
+                        f"{'integrates one mass pair' if kind == 'collision' else 'fits one density'}); "
+                        "this scene has several disc materials")
     if kind == "discharge" and "discharge" not in r:
         raise PlanError(f"{entry.scene}: --kind discharge: the scene has no [discharge] table")
     if kind != "discharge" and "discharge" in r:

@@ -5,14 +5,16 @@ configuration built from the case through the backend's own translation (LIGGGHT
 ``liggghts_backend.write_inputs``, the script it writes with its ``property/global`` matrices,
 ``pair_style``, ``wall/gran``, ``timestep`` and ``gravity`` lines; YADE: ``yade_backend.case_data``
 and the YADE script's own ``setup``; native: ``native_backend.write_inputs`` and ``dem resolve`` of
-the scene it writes), and reads back, for every material pair that can touch (disc-disc and
-disc-wall per wall material) k_n, k_s, eta_n, eta_s, mu, each disc radius' mass and moment of
-inertia, gravity and dt. ``expected_constants(resolved, discs, dt)`` gives the same quantities
-from the resolved scene; ``compare_constants`` lists each quantity's relative difference.
+the scene it writes), and reads back, for every material pair that can touch (every pair of the
+case's disc materials, and every disc material with every wall material) k_n, k_s, eta_n, eta_s,
+mu, the mass and moment of inertia of each disc material's radii, gravity and dt.
+``expected_constants(resolved, discs, dt, materials)`` gives the same quantities from the
+resolved scene; ``compare_constants`` lists each quantity's relative difference.
 
-The probe configuration (``layout``) replaces the case's discs, keeping radius, material, walls
-and points: pairs of discs far above the container with a known overlap and relative velocity,
-discs touching a wall of each wall material, one free disc. How each code is read:
+The probe configuration (``layout``) replaces the case's discs, keeping radii, materials, walls
+and points: pairs of discs of each pair of disc materials far above the container with a known
+overlap and relative velocity, three discs of each disc material touching a wall of each wall
+material, one free disc. How each code is read:
 
 - YADE (``yade -n -j1 -x``): the case's translated setup runs one step; the constants are the
   ones YADE stored: ``phys.kn, ks, cn, cs, tangensOfFrictionAngle`` of a disc-disc interaction and

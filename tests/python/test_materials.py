@@ -301,3 +301,12 @@ def test_two_materials_static_frozen_through_dem_compare(tmp_path):
     assert any(n.startswith("weight carried by the walls") for n in names)
     refused = _compare(scene, "--codes", "native,yade", "--out", tmp_path / "refused", timeout=300)
     assert refused.returncode == 2 and "yade cannot express it: pairs[glass,steel].eta_n" in refused.stderr
+
+
+def test_collision_and_janssen_kinds_refuse_several_disc_materials(tmp_path):
+    from compare.plan import Entry, Options, PlanError, make_plan
+    scene = write_scene(tmp_path / "scene", FREE)
+    for kind in ("collision", "janssen"):
+        with pytest.raises(PlanError, match=f"fill: --kind {kind} judges discs of one material"):
+            make_plan(Entry(scene, Options(kind=kind)))
+    assert make_plan(Entry(scene, Options())).kind == "static"
