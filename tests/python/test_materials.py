@@ -207,6 +207,15 @@ def test_liggghts_refuses_a_missing_disc_wall_pair(free_case, tmp_path):
         liggghts_backend.write_inputs(dataclasses.replace(free_case, resolved=r), tmp_path)
 
 
+def test_liggghts_refuses_a_point_of_another_material_than_its_walls(free_case, tmp_path):
+    """A point is the mesh edge of the walls ending at it: the ledge's free end (13, 1.5) is also
+    the stop's lower end, so a point there must be of rubber and steelwall at once."""
+    r = json.loads(json.dumps(free_case.resolved))
+    r["points"] = [{"name": "tip", "group": "tip", "at": [13.0, 1.5], "material": "rubber"}]
+    with pytest.raises(CaseError, match=r"points: tip has material 'rubber' but wall 'stop'"):
+        liggghts_backend.write_inputs(dataclasses.replace(free_case, resolved=r), tmp_path)
+
+
 def test_yade_refuses_a_cross_pair_that_is_not_the_series_value(free_case, series_case):
     want = series(2 * OWN[("glass", "glass")][2], 2 * OWN[("steel", "steel")][2])
     with pytest.raises(CaseError, match=r"pairs\[glass,steel\]\.eta_n: YADE") as e:
@@ -290,15 +299,21 @@ def _compare(*args, timeout):
 
 @needs_liggghts
 def test_two_materials_static_frozen_through_dem_compare(tmp_path):
+    """native and LIGGGHTS agree on the scene with its own cross pairs, and every mutant of the
+    LIGGGHTS translation (one constant of every pair, or density, or gravity, wrong) is caught."""
     scene = write_scene(tmp_path / "scene", FREE)
     out = tmp_path / "out"
-    p = _compare(scene, "--codes", "native,liggghts", "--settle", "1.0", "--duration", "0.1", "--out", out,
-                 timeout=900)
+    p = _compare(scene, "--codes", "native,liggghts", "--settle", "1.0", "--duration", "0.1", "--mutants",
+                 "--out", out, timeout=900)
     rep = json.loads((out / "agreement.json").read_text())
-    assert p.returncode == 0, [m for m in rep["metrics"] if not m["pass"]] or p.stderr[-2000:]
+    assert p.returncode == 0, [m for m in rep["metrics"] if not m["pass"]] or p.stdout[-2000:] + p.stderr[-2000:]
     names = {m["metric"] for m in rep["metrics"]}
     assert "translation constants read back (liggghts)" in names
     assert any(n.startswith("weight carried by the walls") for n in names)
+    mutants = json.loads((out / "mutants.json").read_text())
+    assert mutants["all_caught"] and len(mutants["rows"]) == 8
+    density = next(r for r in mutants["rows"] if r["mutant"] == "liggghts_density_x1.01")
+    assert density["caught_physically"]          # the weight and the wall totals see a wrong density
     refused = _compare(scene, "--codes", "native,yade", "--out", tmp_path / "refused", timeout=300)
     assert refused.returncode == 2 and "yade cannot express it: pairs[glass,steel].eta_n" in refused.stderr
 
