@@ -218,7 +218,9 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
     if discs is None:
         discs = jittered(start_discs(r), member, plan.options.perturb)
     suffix = f"_m{member}" if plan.members > 1 else ""
-    mats = scene_material_index(r)      # the discs are the scene's, in its order (jittered or rested)
+    mats = scene_material_index(r)      # the scene's discs in its order (jittered or rested) ...
+    if len(mats) != len(discs):         # ... or others: Case.material_index decides (or refuses)
+        mats = None
     if plan.kind == "discharge":
         return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
                     mode="discharge", settle=plan.settle, seed=member, materials=mats)
