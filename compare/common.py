@@ -63,17 +63,43 @@ def pair(resolved: dict, a: str, b: str) -> dict:
 
 
 def disc_material(resolved: dict) -> str:
+    """The one disc material of a scene (for what is defined for one disc material only)."""
     mats = {d[3] for d in resolved["discs"]}
     if len(mats) != 1:
-        raise CaseError("fill: the reference translations support one disc material, "
+        raise CaseError("fill: this comparison supports one disc material, "
                         f"this scene has {len(mats)}")
     return resolved["materials"][mats.pop()]["name"]
 
 
-def kinetic_energy(resolved: dict, discs: np.ndarray) -> float:
-    """Translational + rotational energy of discs rows (x, y, r, vx, vy, omega), per 1 cm."""
+def scene_material_index(resolved: dict) -> np.ndarray:
+    """Each scene disc's material index (into resolved["materials"]): resolved["discs"][:, 3]."""
+    d = np.asarray(resolved["discs"], float).reshape(-1, 4)
+    return d[:, 3].astype(int)
+
+
+def material_names(resolved: dict, index) -> list[str]:
+    """Material names of the indices (into resolved["materials"])."""
+    names = [m["name"] for m in resolved["materials"]]
+    return [names[int(k)] for k in np.asarray(index).reshape(-1)]
+
+
+def densities(resolved: dict, index) -> np.ndarray:
+    """Density of each index's material."""
+    rho = [float(m["density"]) for m in resolved["materials"]]
+    return np.array([rho[int(k)] for k in np.asarray(index).reshape(-1)], float)
+
+
+def kinetic_energy(resolved: dict, discs: np.ndarray, materials=None) -> float:
+    """Translational + rotational energy of discs rows (x, y, r, vx, vy, omega), per 1 cm; each
+    disc with the density of its material (``materials``: per-disc indices into
+    resolved["materials"]; None: the scene's one disc material)."""
     d = np.asarray(discs, float).reshape(-1, 6)
-    rho = {m["name"]: m["density"] for m in resolved["materials"]}[disc_material(resolved)]
+    if materials is None:
+        rho = {m["name"]: m["density"] for m in resolved["materials"]}[disc_material(resolved)]
+    else:
+        rho = densities(resolved, materials)
+        if len(rho) != len(d):
+            raise CaseError(f"materials: {len(rho)} material indices for {len(d)} discs")
     m = rho * math.pi * d[:, 2] ** 2
     return float(np.sum(0.5 * m * (d[:, 3] ** 2 + d[:, 4] ** 2) + 0.25 * m * d[:, 2] ** 2 * d[:, 5] ** 2))
 
@@ -112,6 +138,10 @@ class Case:
     # [s] particle snapshots every snapshot_interval from the start (static) or the opening
     # (discharge), read back by each backend's read_snapshots; 0: none (the study's default).
     snapshot_interval: float = 0.0
+    # Each disc's material index (into resolved["materials"]), in the order of ``discs``; None:
+    # the scene's own discs' materials when the case has as many discs as the scene, else the
+    # scene's one disc material (a scene with several refuses: see ``material_index``).
+    materials: np.ndarray | None = None
 
     @property
     def profile_bin(self) -> float:
@@ -120,6 +150,31 @@ class Case:
     @property
     def centre(self) -> tuple[float, float]:
         return (float(np.mean(self.discs[:, 0])), float(np.mean(self.discs[:, 1])))
+
+    def material_index(self) -> np.ndarray:
+        """Each disc's material index (into resolved["materials"])."""
+        n = len(self.discs)
+        if self.materials is not None:
+            m = np.asarray(self.materials).astype(int).reshape(-1)
+            if len(m) != n:
+                raise CaseError(f"materials: {len(m)} material indices for {n} discs")
+            return m
+        scene = scene_material_index(self.resolved)
+        if len(scene) == n:
+            return scene
+        used = set(scene.tolist())
+        if len(used) != 1:
+            raise CaseError(f"materials: the scene has {len(used)} disc materials and {len(scene)} discs; "
+                            f"a case of {n} discs must give each disc's material")
+        return np.full(n, used.pop(), int)
+
+    def material_names(self) -> list[str]:
+        """Each disc's material name."""
+        return material_names(self.resolved, self.material_index())
+
+    def disc_materials(self) -> list[str]:
+        """The case's disc material names, in the order of resolved["materials"]."""
+        return material_names(self.resolved, sorted(set(self.material_index().tolist())))
 
     def to_json(self) -> dict:
         return {"name": self.name, "dt": self.dt, "duration": self.duration, "mode": self.mode,

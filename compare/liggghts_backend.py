@@ -3,8 +3,15 @@ meshio, input script), runner (serial or ``mpirun -np N``) and reader.
 
 What the translation does (see ../shared/docs/reference-codes.md for the measured facts):
 - true 2D: ``dimension 2``, ``boundary f f p``, z in [-2, 2], ``fix enforce2d``;
-- discs: atom type 1; with ``dimension 2`` LIGGGHTS sets mass = density x pi r^2 (checked: a
-  disc resting on the floor loads it with exactly rho pi r^2 g), the engine's mass per 1 cm;
+- materials: one atom type per disc material of the case (1..nd, in the order of the resolved
+  materials) and one per wall material (nd+1..: the ``type`` of each wall's mesh fix); the
+  ``property/global ... peratomtypepair`` matrices of kn, kt, gamman_abs, gammat_abs and
+  coefficientFriction hold every disc-disc and disc-wall pair of the scene (a missing one is a
+  CaseError naming ``pairs`` and both materials); wall-wall entries never act. A scene point is
+  the mesh edge of the walls ending there, so it must have their material;
+- discs: each of its material's type and density; with ``dimension 2`` LIGGGHTS sets mass =
+  density x pi r^2 (checked: a disc resting on the floor loads it with exactly rho pi r^2 g,
+  and the probe reads each type's mass back), the engine's mass per 1 cm;
   ``fix nve/sphere`` in 2D gives the disc inertia m r^2 / 2 (checked by the calibration runs);
 - law: ``hooke/stiffness``, ``tangential history``, ``absolute_damping on`` (eta absolute),
   ``limitForce on`` (total normal force clamped >= 0): the engine's SHARED_VARIANT
@@ -43,7 +50,7 @@ from pathlib import Path
 import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
 
-from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, disc_material, failed,
+from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
                      inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
 
 NAME = "liggghts"
@@ -99,16 +106,44 @@ def write_wall_stl(wall: dict, profile_bin: float, path: Path) -> int:
     return len(tris)
 
 
-def _matrix(case: Case, key: str) -> str:
+def wall_materials(case: Case) -> list[str]:
+    """Materials of the active walls, sorted; a point (a mesh edge here) must have the material of
+    every wall ending at it."""
     r = case.resolved
-    dm = disc_material(r)
-    wall_mats = {w["material"] for w in r["walls"]} | {p["material"] for p in r["points"]}
-    if len(wall_mats) > 1:
-        raise CaseError(f"walls: LIGGGHTS translation supports one wall material, got {sorted(wall_mats)}")
-    dd = pair(r, dm, dm)[key]
-    dw = pair(r, dm, wall_mats.pop())[key] if wall_mats else dd
-    # type 1 discs, type 2 walls; the matrix must be complete and symmetric (2-2 never acts).
-    return f"{dd!r} {dw!r} {dw!r} {dw!r}"
+    walls = [w for w in r["walls"] if w.get("active", True)]
+    for p in r["points"]:
+        for w in walls:
+            if any(math.hypot(e[0] - p["at"][0], e[1] - p["at"][1]) <= 1e-9 for e in (w["from"], w["to"])) \
+                    and w["material"] != p["material"]:
+                raise CaseError(f"points: {p['name']} has material {p['material']!r} but wall {w['name']!r} ending "
+                                f"there has {w['material']!r}; LIGGGHTS makes the point from the wall mesh's edge")
+    return sorted({w["material"] for w in walls})
+
+
+def atom_types(case: Case) -> dict:
+    """Atom type of each material: the case's disc materials 1..nd (in the order of the resolved
+    materials), then the wall materials nd+1.. (the ``type`` of each wall's mesh fix)."""
+    discs = case.disc_materials()
+    names = discs + [w for w in wall_materials(case) if w not in discs]
+    return {name: k + 1 for k, name in enumerate(names)}
+
+
+def _matrix(case: Case, key: str) -> str:
+    """The ``peratomtypepair`` matrix of ``key`` (row-major, complete and symmetric): each disc-disc
+    and disc-wall entry from the scene's pairs (CaseError naming both materials when a pair is
+    missing); wall-wall entries never act and repeat the first disc material's pair with the
+    lower-typed of the two wall materials (symmetric)."""
+    r = case.resolved
+    first = case.disc_materials()[0]
+    discs = set(case.disc_materials())
+    types = atom_types(case)
+    names = sorted(types, key=types.get)
+    vals = []
+    for a in names:
+        for b in names:
+            lo = a if types[a] <= types[b] else b
+            vals.append(pair(r, a, b)[key] if a in discs or b in discs else pair(r, first, lo)[key])
+    return " ".join(repr(float(v)) for v in vals)
 
 
 def _wall_names(case: Case):
@@ -125,25 +160,27 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     r = case.resolved
-    rho = {m["name"]: m["density"] for m in r["materials"]}[disc_material(r)]
     d = np.asarray(case.discs, float)
     if d.ndim != 2 or d.shape[1] != 6 or not np.all(np.isfinite(d)) or np.any(d[:, 2] <= 0):
         raise CaseError("discs: need finite rows x, y, r > 0, vx, vy, omega")
     walls = [w for w in r["walls"] if w.get("active", True)]
     xs = [c for w in walls for c in (w["from"][0], w["to"][0])] + [p["at"][0] for p in r["points"]]
     ys = [c for w in walls for c in (w["from"][1], w["to"][1])] + [p["at"][1] for p in r["points"]]
+    types = atom_types(case)
+    rho = {m["name"]: float(m["density"]) for m in r["materials"]}
     rmax = float(d[:, 2].max())
     xlo = min(xs + list(d[:, 0])) - 4 * rmax
     xhi = max(xs + list(d[:, 0])) + 4 * rmax
     ylo = min(ys + list(d[:, 1])) - 4 * rmax - (BOX_BELOW if case.mode == "discharge" else 0)
     yhi = max(ys + list(d[:, 1])) + 4 * rmax
     lines = ["LIGGGHTS data file written by compare/liggghts_backend.py", "",
-             f"{len(d)} atoms", "2 atom types", "",
+             f"{len(d)} atoms", f"{len(types)} atom types", "",
              f"{xlo!r} {xhi!r} xlo xhi", f"{ylo!r} {yhi!r} ylo yhi", f"{-Z_HALF!r} {Z_HALF!r} zlo zhi", "",
              "Atoms", ""]
-    # atom_style granular: id type diameter density x y z; in 2D mass = density pi r^2.
-    for k, (x, y, rad, *_v) in enumerate(d):
-        lines.append(f"{k + 1} 1 {2 * rad!r} {rho!r} {x!r} {y!r} 0.0")
+    # atom_style granular: id type diameter density x y z; in 2D mass = density pi r^2, each disc
+    # with its own material's type and density.
+    for k, ((x, y, rad, *_v), name) in enumerate(zip(d, case.material_names())):
+        lines.append(f"{k + 1} {types[name]} {2 * rad!r} {rho[name]!r} {x!r} {y!r} 0.0")
     lines += ["", "Velocities", ""]
     for k, (_x, _y, _r, vx, vy, om) in enumerate(d):
         lines.append(f"{k + 1} {vx!r} {vy!r} 0.0 0.0 0.0 {om!r}")
@@ -153,7 +190,7 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     for w in walls:
         mid = _mesh_id(w["name"])
         write_wall_stl(w, case.profile_bin, out_dir / f"{mid}.stl")
-        meshes.append(mid)
+        meshes.append((mid, types[w["material"]]))
     if case.mode == "discharge":  # the outlet plane spans the box (inside it by 1e-3 cm)
         write_outlet_stl(out_dir, xlo + 1e-3, xhi - 1e-3, float(r["discharge"]["outlet_depth"]))
     script = _script(case, meshes, xlo, xhi, threads)
@@ -162,7 +199,7 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     return path
 
 
-def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int) -> str:
+def _script(case: Case, meshes: list[tuple[str, int]], xlo: float, xhi: float, threads: int) -> str:
     r = case.resolved
     g = np.array(r["gravity"], float)
     gmag = float(np.linalg.norm(g))
@@ -173,6 +210,8 @@ def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int)
     total = settle_steps + run_steps
     skin = float(r["neighbor"]["skin"]) or 0.2
     law = "model hooke/stiffness tangential history absolute_damping on limitForce on"
+    nt = len(atom_types(case))
+    wall_type = max([t for _m, t in meshes], default=nt)   # the outlet (no contacts): any wall type
     s = [f"# LIGGGHTS input for the comparison case {case.name}; generated by compare/liggghts_backend.py.",
          "# Units cgs; forces per 1 cm of thickness. Do not edit: regenerate.",
          "echo none", "atom_style granular", "atom_modify map array", "dimension 2",
@@ -180,22 +219,22 @@ def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int)
          "read_data discs.data",
          f"neighbor {skin!r} bin", "neigh_modify delay 0",
          f"pair_style gran {law}", "pair_coeff * *",
-         f"fix m_kn all property/global kn peratomtypepair 2 {_matrix(case, 'kn')}",
-         f"fix m_kt all property/global kt peratomtypepair 2 {_matrix(case, 'ks')}",
-         f"fix m_gn all property/global gamman_abs peratomtypepair 2 {_matrix(case, 'eta_n')}",
-         f"fix m_gt all property/global gammat_abs peratomtypepair 2 {_matrix(case, 'eta_s')}",
-         f"fix m_mu all property/global coefficientFriction peratomtypepair 2 {_matrix(case, 'mu')}",
+         f"fix m_kn all property/global kn peratomtypepair {nt} {_matrix(case, 'kn')}",
+         f"fix m_kt all property/global kt peratomtypepair {nt} {_matrix(case, 'ks')}",
+         f"fix m_gn all property/global gamman_abs peratomtypepair {nt} {_matrix(case, 'eta_n')}",
+         f"fix m_gt all property/global gammat_abs peratomtypepair {nt} {_matrix(case, 'eta_s')}",
+         f"fix m_mu all property/global coefficientFriction peratomtypepair {nt} {_matrix(case, 'mu')}",
          f"timestep {dt!r}"]
     if gmag > 0:
         s.append(f"fix gravi all gravity {gmag!r} vector {g[0] / gmag!r} {g[1] / gmag!r} 0.0")
-    for mid in meshes:
-        s.append(f"fix {mid} all mesh/surface/stress file {mid}.stl type 2")
+    for mid, t in meshes:
+        s.append(f"fix {mid} all mesh/surface/stress file {mid}.stl type {t}")
     gate = _mesh_id(r["discharge"]["gate"]) if case.mode == "discharge" else None
     if meshes:
         s.append(f"fix walls all wall/gran model hooke/stiffness tangential history mesh n_meshes {len(meshes)} "
-                 f"meshes {' '.join(meshes)} absolute_damping on limitForce on")
+                 f"meshes {' '.join(m for m, _t in meshes)} absolute_damping on limitForce on")
     if case.mode == "discharge":
-        s += ["fix outlet all mesh/surface/planar file outlet.stl type 2",
+        s += [f"fix outlet all mesh/surface/planar file outlet.stl type {wall_type}",
               "fix mf all massflow/mesh mesh outlet vec_side 0 -1 0 count once delete_atoms yes "
               "file removals.txt writeTime screen no",
               # The gate jumps 200 cm down during the first step after settling (same run).
@@ -208,7 +247,7 @@ def _script(case: Case, meshes: list[str], xlo: float, xhi: float, threads: int)
           # discharge deletes discs at the outlet; anywhere else a lost disc is an error
           f"thermo_modify lost {'ignore' if case.mode == 'discharge' else 'error'} norm no",
           f"thermo {sample}"]
-    for mid in meshes:
+    for mid, _t in meshes:
         s.append(f"dump d_{mid} all mesh/vtk {sample} mesh_{mid}_*.vtk output face stresscomponents area {mid}")
     snap = case.snapshot_steps()
     if snap:
@@ -367,7 +406,7 @@ def read(case: Case, out_dir: Path) -> Result:
     ids, rows = _read_dump(dumps[-1])
     res.discs_end = rows.tolist()
     res.n_final = len(rows)
-    res.kinetic_energy_end = kinetic_energy(case.resolved, rows)
+    res.kinetic_energy_end = kinetic_energy(case.resolved, rows, case.material_index()[ids - 1])
     if case.mode != "discharge" and res.n_final != res.n_initial:
         return failed(NAME, case.name, f"lost discs: {res.n_initial} at the start, {res.n_final} at the end",
                       out_dir=str(out_dir))

@@ -25,7 +25,7 @@ import numpy as np
 
 from . import collision_judge
 from . import janssen, stats, study
-from .common import SHARED_VARIANT, Case, Result, failed
+from .common import SHARED_VARIANT, Case, Result, failed, scene_material_index
 from .plan import Entry, Plan, PlanError, jittered, make_plan, member_case, refusals, start_discs
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
@@ -92,7 +92,7 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
         return []
     metrics = []
     case = member_case(plan, 0, start_discs(plan.shared))
-    expected = probe.expected_constants(plan.shared, case.discs, plan.dt)
+    expected = probe.expected_constants(plan.shared, case.discs, plan.dt, case.material_index())
     for c in codes:
         if c == "native":
             continue
@@ -118,7 +118,8 @@ def _probe_cached(probe, code: str, case: Case, out: Path, timeout: float) -> di
     r = case.resolved
     key = json.dumps({"code": code, "pairs": r["pairs"], "materials": r["materials"], "gravity": r["gravity"],
                       "contact": r["contact"], "dt": case.dt,
-                      "radii": sorted({float(x) for x in np.asarray(case.discs)[:, 2]})}, sort_keys=True)
+                      "radii": sorted({(float(x), int(m)) for x, m in zip(np.asarray(case.discs)[:, 2],
+                                                                          case.material_index())})}, sort_keys=True)
     h = hashlib.sha1(key.encode()).hexdigest()[:16]
     root = out
     while root.parent != root and root.name not in ("collision", "static", "janssen", "discharge"):
@@ -148,7 +149,8 @@ def frozen_packing(plan: Plan, out: Path) -> np.ndarray:
     if path.exists():
         return np.load(path)
     d = start_discs(plan.shared)
-    case = Case(name="fill", resolved=plan.shared, discs=d, dt=plan.dt, duration=plan.settle)
+    case = Case(name="fill", resolved=plan.shared, discs=d, dt=plan.dt, duration=plan.settle,
+                materials=scene_material_index(plan.shared))
     res = native_backend.run(case, out / "fill", 1800)
     if not res.ok:
         raise RuntimeError(f"frozen packing of {plan.name}: native fill failed: {res.reason}")
@@ -161,7 +163,8 @@ def frozen_packing(plan: Plan, out: Path) -> np.ndarray:
 
 def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
     pack = frozen_packing(plan, out)
-    case = Case(name=plan.name, resolved=plan.shared, discs=pack, dt=plan.dt, duration=plan.duration)
+    case = Case(name=plan.name, resolved=plan.shared, discs=pack, dt=plan.dt, duration=plan.duration,
+                materials=scene_material_index(plan.shared))     # the fill keeps the scene's order
     res = run_all(codes, case, plan, out, mutation)
     metrics, detail = study.static_compare(case, res, tolerances=(TOL_STATIC_TOTAL, TOL_STATIC_SHEAR,
                                                                   TOL_STATIC_CUMULATIVE))

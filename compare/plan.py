@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve
+from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
 KINDS = ("collision", "static", "janssen", "discharge")
 REFERENCE_CODES = ("liggghts", "yade")
@@ -167,6 +167,10 @@ def make_plan(entry: Entry) -> Plan:
             raise PlanError(f"{entry.scene}: [{key}]: {why} are compared by the shear study "
                             "(bash scripts/shear_study.sh: native and YADE); LIGGGHTS has no bonds, and "
                             "dem compare does not translate them")
+    if kind in ("collision", "janssen") and len(set(scene_material_index(r).tolist())) > 1:
+        raise PlanError(f"{entry.scene}: fill: --kind {kind} judges discs of one material (its reference "
+                        f"{'integrates one mass pair' if kind == 'collision' else 'fits one density'}); "
+                        "this scene has several disc materials")
     if kind == "discharge" and "discharge" not in r:
         raise PlanError(f"{entry.scene}: --kind discharge: the scene has no [discharge] table")
     if kind != "discharge" and "discharge" in r:
@@ -191,7 +195,8 @@ def make_plan(entry: Entry) -> Plan:
 
 
 def start_discs(resolved: dict) -> np.ndarray:
-    """(n, 6) x, y, r, vx, vy, omega of the scene's start."""
+    """(n, 6) x, y, r, vx, vy, omega of the scene's start (each disc's material:
+    ``common.scene_material_index``, the same order)."""
     d = np.array(resolved["discs"], float)
     v = np.array(resolved.get("velocities", np.zeros((len(d), 3))), float).reshape(-1, 3)
     return np.column_stack([d[:, :3], v])
@@ -213,11 +218,14 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
     if discs is None:
         discs = jittered(start_discs(r), member, plan.options.perturb)
     suffix = f"_m{member}" if plan.members > 1 else ""
+    mats = scene_material_index(r)      # the scene's discs in its order (jittered or rested) ...
+    if len(mats) != len(discs):         # ... or others: Case.material_index decides (or refuses)
+        mats = None
     if plan.kind == "discharge":
         return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
-                    mode="discharge", settle=plan.settle, seed=member)
+                    mode="discharge", settle=plan.settle, seed=member, materials=mats)
     return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
-                seed=member)
+                seed=member, materials=mats)
 
 
 def refusals(plan: Plan, codes) -> list[str]:

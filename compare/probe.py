@@ -5,14 +5,16 @@ configuration built from the case through the backend's own translation (LIGGGHT
 ``liggghts_backend.write_inputs``, the script it writes with its ``property/global`` matrices,
 ``pair_style``, ``wall/gran``, ``timestep`` and ``gravity`` lines; YADE: ``yade_backend.case_data``
 and the YADE script's own ``setup``; native: ``native_backend.write_inputs`` and ``dem resolve`` of
-the scene it writes), and reads back, for every material pair that can touch (disc-disc and
-disc-wall per wall material) k_n, k_s, eta_n, eta_s, mu, each disc radius' mass and moment of
-inertia, gravity and dt. ``expected_constants(resolved, discs, dt)`` gives the same quantities
-from the resolved scene; ``compare_constants`` lists each quantity's relative difference.
+the scene it writes), and reads back, for every material pair that can touch (every pair of the
+case's disc materials, and every disc material with every wall material) k_n, k_s, eta_n, eta_s,
+mu, the mass and moment of inertia of each disc material's radii, gravity and dt.
+``expected_constants(resolved, discs, dt, materials)`` gives the same quantities from the
+resolved scene; ``compare_constants`` lists each quantity's relative difference.
 
-The probe configuration (``layout``) replaces the case's discs, keeping radius, material, walls
-and points: pairs of discs far above the container with a known overlap and relative velocity,
-discs touching a wall of each wall material, one free disc. How each code is read:
+The probe configuration (``layout``) replaces the case's discs, keeping radii, materials, walls
+and points: pairs of discs of each pair of disc materials far above the container with a known
+overlap and relative velocity, three discs of each disc material touching a wall of each wall
+material, one free disc. How each code is read:
 
 - YADE (``yade -n -j1 -x``): the case's translated setup runs one step; the constants are the
   ones YADE stored: ``phys.kn, ks, cn, cs, tangensOfFrictionAngle`` of a disc-disc interaction and
@@ -49,7 +51,8 @@ from pathlib import Path
 import numpy as np
 
 from . import liggghts_backend, native_backend, yade_backend
-from .common import Case, CaseError, disc_material, inward_normal, pair, resolve, write_text_atomic
+from .common import (Case, CaseError, disc_material, inward_normal, material_names, pair, resolve,
+                     write_text_atomic)
 
 CODES = ("native", "liggghts", "yade")
 FIELDS = ("kn", "ks", "eta_n", "eta_s", "mu")
@@ -83,18 +86,40 @@ def wall_materials(resolved: dict) -> list[str]:
                   | {p["material"] for p in resolved["points"]})
 
 
-def expected_constants(resolved: dict, discs, dt: float) -> dict:
-    """The constants every code must have, from the resolved scene (``common.resolve``)."""
-    dm = disc_material(resolved)
-    rho = {m["name"]: m["density"] for m in resolved["materials"]}[dm]
-    pairs = {f"{dm}|{dm}": {k: float(pair(resolved, dm, dm)[k]) for k in FIELDS}}
-    for wm in wall_materials(resolved):
-        pairs[f"{dm}|{wm}"] = {k: float(pair(resolved, dm, wm)[k]) for k in FIELDS}
+def _disc_names(resolved: dict, discs, materials) -> tuple[list[str], list[str]]:
+    """Each disc's material name (``materials``: per-disc indices into resolved["materials"], None:
+    the scene's one disc material) and the disc materials in the order of resolved["materials"]."""
+    n = len(np.asarray(discs, float).reshape(-1, 6))
+    idx = np.full(n, [m["name"] for m in resolved["materials"]].index(disc_material(resolved))) \
+        if materials is None else np.asarray(materials).astype(int).reshape(-1)
+    names = material_names(resolved, idx)
+    return names, material_names(resolved, sorted(set(idx.tolist())))
+
+
+def disc_pair_keys(disc_mats: list[str]) -> list[tuple[str, str]]:
+    """Every pair of disc materials that can touch (a, b), a <= b in the given order."""
+    return [(a, b) for i, a in enumerate(disc_mats) for b in disc_mats[i:]]
+
+
+def expected_constants(resolved: dict, discs, dt: float, materials=None) -> dict:
+    """The constants every code must have, from the resolved scene (``common.resolve``): every
+    disc-disc and disc-wall material pair, the mass and inertia of each disc material's radii
+    (``materials``: each disc's material index, None: the scene's one disc material)."""
+    names, mats = _disc_names(resolved, discs, materials)
+    rho = {m["name"]: m["density"] for m in resolved["materials"]}
+    pairs = {}
+    for a, b in disc_pair_keys(mats):
+        pairs[f"{a}|{b}"] = {k: float(pair(resolved, a, b)[k]) for k in FIELDS}
+    for dm in mats:
+        for wm in wall_materials(resolved):
+            pairs[f"{dm}|{wm}"] = {k: float(pair(resolved, dm, wm)[k]) for k in FIELDS}
     mass, inertia = {}, {}
-    for r in _radii(discs):
-        m = rho * math.pi * r * r
-        mass[_radius_key(dm, r)] = m
-        inertia[_radius_key(dm, r)] = 0.5 * m * r * r
+    d = np.asarray(discs, float).reshape(-1, 6)
+    for dm in mats:
+        for r in _radii(d[[n == dm for n in names]]):
+            m = rho[dm] * math.pi * r * r
+            mass[_radius_key(dm, r)] = m
+            inertia[_radius_key(dm, r)] = 0.5 * m * r * r
     return {"pairs": pairs, "mass": mass, "inertia": inertia,
             "gravity": [float(g) for g in resolved["gravity"]], "dt": float(dt)}
 
@@ -141,19 +166,32 @@ def compare_constants(expected: dict, probed: dict, rel: float = 1e-9) -> list[d
 # The probe configuration
 @dataclasses.dataclass
 class Layout:
-    """Probe discs (rows x, y, r, vx, vy, omega) and what each one is for.
+    """Probe discs (rows x, y, r, vx, vy, omega), each disc's material, and what each one is for.
 
-    pairs: role -> (i, j) disc rows (disc-disc): "rest" (no normal velocity, sticking tangential
-    velocity), "closing" (normal velocity), "sliding" (tangential velocity beyond the Coulomb cap
-    after one step), and "spin:<r>" per other radius (like "rest", for mass and inertia);
-    walls: wall material -> {role: (row, wall name)}; free: the free disc's row. Tangential
-    slip comes from spin, closing from translation."""
+    disc_pairs: "A|B" (disc materials) -> role -> (i, j) disc rows (i of A, j of B): "rest" (no
+    normal velocity, sticking tangential velocity), "closing" (normal velocity), "sliding"
+    (tangential velocity beyond the Coulomb cap after one step); spins: disc material -> radius ->
+    (i, j), a pair of that material like "rest" (for mass and inertia; at the probe radius it is
+    the A|A rest pair); walls: "A|wall material" -> {role: (row, wall name)}; free: the free disc's
+    row. Tangential slip comes from spin, closing from translation."""
     discs: np.ndarray
-    pairs: dict
+    materials: list
+    disc_pairs: dict
+    spins: dict
     walls: dict
     free: int
     radius: float
     delta: float
+
+    @property
+    def pairs(self) -> dict:
+        """The first disc material's pair roles and its "spin:<r>" pairs of the other radii."""
+        first = next(iter(self.disc_pairs))
+        out = dict(self.disc_pairs[first])
+        for rad, ij in self.spins[first.split("|")[0]].items():
+            if rad != self.radius:
+                out[f"spin:{rad!r}"] = ij
+        return out
 
 
 def _seg_dist(p, a, b) -> float:
@@ -176,11 +214,14 @@ def _speeds(c: dict, delta: float, dt: float) -> tuple[float, float, float]:
 
 
 def layout(case: Case) -> Layout:
-    """Probe discs for ``case``: disc-disc pairs and the free disc above everything, three discs
-    on a wall of each wall material (at a quarter of a LIGGGHTS strip, away from other walls,
-    points and wall ends), on the side of the case's discs."""
+    """Probe discs for ``case``: for every pair of disc materials a rest, a closing and a sliding
+    pair, a spin pair per other radius of each disc material, and the free disc, all above
+    everything; for every disc material three discs on a wall of each wall material (at a quarter
+    of a LIGGGHTS strip, away from other walls, points and wall ends), on the side of the case's
+    discs."""
     r = case.resolved
-    dm = disc_material(r)
+    names = case.material_names()
+    mats = case.disc_materials()
     r0 = _main_radius(case.discs)
     delta = OVERLAP * r0
     dt = float(case.dt)
@@ -193,31 +234,35 @@ def layout(case: Case) -> Layout:
     xs += list(d0[:, 0])
     y_row = max(ys) + 20 * rmax
     x = min(xs)
-    rows, pairs = [], {}
+    rows, of = [], []
 
-    def add(row):
+    def add(row, material):
         rows.append([float(v) for v in row])
+        of.append(material)
         return len(rows) - 1
 
-    def disc_pair(rad, vn, vt):
+    def disc_pair(a, b, rad, vn, vt):
         """Closing at vn; slipping at vt by spin (both discs turning alike: the contact normal
         does not turn during the step, so no normal velocity appears)."""
         nonlocal x
         gap = 2 * rad - OVERLAP * rad
-        i = add([x, y_row, rad, 0.5 * vn, 0.0, 0.5 * vt / rad])
-        j = add([x + gap, y_row, rad, -0.5 * vn, 0.0, 0.5 * vt / rad])
+        i = add([x, y_row, rad, 0.5 * vn, 0.0, 0.5 * vt / rad], a)
+        j = add([x + gap, y_row, rad, -0.5 * vn, 0.0, 0.5 * vt / rad], b)
         x += gap + 8 * rmax
         return i, j
 
-    dd = pair(r, dm, dm)
-    vc, vs, vl = _speeds(dd, delta, dt)
-    pairs["rest"] = disc_pair(r0, 0.0, vs)
-    pairs["closing"] = disc_pair(r0, vc, 0.0)
-    pairs["sliding"] = disc_pair(r0, 0.0, vl)
-    for rad in _radii(case.discs):
-        if rad != r0:
-            pairs[f"spin:{rad!r}"] = disc_pair(rad, 0.0, _speeds(dd, OVERLAP * rad, dt)[1])
-    free = add([x, y_row, r0, 0.0, 0.0, 0.0])
+    disc_pairs, spins = {}, {m: {} for m in mats}
+    for a, b in disc_pair_keys(mats):
+        vc, vs, vl = _speeds(pair(r, a, b), delta, dt)
+        disc_pairs[f"{a}|{b}"] = {"rest": disc_pair(a, b, r0, 0.0, vs), "closing": disc_pair(a, b, r0, vc, 0.0),
+                                  "sliding": disc_pair(a, b, r0, 0.0, vl)}
+        if a == b:
+            spins[a][r0] = disc_pairs[f"{a}|{b}"]["rest"]
+    for m in mats:
+        for rad in _radii(d0[[n == m for n in names]]):
+            if rad != r0:
+                spins[m][rad] = disc_pair(m, m, rad, 0.0, _speeds(pair(r, m, m), OVERLAP * rad, dt)[1])
+    free = add([x, y_row, r0, 0.0, 0.0, 0.0], mats[0])
 
     on_walls = {}
     taken = [np.array(row[:2]) for row in rows]
@@ -225,14 +270,14 @@ def layout(case: Case) -> Layout:
     for wm in wall_materials(r):
         cands = sorted((w for w in walls if w["material"] == wm),
                        key=lambda w: -float(np.linalg.norm(np.subtract(w["to"], w["from"]))))
-        vc, vs, vl = _speeds(pair(r, dm, wm), delta, dt)
-        roles = {}
+        slots = [(m, role) for m in mats for role in ("rest", "closing", "sliding")]
+        filled = []
         for w in cands:
             a, t, s = liggghts_backend._strips(w, case.profile_bin)
             n = inward_normal(w, centre)
             length = float(s[-1])
             for k in range(len(s) - 1):
-                if len(roles) == 3:
+                if len(filled) == len(slots):
                     break
                 q = float(s[k] + 0.25 * (s[k + 1] - s[k]))
                 c = a + q * t + n * (r0 - delta)
@@ -244,23 +289,27 @@ def layout(case: Case) -> Layout:
                     continue
                 if any(np.linalg.norm(c - o) < 4 * rmax for o in taken):
                     continue
-                role = ("rest", "closing", "sliding")[len(roles)]
+                m, role = slots[len(filled)]
+                vc, vs, vl = _speeds(pair(r, m, wm), delta, dt)
                 v = -n * vc if role == "closing" else np.zeros(2)
                 spin = {"rest": vs, "closing": 0.0, "sliding": vl}[role] / r0
-                roles[role] = (add([c[0], c[1], r0, v[0], v[1], spin]), w["name"])
+                on_walls.setdefault(f"{m}|{wm}", {})[role] = (add([c[0], c[1], r0, v[0], v[1], spin], m), w["name"])
+                filled.append((m, role))
                 taken.append(c)
-            if len(roles) == 3:
+            if len(filled) == len(slots):
                 break
-        if len(roles) < 3:
-            raise CaseError(f"probe: no room for three probe discs on the walls of material {wm!r} "
-                            f"(radius {r0!r}, away from other walls, points and wall ends)")
-        on_walls[wm] = roles
-    return Layout(discs=np.array(rows, float), pairs=pairs, walls=on_walls, free=free, radius=r0, delta=delta)
+        if len(filled) < len(slots):
+            raise CaseError(f"probe: no room for {len(slots)} probe discs (three per disc material) on the walls "
+                            f"of material {wm!r} (radius {r0!r}, away from other walls, points and wall ends)")
+    return Layout(discs=np.array(rows, float), materials=of, disc_pairs=disc_pairs, spins=spins, walls=on_walls,
+                  free=free, radius=r0, delta=delta)
 
 
 def _probe_case(case: Case, lay: Layout) -> Case:
+    index = {m["name"]: k for k, m in enumerate(case.resolved["materials"])}
     return dataclasses.replace(case, name=case.name + "_probe", discs=lay.discs, mode="static", settle=0.0,
-                               duration=case.dt, series_interval=case.dt, snapshot_interval=0.0)
+                               duration=case.dt, series_interval=case.dt, snapshot_interval=0.0,
+                               materials=np.array([index[m] for m in lay.materials], int))
 
 
 def _result(code: str, constants: dict, method: dict, status: str = "ok", reason: str = "", **extra) -> dict:
@@ -287,21 +336,29 @@ def probe_native(case: Case, out_dir: Path, timeout: float = 60) -> dict:
     out_dir = Path(out_dir)
     scene = native_backend.write_inputs(case, out_dir)
     r = resolve(scene)
-    dm = disc_material(r)
-    rho = {m["name"]: m["density"] for m in r["materials"]}[dm]
-    pairs = {f"{dm}|{dm}": {k: float(pair(r, dm, dm)[k]) for k in FIELDS}}
-    for wm in wall_materials(r):
-        pairs[f"{dm}|{wm}"] = {k: float(pair(r, dm, wm)[k]) for k in FIELDS}
+    # each disc's material as the engine read it back from the packing's material column
+    names = material_names(r, np.asarray(r["discs"], float)[:, 3].astype(int))
+    mats = material_names(r, sorted({[m["name"] for m in r["materials"]].index(n) for n in names}))
+    rho = {m["name"]: m["density"] for m in r["materials"]}
+    pairs = {}
+    for a, b in disc_pair_keys(mats):
+        pairs[f"{a}|{b}"] = {k: float(pair(r, a, b)[k]) for k in FIELDS}
+    for dm in mats:
+        for wm in wall_materials(r):
+            pairs[f"{dm}|{wm}"] = {k: float(pair(r, dm, wm)[k]) for k in FIELDS}
     mass, inertia = {}, {}
-    for rad in _radii(case.discs):
-        m = rho * math.pi * rad * rad
-        mass[_radius_key(dm, rad)] = m
-        inertia[_radius_key(dm, rad)] = 0.5 * m * rad * rad
+    d = np.asarray(r["discs"], float)
+    for dm in mats:
+        for rad in sorted({float(x) for x, n in zip(d[:, 2], names) if n == dm}):
+            m = rho[dm] * math.pi * rad * rad
+            mass[_radius_key(dm, rad)] = m
+            inertia[_radius_key(dm, rad)] = 0.5 * m * rad * rad
     how = "dem resolve of the scene native_backend writes"
     return _result("native", {"pairs": pairs, "mass": mass, "inertia": inertia,
                               "gravity": [float(g) for g in r["gravity"]], "dt": float(r["integrator"]["dt"])},
                    {"pairs": how, "gravity": how, "dt": how + " (integrator.dt)",
-                    "mass": "rho pi r^2 from the resolved density (the engine's definition; not printed)",
+                    "mass": "rho pi r^2 of each disc's material as dem resolve reads it from the packing "
+                            "(the engine's definition; not printed)",
                     "inertia": "m r^2 / 2 (the engine's definition; not printed)"})
 
 
@@ -360,17 +417,9 @@ def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     pc = _probe_case(case, lay)
     data = yade_backend.case_data(pc)
     yade_backend._write(data, out_dir, 1)
-    r = case.resolved
-    dm = disc_material(r)
-    roles = {"disc_pairs": {f"{dm}|{dm}": lay.pairs["rest"]},
-             "wall_pairs": {f"{dm}|{wm}": roles["rest"] for wm, roles in lay.walls.items()},
-             "bodies": {}}
-    radius_row = {lay.radius: lay.pairs["rest"][0]}
-    for key, (i, _j) in lay.pairs.items():
-        if key.startswith("spin:"):
-            radius_row[float(lay.discs[i, 2])] = i
-    for rad in _radii(case.discs):
-        roles["bodies"][_radius_key(dm, rad)] = radius_row[rad]
+    roles = {"disc_pairs": {key: ij["rest"] for key, ij in lay.disc_pairs.items()},
+             "wall_pairs": {key: roles["rest"] for key, roles in lay.walls.items()},
+             "bodies": {_radius_key(m, rad): ij[0] for m, by in lay.spins.items() for rad, ij in by.items()}}
     write_text_atomic(out_dir / YADE_ROLES, json.dumps(roles) + "\n")
     write_text_atomic(out_dir / YADE_PROBE_SCRIPT, _YADE_PROBE)
     (out_dir / YADE_PROBE_OUT).unlink(missing_ok=True)
@@ -389,8 +438,8 @@ def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     inertia = {k: b["inertia"][2] for k, b in got["bodies"].items()}
     consts = {"pairs": pairs, "mass": mass, "inertia": inertia, "gravity": got["gravity"][:2], "dt": got["dt"]}
     how = "ViscElPhys of a real {} interaction after one step (kn, ks, cn, cs, tangensOfFrictionAngle)"
-    method = {"pairs": {k: how.format("disc-disc" if k == f"{dm}|{dm}" else "disc-facet") for k in roles["disc_pairs"]
-                        | roles["wall_pairs"]},
+    method = {"pairs": {k: how.format("disc-disc" if k in roles["disc_pairs"] else "disc-facet")
+                        for k in roles["disc_pairs"] | roles["wall_pairs"]},
               "mass": "body.state.mass", "inertia": "body.state.inertia[2] (z: the disc's spin axis)",
               "gravity": f"{got['integrator']}.gravity", "dt": "O.dt"}
     if missing:
@@ -481,7 +530,6 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     dt = times[-1]
     dtf = 0.5 * dt
     r = case.resolved
-    dm = disc_material(r)
 
     def vec(s, k, a, b):
         return np.array([s[k][a], s[k][b]])
@@ -496,36 +544,36 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     def state(s, k):
         return vec(s, k, "x", "y"), vec(s, k, "vx", "vy"), s[k]["omegaz"], s[k]["radius"]
 
-    def partner(i):
-        for a, b in lay.pairs.values():
-            if i == a:
-                return b
-        raise KeyError(i)
+    partners = {}
+    for roles in lay.disc_pairs.values():
+        for a, b in roles.values():
+            partners[a], partners[b] = b, a
+    for by in lay.spins.values():
+        for a, b in by.values():
+            partners[a], partners[b] = b, a
 
-    # mass and inertia of each radius: the spin pair's first disc (normal force along the pair)
-    mass, inertia = {}, {}
-    spin_rows = {lay.radius: lay.pairs["rest"][0]}
-    for key, (i, _j) in lay.pairs.items():
-        if key.startswith("spin:"):
-            spin_rows[float(lay.discs[i, 2])] = i
-    inertia_of = {}
-    for rad, i in spin_rows.items():
-        e = vec(s0, partner(i), "x", "y") - vec(s0, i, "x", "y")
-        e /= np.linalg.norm(e)
-        df = float(np.dot(vec(s0, i, "fx", "fy") + vec(s1, i, "fx", "fy"), e))
-        dv = float(np.dot(vec(s1, i, "vx", "vy") - vec(s0, i, "vx", "vy"), e))
-        key = _radius_key(dm, rad)
-        mass[key] = dtf * df / dv
-        inertia_of[i] = dtf * (s0[i]["tqz"] + s1[i]["tqz"]) / (s1[i]["omegaz"] - s0[i]["omegaz"])
-        inertia[key] = inertia_of[i]
-    i_main = inertia_of[lay.pairs["rest"][0]]
+    # mass and inertia of each disc material's radii: the spin pair's first disc (normal force
+    # along the pair)
+    mass, inertia, inertia_of = {}, {}, {}
+    for m, by in lay.spins.items():
+        for rad, (i, _j) in by.items():
+            e = vec(s0, partners[i], "x", "y") - vec(s0, i, "x", "y")
+            e /= np.linalg.norm(e)
+            df = float(np.dot(vec(s0, i, "fx", "fy") + vec(s1, i, "fx", "fy"), e))
+            dv = float(np.dot(vec(s1, i, "vx", "vy") - vec(s0, i, "vx", "vy"), e))
+            key = _radius_key(m, rad)
+            mass[key] = dtf * df / dv
+            inertia[key] = dtf * (s0[i]["tqz"] + s1[i]["tqz"]) / (s1[i]["omegaz"] - s0[i]["omegaz"])
+            if rad == lay.radius:
+                inertia_of[m] = inertia[key]
 
     def half_step(k):
         """x(t + dt) as dumped; v and omega at t + dt/2 from the step-0 forces (velocity Verlet)."""
         x1, _v, _w, rad = state(s1, k)
         m = s0[k]["mass"]
         v = vec(s0, k, "vx", "vy") + (dtf / m) * vec(s0, k, "fx", "fy")
-        w = s0[k]["omegaz"] + dtf * s0[k]["tqz"] / i_main     # every contact probe disc has radius lay.radius
+        # every contact probe disc has radius lay.radius: its material's inertia at that radius
+        w = s0[k]["omegaz"] + dtf * s0[k]["tqz"] / inertia_of[lay.materials[k]]
         return x1, v, w, rad
 
     def solve(role_rows, other_of):
@@ -558,16 +606,19 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
             kt = None
         return {"kn": float(kn), "ks": kt, "eta_n": float(eta_n), "eta_s": eta_t, "mu": mu}
 
-    pairs = {f"{dm}|{dm}": solve({q: lay.pairs[q][0] for q in ("rest", "closing", "sliding")},
-                                 lambda i, st: half_step(partner(i)) if st else state(s0, partner(i)))}
+    pairs = {}
+    for key, roles in lay.disc_pairs.items():
+        pairs[key] = solve({q: roles[q][0] for q in ("rest", "closing", "sliding")},
+                           lambda i, st: half_step(partners[i]) if st else state(s0, partners[i]))
     walls = {w["name"]: w for w in r["walls"]}
-    for wm, roles in lay.walls.items():
+    for key, roles in lay.walls.items():
         def wall_of(i, _st, roles=roles):
             name = next(n for q, (row, n) in roles.items() if row == i)
             return ("wall", walls[name]["from"], inward_normal(walls[name], case.centre))
-        pairs[f"{dm}|{wm}"] = solve({q: row for q, (row, _n) in roles.items()}, wall_of)
+        pairs[key] = solve({q: row for q, (row, _n) in roles.items()}, wall_of)
     consts = {"pairs": pairs, "mass": mass, "inertia": inertia, "gravity": [float(g) for g in gravity], "dt": dt}
-    checks = {f"mass[{_radius_key(dm, rad)}]": s0[i]["mass"] for rad, i in spin_rows.items()}
+    checks = {f"mass[{_radius_key(m, rad)}]": s0[i]["mass"] for m, by in lay.spins.items()
+              for rad, (i, _j) in by.items()}
     method = {
         "kn, eta_n": "step 0 (no shear history): F_n = k_n delta - eta_n v_n of a pair at rest and a closing pair",
         "eta_s": "step 0: F_t = -eta_t v_t (zero shear history) of the pair at rest",
@@ -609,7 +660,7 @@ def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
 def check_case(case: Case, out_root: Path, codes=CODES, timeout: float = 120, rel: float = 1e-9) -> dict:
     """Probes ``case`` in each code against ``expected_constants``: {code: {status, reason,
     wall_time_s, rows (compare_constants), max_rel_diff, pass}}; a failed probe does not pass."""
-    expected = expected_constants(case.resolved, case.discs, case.dt)
+    expected = expected_constants(case.resolved, case.discs, case.dt, case.material_index())
     out = {}
     for code in codes:
         res = probe(code, case, Path(out_root) / code, timeout)

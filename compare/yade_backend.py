@@ -11,11 +11,15 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
   middle of the overlap, r - overlap/2 from the centre, on spheres and facets alike): the
   engine's SHARED_VARIANT;
 - constants: materials combine IN SERIES, k = k1 k2 / (k1 + k2), a 0 meaning "absent" (the
-  contact then takes the other material's value). Disc material = 2 x the disc-disc pair, so
-  disc-disc contacts get the pair exactly; each wall material is solved so that series(disc,
-  wall) is the resolved disc-wall pair: w = k_dw k_d / (k_d - k_dw), or 0 when k_dw = k_d (the
-  paper's case: disc-wall = 2 x disc-disc). k_dw > k_d cannot be expressed (CaseError). Friction
-  per material pair with a MatchMaker (tan(atan(mu)));
+  contact then takes the other material's value). Disc material A = 2 x the A-A pair, so
+  A-A contacts get the pair exactly; an A-B pair of two disc materials must be
+  series(2 x A-A, 2 x B-B) for kn, ks, eta_n, eta_s (otherwise CaseError naming the field and the
+  series value). Each wall material is solved against the first disc material so that
+  series(disc, wall) is the resolved disc-wall pair: w = k_dw k_d / (k_d - k_dw), or 0 when
+  k_dw = k_d (the paper's case: disc-wall = 2 x disc-disc); k_dw > k_d cannot be expressed, and
+  every other disc material's pair with that wall must equal its series with the same wall
+  values (CaseError naming the field otherwise). Friction per material pair with a MatchMaker
+  (tan(atan(mu))); each disc's mass from its own material's density;
 - walls: one facet per wall segment (edge = the segment at z = 0, apex out of the plane): the
   interior gives plane contacts, the ends vertex contacts (the slit ends L and R). A guard
   switches vertex contacts off where the engine has none: at ends that are not scene points, and
@@ -91,8 +95,10 @@ LIMITATIONS = [
     "tangential lever arm and contact point: r - overlap/2 from the centre (engine: r)",
     "shear history: a contact moving from one wall to a neighbouring wall's end point starts a "
     "new history (the engine passes it on between neighbours); within one wall it is kept",
-    "constants: one disc material; a disc-wall constant larger than 2 x the disc-disc one "
-    "(k_dw > k_d) or a zero disc-wall damping with non-zero disc-disc damping cannot be expressed",
+    "constants: disc materials combine in series (an A-B pair other than series(2 x A-A, 2 x B-B) "
+    "cannot be expressed), one wall material serves every disc material; a disc-wall constant larger "
+    "than 2 x the disc-disc one (k_dw > k_d) or a zero disc-wall damping with non-zero disc-disc "
+    "damping cannot be expressed",
     "points: only at wall ends (facet vertices), with the material of the walls ending there",
     "friction coefficient passes through tan(atan(mu)) (1 ulp)",
 ]
@@ -145,26 +151,61 @@ def series(a: float, b: float) -> float:
     return 1.0 / s if s else 0.0
 
 
-def materials(resolved: dict) -> tuple[dict, dict]:
-    """Disc material and wall materials (by name) of the translation; raises CaseError."""
-    dname = disc_material(resolved)
-    rho = {m["name"]: m["density"] for m in resolved["materials"]}[dname]
-    dd = pair(resolved, dname, dname)
-    disc = {"kn": 2.0 * dd["kn"], "cn": 2.0 * dd["eta_n"], "ks": 2.0 * dd["ks"], "cs": 2.0 * dd["eta_s"],
-            "density": float(rho), "mu": float(dd["mu"])}
+_FIELDS = (("kn", "kn"), ("cn", "eta_n"), ("ks", "ks"), ("cs", "eta_s"))   # YADE name, scene name
+
+
+def _same(a: float, b: float) -> bool:
+    return abs(a - b) <= EQUAL_REL * max(abs(a), abs(b))
+
+
+def materials(resolved: dict, disc_names: list[str] | None = None) -> tuple[dict, dict, list]:
+    """Disc materials, wall materials (by name) and friction per material pair of the translation
+    (``disc_names``: the case's disc materials, None: the scene's one); raises CaseError.
+
+    Disc material A = 2 x the A-A pair. YADE combines two disc materials in series, so an A-B pair
+    is expressed only when it is series(2 x A-A, 2 x B-B) for kn, ks, eta_n and eta_s (relative
+    EQUAL_REL). Each wall material is solved against the first disc material; every other disc
+    material B must then get its B-wall pair from the same wall values. Friction: one MatchMaker
+    entry per pair, [a, b, mu]."""
+    if disc_names is None:
+        disc_names = [disc_material(resolved)]
+    rho = {m["name"]: float(m["density"]) for m in resolved["materials"]}
+    discs, friction = {}, []
+    for a in disc_names:
+        aa = pair(resolved, a, a)
+        discs[a] = dict({k: 2.0 * float(aa[f]) for k, f in _FIELDS}, density=rho[a])
+    for i, a in enumerate(disc_names):
+        for b in disc_names[i:]:
+            ab = pair(resolved, a, b)
+            friction.append([a, b, float(ab["mu"])])
+            if a == b:
+                continue
+            for k, f in _FIELDS:
+                want, got = series(discs[a][k], discs[b][k]), float(ab[f])
+                if not _same(got, want):
+                    raise CaseError(f"pairs[{a},{b}].{f}: YADE combines the disc materials {a!r} and {b!r} in "
+                                    f"series, which gives series(2 x pairs[{a},{a}], 2 x pairs[{b},{b}]) = {want!r}; "
+                                    f"the scene has {got!r}")
     walls = {}
     names = {w["material"] for w in resolved["walls"]} | {p["material"] for p in resolved["points"]}
+    first = disc_names[0]
     for wm in sorted(names):
-        dw = pair(resolved, dname, wm)
-        label = f"pairs[{dname},{wm}]"
-        walls[wm] = {"kn": _series_partner(f"{label}.kn", disc["kn"], float(dw["kn"])),
-                     "cn": _series_partner(f"{label}.eta_n", disc["cn"], float(dw["eta_n"])),
-                     "ks": _series_partner(f"{label}.ks", disc["ks"], float(dw["ks"])),
-                     "cs": _series_partner(f"{label}.eta_s", disc["cs"], float(dw["eta_s"])),
-                     "mu": float(dw["mu"])}
-        if not (math.isfinite(walls[wm]["mu"]) and walls[wm]["mu"] >= 0):
-            raise CaseError(f"{label}.mu: must be finite and >= 0")
-    return disc, walls
+        dw = pair(resolved, first, wm)
+        label = f"pairs[{first},{wm}]"
+        walls[wm] = {k: _series_partner(f"{label}.{f}", discs[first][k], float(dw[f])) for k, f in _FIELDS}
+        for b in disc_names:
+            bw = pair(resolved, b, wm)
+            friction.append([b, wm, float(bw["mu"])])
+            for k, f in _FIELDS:
+                want, got = series(discs[b][k], walls[wm][k]), float(bw[f])
+                if not _same(got, want):
+                    raise CaseError(f"pairs[{b},{wm}].{f}: YADE has one {wm!r} wall material for every disc "
+                                    f"material; solved from {label}.{f} it gives the {b}-{wm} pair "
+                                    f"{want!r}, the scene has {got!r}")
+    for a, b, mu in friction:
+        if not (math.isfinite(mu) and mu >= 0):
+            raise CaseError(f"pairs[{a},{b}].mu: must be finite and >= 0")
+    return discs, walls, friction
 
 
 def _points(resolved: dict, walls: list[dict]) -> list[list[float]]:
@@ -205,7 +246,8 @@ def case_data(case: Case) -> dict:
     d = np.asarray(case.discs, float)
     if d.ndim != 2 or d.shape[1] != 6 or len(d) == 0:
         raise CaseError("discs: need an (n, 6) array x, y, r, vx, vy, omega")
-    disc, wall_mats = materials(r)
+    disc_of = case.material_names()
+    discs_m, wall_mats, friction = materials(r, case.disc_materials())
     walls = [{"name": w["name"], "from": [float(v) for v in w["from"]], "to": [float(v) for v in w["to"]],
               "material": w["material"]} for w in r["walls"] if w.get("active", True)]
     for w in walls:
@@ -241,7 +283,8 @@ def case_data(case: Case) -> dict:
     low = box[2] if outlet_y is None else min(box[2], outlet_y - rmax)
     corners = [(box[0], low), (box[1], low), (box[0], box[3]), (box[1], box[3])]
     pe_ref = min(-(g[0] * x + g[1] * y) for x, y in corners)
-    mass = disc["density"] * math.pi * d[:, 2] ** 2 if finite else np.zeros(len(d))
+    rho = np.array([discs_m[m]["density"] for m in disc_of])
+    mass = rho * math.pi * d[:, 2] ** 2 if finite else np.zeros(len(d))
     diag = math.hypot(box[1] - box[0], box[3] - low)
     energy_scale = float(np.sum(mass) * math.hypot(*g) * diag
                          + np.sum(0.5 * mass * (d[:, 3] ** 2 + d[:, 4] ** 2))) if finite else 1.0
@@ -251,8 +294,8 @@ def case_data(case: Case) -> dict:
         "scan_every": scan_every,
         "gravity": g,
         "discs": [[float(v) for v in row] for row in d],
-        "disc_material": disc, "mu_disc_disc": disc["mu"],
-        "wall_materials": wall_mats,
+        "disc_materials": discs_m, "disc_material_of": disc_of,
+        "wall_materials": wall_mats, "friction": friction,
         "walls": walls, "points": points,
         "gate": gate, "outlet_y": outlet_y,
         "snapshot_every": case.snapshot_steps(),

@@ -154,9 +154,9 @@ def test_liggghts_probe_sees_a_scaled_matrix(key, field, case, tmp_path, monkeyp
 def test_yade_probe_sees_a_scaled_material(field, name, case, tmp_path, monkeypatch):
     orig = yade_backend.materials
 
-    def scaled(resolved):
-        disc, walls = orig(resolved)
-        return dict(disc, **{field: disc[field] * 1.05}), walls
+    def scaled(resolved, names=None):
+        discs, walls, friction = orig(resolved, names)
+        return {m: dict(d, **{field: d[field] * 1.05}) for m, d in discs.items()}, walls, friction
 
     monkeypatch.setattr(yade_backend, "materials", scaled)
     res = P.probe("yade", case, tmp_path)

@@ -3,7 +3,8 @@
 # Not importable outside YADE: it uses YADE's globals (O, ViscElMat, PyRunner, ...).
 #
 # What it does (every number comes from yade_case.json, written by the backend):
-# - discs: spheres at z = 0 with blockedDOFs 'zXY', mass rho pi r^2 (per 1 cm), inertia m r^2/2;
+# - discs: spheres at z = 0 with blockedDOFs 'zXY', each of its own material, mass rho pi r^2 of
+#   that material's rho (per 1 cm), inertia m r^2/2;
 # - walls: one facet per wall segment, a triangle whose edge is the segment (z = 0) and whose
 #   apex is out of the plane, so the segment's interior gives plane contacts and its ends vertex
 #   (point) contacts; a "guard" switches off vertex contacts the engine does not have (an end
@@ -58,18 +59,16 @@ def setup():
     S["dt"] = C["dt"]
     O.reset()
     O.dt = C["dt"]
-    dm = C["disc_material"]
-    S["disc_mat"] = O.materials.append(ViscElMat(kn=dm["kn"], cn=dm["cn"], ks=dm["ks"], cs=dm["cs"],
-                                                 frictionAngle=math.atan(C["mu_disc_disc"]),
-                                                 density=dm["density"], label="disc"))
+    disc_mat = {}
+    for name, d in sorted(C["disc_materials"].items()):
+        disc_mat[name] = O.materials.append(ViscElMat(kn=d["kn"], cn=d["cn"], ks=d["ks"], cs=d["cs"],
+                                                      density=d["density"], label="disc_" + name))
     wall_mat = {}
     for name, m in sorted(C["wall_materials"].items()):
         wall_mat[name] = O.materials.append(ViscElMat(kn=m["kn"], cn=m["cn"], ks=m["ks"], cs=m["cs"],
-                                                      frictionAngle=math.atan(m["mu"]), density=1.0,
-                                                      label="wall_" + name))
-    matches = [(S["disc_mat"], S["disc_mat"], math.atan(C["mu_disc_disc"]))]
-    for name, mid in sorted(wall_mat.items()):
-        matches.append((S["disc_mat"], mid, math.atan(C["wall_materials"][name]["mu"])))
+                                                      density=1.0, label="wall_" + name))
+    mat_id = dict(disc_mat, **wall_mat)
+    matches = [(mat_id[a], mat_id[b], math.atan(mu)) for a, b, mu in C["friction"]]
     ids = sorted(wall_mat.values())
     for a in range(len(ids)):
         for b in range(a, len(ids)):
@@ -95,8 +94,9 @@ def setup():
         if not _finite(x, y, r, vx, vy, om) or not r > 0:
             raise _InputError(f"disc {k}: non-finite or non-positive value in x, y, r, vx, vy, omega "
                               f"= {[x, y, r, vx, vy, om]!r}")
-        b = utils.sphere((x, y, 0.0), r, material=S["disc_mat"])
-        m = dm["density"] * math.pi * r * r
+        name = C["disc_material_of"][k]
+        b = utils.sphere((x, y, 0.0), r, material=disc_mat[name])
+        m = C["disc_materials"][name]["density"] * math.pi * r * r
         b.state.mass = m
         b.state.inertia = Vector3(0.5 * m * r * r, 0.5 * m * r * r, 0.5 * m * r * r)
         b.state.blockedDOFs = "zXY"
