@@ -104,19 +104,16 @@ def test_members_are_seeded_jitters_of_the_scene_start():
 
 
 def test_a_scene_a_reference_code_cannot_express_is_refused_before_any_run(tmp_path, dem_binary):
-    """Two wall materials: the LIGGGHTS translation has one wall type; the refusal names the
-    field, the code and why; nothing is written (exit 2)."""
-    text = (SCENES / "silo_17_18.toml").read_text()
-    text = text.replace('[materials.wall]\n', '[materials.wall]\n\n[materials.steel]\n')
-    text += ('\n[[pairs]]\nmaterials = ["sand", "steel"]\nkn_rho_g = 7.28e4\nks_rho_g = 1.82e4\n'
-             'eta_n_rho_g = 30.6\neta_s_rho_g = 15.3\nmu = 0.3\n\n[[walls]]\nname = "ledge"\n'
-             'from = [10.0, 45.0]\nto = [15.0, 45.0]\nmaterial = "steel"\n')
+    """A disc-wall spring stiffer than twice the disc-disc one: YADE combines the two materials of a
+    contact in series and cannot reach it; the refusal names the field, the code and why, and
+    nothing is written (exit 2)."""
+    text = (SCENES / "silo_17_18.toml").read_text().replace("kn_rho_g = 7.28e4", "kn_rho_g = 1.5e5")
     scene = _entry(tmp_path, text)
     out = tmp_path / "out"
-    p = subprocess.run([str(dem_binary), "compare", str(scene), "--out", str(out), "--codes", "native,liggghts"],
+    p = subprocess.run([str(dem_binary), "compare", str(scene), "--out", str(out), "--codes", "native,yade"],
                        capture_output=True, text=True, timeout=120)
     assert p.returncode == 2, p.stderr
-    assert "liggghts cannot express it" in p.stderr and "walls" in p.stderr and "one wall material" in p.stderr
+    assert "yade cannot express it" in p.stderr and "kn" in p.stderr and "series" in p.stderr
     assert not out.exists()
 
 
