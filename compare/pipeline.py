@@ -112,8 +112,9 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
 
 
 def _probe_cached(probe, code: str, case: Case, out: Path, timeout: float) -> dict:
-    """A code's probe of a case's translation, kept by the translated constants (the same constants
-    translate the same way: a list of collisions with one set of constants probes once)."""
+    """A code's probe of a case's translation, kept under the run's folder ``out`` by the translated
+    constants (the same constants translate the same way: a list of collisions with one set of
+    constants probes once)."""
     import hashlib
     r = case.resolved
     key = json.dumps({"code": code, "pairs": r["pairs"], "materials": r["materials"], "gravity": r["gravity"],
@@ -121,10 +122,7 @@ def _probe_cached(probe, code: str, case: Case, out: Path, timeout: float) -> di
                       "radii": sorted({(float(x), int(m)) for x, m in zip(np.asarray(case.discs)[:, 2],
                                                                           case.material_index())})}, sort_keys=True)
     h = hashlib.sha1(key.encode()).hexdigest()[:16]
-    root = out
-    while root.parent != root and root.name not in ("collision", "static", "janssen", "discharge"):
-        root = root.parent
-    d = root.parent / "probes" / code / h
+    d = out / "probes" / code / h
     cached = d / "probe.json"
     if cached.exists():
         return json.loads(cached.read_text())
@@ -408,7 +406,7 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
             f"{p.members} member(s), dt {p.dt:g} s, {p.duration:g} s"
             + (f" [mutant {mutation.name}]" if mutation else ""))
         t1 = time.monotonic()
-        metrics = translation_check(p, codes, where, mutation) if check_translation else []
+        metrics = translation_check(p, codes, out, mutation) if check_translation else []
         m, detail = run_plan(p, codes, where, mutation)
         metrics += m
         report["metrics"] += metrics
