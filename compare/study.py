@@ -331,14 +331,6 @@ def flow_profile(res: Result, case: Case) -> dict:
     return out
 
 
-def mean_se(values) -> tuple[float, float, int]:
-    v = np.array([x for x in values if x is not None and math.isfinite(x)], float)
-    if len(v) == 0:
-        return float("nan"), float("nan"), 0
-    se = float(np.std(v, ddof=1) / math.sqrt(len(v))) if len(v) > 1 else float("nan")
-    return float(np.mean(v)), se, len(v)
-
-
 FLOW_TOTALS = ("flow_side_normal", "flow_side_shear", "flow_bottom_normal")
 
 
