@@ -104,6 +104,15 @@ def kinetic_energy(resolved: dict, discs: np.ndarray, materials=None) -> float:
     return float(np.sum(0.5 * m * (d[:, 3] ** 2 + d[:, 4] ** 2) + 0.25 * m * d[:, 2] ** 2 * d[:, 5] ** 2))
 
 
+def outlet_y(resolved: dict) -> float:
+    """Height below which a discharge removes discs: ``discharge.outlet_depth`` below the gate
+    (the engine's rule: below the floor of the slit the gate closes; docs/scene.md)."""
+    gate = next((w for w in resolved["walls"] if w["name"] == resolved["discharge"]["gate"]), None)
+    if gate is None:
+        raise CaseError(f"discharge.gate: {resolved['discharge']['gate']!r} is not a wall of the scene")
+    return min(float(gate["from"][1]), float(gate["to"][1])) - float(resolved["discharge"]["outlet_depth"])
+
+
 def inward_normal(wall: dict, centre: tuple[float, float]) -> np.ndarray:
     """Unit normal of a wall pointing to the side where ``centre`` (the discs) lies."""
     a, b = np.array(wall["from"], float), np.array(wall["to"], float)

@@ -29,7 +29,8 @@ What the translation does (see ../shared/docs/reference-codes.md for the measure
   positions are also dumped as per-atom variables (Float64 point data);
 - discharge: the gate mesh jumps 200 cm down in one step at the opening (same run: a new
   ``run`` would recompute forces without history updates); discs crossing the outlet plane
-  ``outlet_depth`` below the floor are deleted by ``massflow/mesh`` and logged with their time.
+  ``outlet_depth`` below the gate (common.outlet_y, the engine's rule) are deleted by
+  ``massflow/mesh`` and logged with their time.
 
 What LIGGGHTS cannot express exactly: the paper's incremental normal spring and its no-tension
 rule on the elastic force (eqs. 7a, 8), and the Coulomb cap on the elastic normal force (eq.
@@ -50,7 +51,7 @@ from pathlib import Path
 import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
 
-from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
+from .common import (outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
                      inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
 
 NAME = "liggghts"
@@ -192,7 +193,7 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
         write_wall_stl(w, case.profile_bin, out_dir / f"{mid}.stl")
         meshes.append((mid, types[w["material"]]))
     if case.mode == "discharge":  # the outlet plane spans the box (inside it by 1e-3 cm)
-        write_outlet_stl(out_dir, xlo + 1e-3, xhi - 1e-3, float(r["discharge"]["outlet_depth"]))
+        write_outlet_stl(out_dir, xlo + 1e-3, xhi - 1e-3, outlet_y(r))
     script = _script(case, meshes, xlo, xhi, threads)
     path = out_dir / "in.liggghts"
     write_text_atomic(path, script)
@@ -265,11 +266,10 @@ def _script(case: Case, meshes: list[tuple[str, int]], xlo: float, xhi: float, t
     return "\n".join(s) + "\n"
 
 
-def write_outlet_stl(out_dir: Path, xlo: float, xhi: float, depth: float) -> None:
-    """The outlet plane y = -depth as strips at most 2 Z_HALF wide (2 triangles each, smallest
+def write_outlet_stl(out_dir: Path, xlo: float, xhi: float, y: float) -> None:
+    """The outlet plane at height y as strips at most 2 Z_HALF wide (2 triangles each, smallest
     angle >= 45 deg). Two triangles spanning the whole box are rejected by LIGGGHTS once the box is
     wider than ~900 cm ("Fix mesh: Bad mesh": smallest angle below the 0.256 deg curvature limit)."""
-    y = -depth
     n = max(1, int(math.ceil((xhi - xlo) / (2 * Z_HALF) - 1e-9)))
     xs = np.linspace(xlo, xhi, n + 1)
     pts = np.array([[x, y, z] for x in xs for z in (-Z_HALF, Z_HALF)])

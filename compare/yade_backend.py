@@ -31,7 +31,8 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
   ``series_interval`` and at the end; the contact point reported is the disc centre's projection
   on the segment clamped to its ends (the engine's contact point: a vertex contact counts in the
   end bin of its wall). The per-wall sum is checked against YADE's own wall force;
-- discharge: settle, erase the gate body, run on; discs whose centre is below -outlet_depth are
+- discharge: settle, erase the gate body, run on; discs whose centre is below outlet_depth under
+  the gate (common.outlet_y, the engine's rule) are
   erased at the start of the step in which they are found (per-step check while any disc is
   near the outlet plane) and their times logged.
 - failures (``run`` never raises; the Result says why): translation refused (CaseError from
@@ -71,6 +72,7 @@ from pathlib import Path
 import meshio  # VTKRecorder snapshots (VTU)
 import numpy as np
 
+from .common import outlet_y as common_outlet_y
 from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, pair,
                      profiles_from_contacts, write_text_atomic)
 
@@ -268,7 +270,7 @@ def case_data(case: Case) -> dict:
         gate = dis.get("gate")
         if gate not in {w["name"] for w in walls}:
             raise CaseError(f"discharge.gate: {gate!r} is not an active wall")
-        outlet_y = -float(dis["outlet_depth"])
+        outlet_y = common_outlet_y(r)
     finite = np.all(np.isfinite(d))
     rmax = float(np.nanmax(d[:, 2])) if np.any(np.isfinite(d[:, 2])) else 1.0
     xs = [c for w in walls for c in (w["from"][0], w["to"][0])]

@@ -175,3 +175,25 @@ def test_windowed_peak_is_the_largest_moving_average_over_the_opening_value():
     # its whole window; the spike's window: (40 + 99 / 10) / 40 = 1.2475, below it
     assert pk["peak_window_side"] == pytest.approx(2.5)
     assert pk["peak_window_bottom"] == pytest.approx(1.0)
+
+
+def test_every_code_removes_discs_at_the_engines_outlet_height(tmp_path, dem_binary):
+    """outlet_depth is measured from the gate (the slit's floor), not from y = 0: a hopper whose
+    gate is at y = 6 removes discs below y = 2 in the engine, the LIGGGHTS outlet mesh and the
+    YADE remover alike (measured from y = 0 the references counted discs some 0.05 s later)."""
+    import meshio
+    from compare import liggghts_backend, yade_backend
+    from compare.common import outlet_y
+    scene = ROOT / "reference_inputs" / "agreement" / "user" / "hopper.toml"
+    p = plan.make_plan(plan.Entry(scene, plan.Options()))
+    gate = next(w for w in p.shared["walls"] if w["name"] == "gate")
+    expected = gate["from"][1] - p.shared["discharge"]["outlet_depth"]
+    assert expected == 2.0 and outlet_y(p.shared) == expected
+    case = plan.member_case(p, 0)
+    liggghts_backend.write_inputs(case, tmp_path / "l")
+    assert np.allclose(meshio.read(str(tmp_path / "l" / "outlet.stl")).points[:, 1], expected)
+    assert yade_backend.case_data(case)["outlet_y"] == expected
+    r = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(tmp_path / "n"), "--no-plots", "--quiet",
+                        "--end-time", "0.01"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert json.loads((tmp_path / "n" / "summary.json").read_text())["discharge"]["outlet_y"] == expected
