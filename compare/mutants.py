@@ -100,7 +100,7 @@ def margin(m: dict) -> float:
         return float(v["max_diff_over_tolerance"])
     if "p" in v and v.get("p") is not None:
         return float("nan")
-    for k in ("max_rel_diff", "max_rel"):
+    for k in ("max_rel_diff", "max_rel", "rel_diff"):
         if k in v and isinstance(m.get("tolerance"), (int, float)) and m["tolerance"]:
             return float(v[k]) / float(m["tolerance"])
     return float("nan")
