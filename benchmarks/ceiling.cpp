@@ -1,4 +1,4 @@
-// What 2 threads give on this machine for work with no engine in it (issue 5, the 1 -> 2 thread
+// What 2 threads give on this machine for work with no engine in it (the 1 -> 2 thread
 // target): the ceiling the engine's own speed-up is to be read against. Five loops, each run
 // with 1 and 2 threads (OpenMP, each thread its own contiguous half, as the engine splits):
 //

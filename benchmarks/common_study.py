@@ -1,4 +1,4 @@
-"""Shared helpers of the work-precision and stability studies (issue 5, points 2 and 3).
+"""Shared helpers of the work-precision and stability studies.
 
 Both studies drive the engine binary (``--dem PATH``, else ``$DEM_BINARY``, else
 ``build/dem``) as a subprocess, read its ``summary.json`` and ``discs.csv``, and write

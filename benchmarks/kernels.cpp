@@ -1,4 +1,4 @@
-// Google Benchmark kernels (issue 5): the contact-force pass, the cell/list rebuild and the
+// Google Benchmark kernels: the contact-force pass, the cell/list rebuild and the
 // integration pass on a settled 10k-disc lattice silo (reference_inputs/scenes/bench_silo_10k.toml,
 // the paper's law and eq. 19, 300 steps after the start so the lattice is in contact), at 1 and 2
 // threads; and the rows of the skip table: the same force pass with and without a feature

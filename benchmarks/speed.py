@@ -1,4 +1,4 @@
-"""Speed benchmark (issue 5, point 1): particle-steps per second and peak memory of the native
+"""Speed benchmark: particle-steps per second and peak memory of the native
 engine, LIGGGHTS and YADE on the same silo scenes, settling then discharging, in one run.
 
     /usr/bin/python3 benchmarks/speed.py --out out/speed            # all sizes (~30-40 min)
@@ -313,7 +313,7 @@ def write_report(out, table, meta):
     if any("getrusage" in x for x in sources):
         L += ["", "Memory: /usr/bin/time was missing, so some rows come from getrusage of the worker's children,",
               "which includes the Python worker's own size (apt-get install time)."]
-    L += ["", "## Targets (issue 5)", ""]
+    L += ["", "## Targets", ""]
     for size in meta["sizes"]:
         n1, n2 = find(size, "native", "shared_verlet", 1), find(size, "native", "shared_verlet", 2)
         lg = find(size, "liggghts", "shared_verlet", 1)

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Stability stress test (issue 5, point 3): the largest stable dt of every scheme on the
+"""Stability stress test: the largest stable dt of every scheme on the
 paper's silo (all eight arrangements 11/12 ... 18/19) and on packings with other stiffness
 ratios K_s/K_n, damping ratios and coordination numbers, beside the theoretical bounds the
 engine prints (single contact, rotation on 4 and 6 sticking contacts, eq. 26, eq. 21); and the
@@ -368,7 +368,7 @@ def plot(results: list, cases: list, out: Path) -> None:
 
 def write_report(res: dict, out: Path) -> None:
     cfg = res["config"]
-    L = ["# Stability stress test (issue 5, point 3)", "",
+    L = ["# Stability stress test", "",
          f"Engine `{res['engine']}` (`{res['dem']}`), profile `{res['profile']}`; {res['n_runs']} runs in "
          f"{res['elapsed_s']:.0f} s ({res['jobs']} at a time) on a shared 2-core machine. Command: `{res['command']}`.", "",
          "![stability](stability.png)", "",

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Work-precision study (issue 5, point 2): run time against error for every integrator of the
+"""Work-precision study: run time against error for every integrator of the
 engine (paper_eq18, paper_eq19, velocity_verlet) over a dt sweep, and the same points for
 LIGGGHTS and YADE where they can run the case.
 
@@ -594,7 +594,7 @@ def at(points, key, dt):
 
 
 def write_report(res: dict, out: Path) -> None:
-    L = ["# Work-precision: run time against error (issue 5, point 2)", ""]
+    L = ["# Work-precision: run time against error", ""]
     L += [f"Engine `{res['engine']}` (`{res['dem']}`), profile `{res['profile']}`, codes: "
           + ", ".join(f"{k}: {v}" for k, v in res["code_versions"].items())
           + f". Study time {res['elapsed_s']:.0f} s on a shared 2-core machine (load average at start "

@@ -1,4 +1,4 @@
-"""Writes the agreement report: report.md, agreement.json and PNG plots (issue 4, point 7)."""
+"""Writes the agreement report: report.md, agreement.json and PNG plots."""
 from __future__ import annotations
 
 import json

@@ -217,8 +217,8 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
 // entries of discs from b on (which are still to be read); when a round would not fit (the list
 // grew up to b), the unread old entries are moved once to the buffer's tail, behind the margin,
 // and if even that is too little the buffer is enlarged. Moving the whole old list to the tail
-// before every build, as until session 14, copied the largest array serially at each build (at
-// a million discs some 72 MB). The list is the same as a build beside the old one, for any
+// before every build instead would copy the largest array serially at each build (at a million
+// discs some 72 MB). The list is the same as a build beside the old one, for any
 // thread count.
 void Neighbors::build_pairs(const Discs& d, int nt) {
   const int n = static_cast<int>(d.size());

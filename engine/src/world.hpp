@@ -84,9 +84,9 @@ class World {
   // block has about the same work: a disc 1 unit, a pair that touched in the last pass (non-zero
   // history) 1 more, on its i. Equal numbers of discs left a settled silo's lower half (its pairs
   // in contact) to one thread and the looser top to the other: 12.8 against 4.5 ms a step at 1M
-  // discs (session 11). Since the law runs eight pairs a vector a touching pair costs about what
-  // a disc does: with 12 units a pair against 4 a disc (until session 16) the thread of the
-  // upper, looser discs had 1.6 times the other's work at 1M discs (perf). Candidate pairs are
+  // discs. The law runs eight pairs a vector, so a touching pair costs about what a disc does:
+  // weighed at 3 units a pair against 1 a disc, the thread of the upper, looser discs had 1.6
+  // times the other's work at 1M discs (perf). Candidate pairs are
   // not counted: a state file's restart builds its lists at another time than the run in one
   // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's
   // edge its sum is ordered by the blocks, so they are part of the state (saved with it) and are

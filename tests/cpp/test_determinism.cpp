@@ -1,4 +1,4 @@
-// Determinism (issue 5): the same scene and thread count gives bit-identical results. A hash of
+// Determinism: the same scene and thread count gives bit-identical results. A hash of
 // every disc's position, velocity and spin after N steps is compared with the hash stored here
 // for 1 and 2 threads; it changes only when the arithmetic of a step changes (then it must be
 // re-recorded on purpose, with the reason in the commit). The scene settles 4500 discs from a

@@ -1,4 +1,4 @@
-"""The speed study's report (benchmarks/speed.py write_report, issue 5): its targets section
+"""The speed study's report (benchmarks/speed.py write_report): its targets section
 states the ratio to serial LIGGGHTS, the 2-thread speed-up and the 1M memory of both native rows
 (the comparison scene's and the paper's eq. 19), each computed from the runs' records."""
 import sys

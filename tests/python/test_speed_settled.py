@@ -1,4 +1,4 @@
-"""The speed study's settled start (benchmarks/speed.py --start settled, issue 5): the 10k lattice
+"""The speed study's settled start (benchmarks/speed.py --start settled): the 10k lattice
 silo settled by the engine becomes a scene that starts every code from the packing at rest. The
 scene keeps the silo and the disc count, the packing touches (about two contacts a disc, against
 none in the lattice), and the native comparison case accepts its overlaps. A few seconds."""

@@ -1,4 +1,4 @@
-"""Smoke test of the work-precision and stability studies (benchmarks/, issue 5): a 3-point dt
+"""Smoke test of the work-precision and stability studies (benchmarks/): a 3-point dt
 sweep of the head-on collision measures the convergence order of each scheme against the
 closed-form damped oscillator, and the closed form agrees with compare/'s RK4 ODE. A few
 seconds; the full studies are run by hand (benchmarks/README.md)."""
