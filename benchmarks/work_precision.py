@@ -322,18 +322,21 @@ def problem_static_paper(cfg, out: Path, repeats: int) -> dict:
 
 
 def problem_static_shared(cfg, out: Path, codes, repeats: int) -> dict:
-    """The shared variant: compare/study.py's frozen packing (the native engine fills 17/18 with
-    the shared law, velocities zeroed), re-rested for shared_duration in every code."""
-    from compare import study
+    """The shared variant: the comparison's frozen packing (compare/pipeline.py: the native engine
+    fills 17/18 with the shared law, velocities zeroed), re-rested for shared_duration in every code."""
+    from compare import pipeline, plan as cplan
+    from compare.common import Case
     base = out / "b_shared"
     base.mkdir(parents=True, exist_ok=True)
     scene = cs.SCENES / "silo_17_18.toml"
-    log("(b) shared variant: frozen packing (compare.study.frozen_packing, dt 2e-5 s, 1 s)")
-    pack = study.frozen_packing(scene, 2e-5, 1.0, base / "packing")
+    log("(b) shared variant: frozen packing (compare.pipeline.frozen_packing, dt 2e-5 s, 1 s)")
+    frozen = cplan.make_plan(cplan.Entry(scene, cplan.Options(dt=2e-5, settle=1.0)))
+    pack = pipeline.frozen_packing(frozen, base / "packing")
     side = None
 
     def case_for(dt):
-        return study.static_case(scene, "silo_17_18_shared", dt, cfg["shared_duration"], pack)
+        return Case(name="silo_17_18_shared", resolved=frozen.shared, discs=pack, dt=dt,
+                    duration=cfg["shared_duration"])
 
     def one_native(scheme, dt, tag=""):
         case = case_for(dt)

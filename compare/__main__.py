@@ -76,7 +76,7 @@ def main(argv=None) -> int:
         print(f"--codes: unknown {bad}" if bad else "--codes: native is the reference and must be included",
               file=sys.stderr)
         return 2
-    base = plan.Options(codes=codes, profile="full" if a.full else "quick", timeout=a.timeout)
+    base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout)
     try:
         if a.cmd == "report":
             entries = plan.read_list(plan.default_list(base.profile), base)

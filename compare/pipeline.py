@@ -25,7 +25,7 @@ import numpy as np
 
 from . import collision_judge
 from . import janssen, stats, study
-from .common import SHARED_VARIANT, Case, Result, failed, scene_material_index
+from .common import Case, Result, scene_material_index
 from .plan import Entry, Plan, PlanError, jittered, make_plan, member_case, refusals, start_discs
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
@@ -45,13 +45,6 @@ def _metric(name, scene, values, tol, passed, note="", kind="deterministic") -> 
 
 # ------------------------------------------------------------------------ running codes
 
-def run_code(code: str, case: Case, out: Path, timeout: float, reuse: bool = False) -> Result:
-    cached = out / "result.json"
-    if reuse and cached.exists():
-        return Result.load(cached)
-    return study.run_code(code, case, out, timeout)
-
-
 def case_for(code: str, case: Case, plan: Plan, mutation) -> Case:
     """The case a code runs: the native side with the scene's own law when asked, then the
     mutation (a mutant's wrong constant, or an attribution's law switch) for the code it names."""
@@ -70,15 +63,18 @@ def _with_resolved(case: Case, r: dict) -> Case:
     return c
 
 
-def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:
-    """Every code's run of one case; in a mutant run the unmutated codes reuse the baseline's."""
-    res = {}
-    for c in codes:
-        mutated = mutation is not None and mutation.code == c
-        d = mutation.folder(out, c) if mutated else out / c
-        res[c] = run_code(c, case_for(c, case, plan, mutation), d, plan.options.timeout,
+def run_one(code: str, case: Case, plan: Plan, out: Path, mutation=None) -> Result:
+    """One code's run of a case in ``out/code``; in a mutant or attribution run the code it names
+    runs in its own folder and every other code reuses its baseline result."""
+    mutated = mutation is not None and mutation.code == code
+    d = mutation.folder(out, code) if mutated else out / code
+    return study.run_code(code, case_for(code, case, plan, mutation), d, plan.options.timeout,
                           reuse=mutation is not None and not mutated)
-    return res
+
+
+def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:
+    """Every code's run of one case."""
+    return {c: run_one(c, case, plan, out, mutation) for c in codes}
 
 
 # ------------------------------------------------------------------------ translation check
@@ -86,10 +82,7 @@ def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:
 def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
     """Each reference code's constants read back from the code (compare/probe.py) against
     ``dem resolve`` to 1e-9 relative."""
-    try:
-        from . import probe
-    except ImportError:
-        return []
+    from . import probe
     metrics = []
     case = member_case(plan, 0, start_discs(plan.shared))
     expected = probe.expected_constants(plan.shared, case.discs, plan.dt, case.material_index())
@@ -301,10 +294,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
             cut = jc.cut_floor_layer(np.array(r1.discs_end, float), floor)
             case2 = Case(name=f"{plan.name}_m{k}", resolved=plan.shared, discs=cut, dt=plan.dt,
                          duration=plan.duration, seed=k)
-            mutated = mutation is not None and mutation.code == c
-            d = mutation.folder(out / f"m{k}" / "settle", c) if mutated else out / f"m{k}" / "settle" / c
-            r2 = run_code(c, case_for(c, case2, plan, mutation), d, plan.options.timeout,
-                          reuse=mutation is not None and not mutated)
+            r2 = run_one(c, case2, plan, out / f"m{k}" / "settle", mutation)
             if not r2.ok:
                 records[c].append({"status": "failed", "reason": f"settle: {r2.reason}"})
                 continue

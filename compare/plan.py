@@ -49,7 +49,6 @@ class PlanError(ValueError):
 
 @dataclasses.dataclass
 class Options:
-    codes: tuple = ("native",) + REFERENCE_CODES
     profile: str = "quick"
     kind: str = ""               # "" = from the scene
     start: str = "frozen"        # static: "frozen" | "scene"

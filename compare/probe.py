@@ -337,25 +337,11 @@ def probe_native(case: Case, out_dir: Path, timeout: float = 60) -> dict:
     scene = native_backend.write_inputs(case, out_dir)
     r = resolve(scene)
     # each disc's material as the engine read it back from the packing's material column
-    names = material_names(r, np.asarray(r["discs"], float)[:, 3].astype(int))
-    mats = material_names(r, sorted({[m["name"] for m in r["materials"]].index(n) for n in names}))
-    rho = {m["name"]: m["density"] for m in r["materials"]}
-    pairs = {}
-    for a, b in disc_pair_keys(mats):
-        pairs[f"{a}|{b}"] = {k: float(pair(r, a, b)[k]) for k in FIELDS}
-    for dm in mats:
-        for wm in wall_materials(r):
-            pairs[f"{dm}|{wm}"] = {k: float(pair(r, dm, wm)[k]) for k in FIELDS}
-    mass, inertia = {}, {}
     d = np.asarray(r["discs"], float)
-    for dm in mats:
-        for rad in sorted({float(x) for x, n in zip(d[:, 2], names) if n == dm}):
-            m = rho[dm] * math.pi * rad * rad
-            mass[_radius_key(dm, rad)] = m
-            inertia[_radius_key(dm, rad)] = 0.5 * m * rad * rad
+    discs = np.column_stack([d[:, :3], np.zeros((len(d), 3))])
+    read = expected_constants(r, discs, float(r["integrator"]["dt"]), d[:, 3].astype(int))
     how = "dem resolve of the scene native_backend writes"
-    return _result("native", {"pairs": pairs, "mass": mass, "inertia": inertia,
-                              "gravity": [float(g) for g in r["gravity"]], "dt": float(r["integrator"]["dt"])},
+    return _result("native", read,
                    {"pairs": how, "gravity": how, "dt": how + " (integrator.dt)",
                     "mass": "rho pi r^2 of each disc's material as dem resolve reads it from the packing "
                             "(the engine's definition; not printed)",

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import calibration, janssen  # noqa: E402
+from . import calibration  # noqa: E402
 from .common import write_text_atomic  # noqa: E402
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green"}
@@ -66,26 +66,6 @@ def plot_profiles(prof_json: Path, png: Path) -> None:
     failed = [f"{c}: {d['reason']}" for c, d in data["codes"].items() if d["status"] != "ok"]
     fig.suptitle(f"{data['case']}: wall profiles, all codes" + ("\nFAILED " + "; ".join(failed) if failed else ""),
                  fontsize=10)
-    fig.tight_layout()
-    _savefig(fig, png)
-
-
-def plot_janssen(fits: dict, png: Path, name: str) -> None:
-    fig, ax = plt.subplots(figsize=(6, 5))
-    for code, f in fits.items():
-        if "error" in f:
-            continue
-        z, p = np.array(f["z"]), np.array(f["p"])
-        ax.plot(p / 1e3, z, MARKERS[code], ms=4, color=COLORS[code], alpha=0.6, label=f"{code} (bins)")
-        zz = np.linspace(0, z.max(), 200)
-        ax.plot(janssen.model(zz, f["p_inf"], f["lambda"], f["z0"]) / 1e3, zz, "-", color=COLORS[code],
-                label=f"{code} fit: p_inf {f['p_inf'] / 1e3:.3g}e3, λ {f['lambda']:.3g} cm, K {f['K']:.2f}")
-    ax.invert_yaxis()
-    ax.set_xlabel("side-wall pressure, mean of both walls [10^3 dyn/cm per cm]")
-    ax.set_ylabel("depth below the surface z [cm]")
-    ax.set_title(f"{name}: Janssen fits (floor region W/2 left out)", fontsize=10)
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
     fig.tight_layout()
     _savefig(fig, png)
 

@@ -44,7 +44,8 @@ def backend(code: str):
     return importlib.import_module(f"compare.{code}_backend")
 
 
-def run_code(code: str, case: Case, out: Path, timeout: float, threads: int = 1) -> Result:
+def run_code(code: str, case: Case, out: Path, timeout: float, threads: int = 1,
+             reuse: bool = False) -> Result:
     """One run of one code; a missing backend or binary is a failure, never a skip."""
     try:
         be = backend(code)
@@ -53,6 +54,8 @@ def run_code(code: str, case: Case, out: Path, timeout: float, threads: int = 1)
     if not be.available():
         return failed(code, case.name, f"{code} is not installed")
     cached = out / "result.json"
+    if reuse and cached.exists():    # a mutant or attribution run: the unchanged codes' baseline
+        return Result.load(cached)
     t0 = time.monotonic()
     try:
         res = be.run(case, out, timeout=timeout, threads=threads)
@@ -75,38 +78,6 @@ def failures(results: dict) -> str:
 
 
 # ---------------------------------------------------------------- static cases
-
-def frozen_packing(scene: Path, dt: float, settle: float, out: Path, cut_floor_layer: bool = False) -> np.ndarray:
-    """The native engine fills the scene with the shared law; its end state, velocities zeroed."""
-    from . import native_backend
-    r = resolve(scene)
-    r["contact"] = dict(SHARED_VARIANT)
-    d = np.array(r["discs"], float)
-    discs = np.column_stack([d[:, :3], np.zeros((len(d), 3))])
-    res = native_backend.run(Case(name="fill", resolved=r, discs=discs, dt=dt, duration=settle), out / "fill", 1800)
-    if not res.ok:
-        raise RuntimeError(f"frozen packing of {scene.name}: native fill failed: {res.reason}")
-    end = np.array(res.discs_end, float)
-    if cut_floor_layer:
-        # Janssen bin: take the layer on the floor away and let the column settle onto the next
-        # one, so that the side walls' friction is mobilised (as after a slight discharge).
-        keep = end[:, 1] - end[:, 2] > 0.05 + end[:, 2].max()
-        end = end[keep]
-        end[:, 3:] = 0
-        res = native_backend.run(Case(name="fill2", resolved=r, discs=end, dt=dt, duration=settle / 2),
-                                 out / "fill2", 1800)
-        if not res.ok:
-            raise RuntimeError(f"frozen packing of {scene.name}: second settle failed: {res.reason}")
-        end = np.array(res.discs_end, float)
-    end[:, 3:] = 0.0
-    return end
-
-
-def static_case(scene: Path, name: str, dt: float, duration: float, packing: np.ndarray) -> Case:
-    r = resolve(scene)
-    r["contact"] = dict(SHARED_VARIANT)
-    return Case(name=name, resolved=r, discs=packing, dt=dt, duration=duration)
-
 
 def _edge_flips(d: np.ndarray, scale: float) -> int | None:
     """Number of contacts that moved across one bin edge if ``d`` (bin differences) is made of
@@ -393,7 +364,7 @@ def flow_profile_metric(scene_name: str, code: str, group: str, ref: dict, other
 def _members_for(a: tuple, b: tuple, alpha: float, rel: float = 0.05) -> int | None:
     """Members per code that would detect a relative difference ``rel`` (80 % power), from the
     pooled member-to-member spread of both codes relative to the mean of ``a``."""
-    (ma, sa, na), (mb, sb, nb) = a, b
+    (ma, sa, na), (_, sb, nb) = a, b
     if na < 2 or nb < 2 or not ma or not (math.isfinite(sa) and math.isfinite(sb)):
         return None
     sd = math.sqrt(((na - 1) * na * sa ** 2 + (nb - 1) * nb * sb ** 2) / (na + nb - 2))
