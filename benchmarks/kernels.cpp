@@ -22,9 +22,9 @@
 #include <memory>
 #include <string>
 
-#include "last_good.hpp"
-#include "scene.hpp"
-#include "world.hpp"
+#include "run/last_good.hpp"
+#include "scene/scene.hpp"
+#include "physics/world.hpp"
 
 namespace {
 

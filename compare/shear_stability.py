@@ -2,7 +2,7 @@
 whole cluster (its discs' x, y and rotation, its bonds, and the contacts to its touching
 neighbours, which are held fixed), linearised with every contact sticking. This is the
 multi-degree-of-freedom version of the one-contact bounds. The engine computes the same bound
-for its own scheme (engine/src/stability.cpp, cluster_dt_bound: printed in the run header,
+for its own scheme (engine/src/physics/stability.cpp, cluster_dt_bound: printed in the run header,
 `stability.dt_clusters` in summary.json, and enforced); this module, written apart in numpy,
 gives it for every scheme and checks the engine's (tests/python/test_shear.py). It is not a
 safe bound for the whole assembly (neighbours that move can raise the frequencies), but it

@@ -49,7 +49,7 @@ def resolve(scene, dem):
 
 
 def bonds_of(discs, clusters):
-    """The engine's bond list (engine/src/clusters.cpp): every pair of a cluster, or the pairs
+    """The engine's bond list (engine/src/physics/clusters.cpp): every pair of a cluster, or the pairs
     whose gap is at most touch_tolerance."""
     out = []
     for members in clusters["members"]:

@@ -12,9 +12,9 @@
 #include <fstream>
 #include <string>
 
-#include "scene.hpp"
-#include "state.hpp"
-#include "world.hpp"
+#include "scene/scene.hpp"
+#include "io/state.hpp"
+#include "physics/world.hpp"
 
 namespace {
 

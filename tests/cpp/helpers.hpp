@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "world.hpp"
+#include "physics/world.hpp"
 
 namespace dem::testing {
 

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "clusters.hpp"
+#include "physics/clusters.hpp"
 #include "helpers.hpp"
-#include "world.hpp"
+#include "physics/world.hpp"
 
 using namespace dem;
 using dem::testing::make_world;

@@ -1,7 +1,7 @@
 // The contact law of eqs. (6)-(14) on single calls: no tension, Coulomb cap, dashpot switch-off.
 #include <gtest/gtest.h>
 
-#include "contact_law.hpp"
+#include "physics/contact_law.hpp"
 
 using namespace dem;
 

@@ -10,8 +10,8 @@
 #include <cstring>
 #include <string>
 
-#include "scene.hpp"
-#include "world.hpp"
+#include "scene/scene.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

@@ -8,10 +8,10 @@
 #include <sstream>
 #include <string>
 
-#include "discs.hpp"
-#include "scene.hpp"
-#include "state.hpp"
-#include "world.hpp"
+#include "physics/discs.hpp"
+#include "scene/scene.hpp"
+#include "io/state.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "elastic_params.hpp"
+#include "physics/elastic_params.hpp"
 
 using namespace dem;
 

@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "discharge.hpp"
+#include "run/discharge.hpp"
 #include "helpers.hpp"
 
 using namespace dem;

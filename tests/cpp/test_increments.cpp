@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "scene.hpp"
-#include "world.hpp"
+#include "scene/scene.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

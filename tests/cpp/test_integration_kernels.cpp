@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "helpers.hpp"
-#include "world.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

@@ -9,12 +9,12 @@
 #include <sstream>
 #include <string>
 
-#include "discharge.hpp"
-#include "last_good.hpp"
-#include "run.hpp"
-#include "scene.hpp"
-#include "state.hpp"
-#include "world.hpp"
+#include "run/discharge.hpp"
+#include "run/last_good.hpp"
+#include "run/run.hpp"
+#include "scene/scene.hpp"
+#include "io/state.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

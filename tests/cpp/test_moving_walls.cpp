@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "helpers.hpp"
-#include "world.hpp"
+#include "physics/world.hpp"
 
 using namespace dem;
 using dem::testing::make_world;

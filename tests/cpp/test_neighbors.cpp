@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "neighbors.hpp"
+#include "physics/neighbors.hpp"
 
 namespace dem {
 namespace {

@@ -8,8 +8,8 @@
 #include <sstream>
 #include <string>
 
-#include "opening_positions.hpp"
-#include "state.hpp"
+#include "run/opening_positions.hpp"
+#include "io/state.hpp"
 
 namespace dem {
 namespace {

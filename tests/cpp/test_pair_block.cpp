@@ -9,9 +9,9 @@
 #include <random>
 #include <vector>
 
-#include "contact_law.hpp"
+#include "physics/contact_law.hpp"
 #include "helpers.hpp"
-#include "world.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

@@ -9,10 +9,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "discharge.hpp"
-#include "pair_totals.hpp"
-#include "scene.hpp"
-#include "world.hpp"
+#include "run/discharge.hpp"
+#include "physics/pair_totals.hpp"
+#include "scene/scene.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

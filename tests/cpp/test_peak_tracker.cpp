@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "discharge.hpp"
+#include "run/discharge.hpp"
 
 namespace dem {
 namespace {

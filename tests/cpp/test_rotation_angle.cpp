@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "helpers.hpp"
-#include "world.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 namespace {

@@ -4,10 +4,10 @@
 
 #include <cmath>
 
-#include "outputs.hpp"
-#include "run.hpp"
-#include "scene.hpp"
-#include "world.hpp"
+#include "io/outputs.hpp"
+#include "run/run.hpp"
+#include "scene/scene.hpp"
+#include "physics/world.hpp"
 
 using namespace dem;
 

@@ -3,10 +3,10 @@
 
 #include <cmath>
 
-#include "clusters.hpp"
+#include "physics/clusters.hpp"
 #include "helpers.hpp"
-#include "stability.hpp"
-#include "world.hpp"
+#include "physics/stability.hpp"
+#include "physics/world.hpp"
 
 using namespace dem;
 

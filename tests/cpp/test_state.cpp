@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "run.hpp"
-#include "scene.hpp"
-#include "state.hpp"
-#include "world.hpp"
+#include "run/run.hpp"
+#include "scene/scene.hpp"
+#include "io/state.hpp"
+#include "physics/world.hpp"
 
 using namespace dem;
 

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "helpers.hpp"
-#include "stress_planes.hpp"
+#include "physics/stress_planes.hpp"
 
 using namespace dem;
 

@@ -50,7 +50,7 @@ def check_file(path):
         raise AssertionError(f"unexpected file {path}")
 
 
-# The arrays of the last good state in their order (engine/src/state.cpp write_discs), by item
+# The arrays of the last good state in their order (engine/src/io/state.cpp write_discs), by item
 # size: per kind r, mass, 1/m, 1/I, material; per disc kind, id, x, y, phi (output.rotation_angle
 # only: may be empty), vx, vy, omega, du, dv, dphi (eq. 19 only: may be empty), fx, fy, torque.
 KIND_ITEMS = [8, 8, 8, 8, 4]
@@ -58,7 +58,7 @@ DISC_ITEMS = [4, 4] + [8] * 12
 
 
 def check_last_good(path):
-    """A kept last good state (engine/src/last_good.cpp): magic, time, the arrays, nothing more."""
+    """A kept last good state (engine/src/run/last_good.cpp): magic, time, the arrays, nothing more."""
     data = path.read_bytes()
     assert data[:8] == b"DEMGOOD1", path
     at = 16

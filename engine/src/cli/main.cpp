@@ -1,0 +1,531 @@
+// dem: command-line front end. Exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could
+// not go on (a file it could not write or read).
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "run/checkpoint.hpp"
+#include "run/control.hpp"
+#include "run/discharge.hpp"
+#include "physics/elastic_params.hpp"
+#include "run/ensemble.hpp"
+#include "physics/free_heap.hpp"
+#include "io/state.hpp"
+#include "io/outputs.hpp"
+#include "scene/resolve.hpp"
+#include "run/run.hpp"
+#include "scene/scene.hpp"
+#include "physics/stability.hpp"
+#include "physics/world.hpp"
+
+using namespace dem;
+
+namespace {
+
+const char* kMainHelp =
+    "dem " DEM_VERSION " - 2D discrete-element engine of Kiyama & Fujimura (1983)\n"
+    "\n"
+    "usage:\n"
+    "  dem run SCENE.toml --out DIR [options]   run a scene (dem run --help)\n"
+    "  dem ensemble SCENE.toml --out DIR [...]  run perturbed copies of a discharge (dem ensemble --help)\n"
+    "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
+    "  dem resolve SCENE.toml [--out FILE.json] the validated scene with every value resolved (JSON)\n"
+    "  dem compare SCENE.toml|LIST --out DIR     the scene in this engine, LIGGGHTS and YADE: agreement report (dem compare --help)\n"
+    "\n"
+    "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
+    "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
+
+const char* kRunHelp =
+    "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
+    "               [--no-plots] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
+    "\n"
+    "  --out DIR       output directory (created; see docs/outputs.md)\n"
+    "  --dt S          time step [s], overrides integrator.dt\n"
+    "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
+    "  --end-time S    maximum simulated time [s], overrides end.time\n"
+    "  --force-dt      run even if dt is above the computed stability bound\n"
+    "  --threads N     threads of the force and integration loops (integrator.threads, default 1);\n"
+    "                  a given N always gives the same bits; N = 1 is the serial loop\n"
+    "  --from STATE    start from a saved state (overrides start.from; skips the fill)\n"
+    "  --save-state F  save the final state (positions, velocities, forces, contact history)\n"
+    "  --checkpoint-every S  write DIR/checkpoint.dem every S simulated seconds (overrides\n"
+    "                  output.checkpoint_every; 0: none)\n"
+    "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
+    "                  the result is bit-identical to a run never stopped\n"
+    "  --quiet         no header and no progress line\n"
+    "  --no-plots      skip the PNGs (network.png, side_walls.png, made with " DEM_PYTHON_EXE " -m compare.figures)\n"
+    "\n"
+    "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
+    "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
+    "end.max_overlap x r_min) stops with 3 and writes the last good state. SIGINT or SIGTERM stops\n"
+    "at the end of the current step, writes a checkpoint and all outputs (status \"interrupted\")\n"
+    "and exits with 130 (SIGINT) or 143 (SIGTERM).\n";
+
+const char* kEnsembleHelp =
+    "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
+    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet]\n"
+    "\n"
+    "Runs M copies of the scene (default 8) whose initial disc centres are moved by a seeded\n"
+    "uniform amount in [-CM, CM] (default 1e-4 cm), J at a time (default: all cores), into\n"
+    "DIR/member_KK, and writes DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
+    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n";
+
+const char* kParamsHelp =
+    "usage: dem params [--E kgf/cm2,...] [--nu V] [--r CM] [--rho G/CM3] [--q GF/CM] [--s V] [--g CM/S2]\n"
+    "\n"
+    "Prints the paper's Table 1: K_n/(rho g) [cm], eta_n/(rho g) [cm s] and the dt bound of eq. (26)\n"
+    "for each Young's modulus E (default 7.5e2,1e3,1e4,1e5,1e6 kgf/cm^2), with nu = 0.3, r = 1 cm,\n"
+    "rho = 2.65 g/cm^3, line load q = 30 gf/cm (not printed in the paper; it reproduces Table 1),\n"
+    "s = K_s/K_n = 0.25, g = 980 cm/s^2.\n";
+
+int bad(const std::string& msg) {
+  std::fprintf(stderr, "dem: %s\n", msg.c_str());
+  return 2;
+}
+
+bool number_arg(const char* s, double& v) {
+  char* end = nullptr;
+  v = std::strtod(s, &end);
+  return end != s && *end == '\0' && std::isfinite(v);
+}
+
+void print_header(const SceneSpec& s, const World& w, const StabilityReport& st) {
+  std::printf("dem %s | scene %s (%s)\n", DEM_VERSION, s.name.c_str(), s.file.c_str());
+  std::printf("  fill: %s\n", s.fill_summary.c_str());
+  std::printf("  N = %zu discs, %zu walls, %zu points; gravity (%g, %g) cm/s^2\n", w.discs.size(),
+              w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy);
+  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d\n", to_string(w.scheme), w.dt,
+              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
+  std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s, lever_arm %s\n",
+              to_string(w.options.normal_spring), to_string(w.options.no_tension), to_string(w.options.friction_cap),
+              to_string(w.options.lever_arm));
+  std::printf("  kernel: shear %s, dashpots %s, bonds %s, moving walls %s (compiled out when off); %d doubles a vector\n",
+              w.kernel_shear ? "on" : "off", w.kernel_dashpots ? "on" : "off", w.bonds.empty() ? "off" : "on",
+              w.moving.empty() ? "off" : "on", World::vector_width);
+  std::printf("  %-14s %9s %9s %7s %9s %6s %7s | dt bounds [s]: %-9s %-9s %-9s %-9s %-9s\n", "pair", "m*", "omega0",
+              "zeta_n", "t_c", "e", "zeta_t", "normal", "tangent", "eq.26", "eq.21", "rot z=4");
+  for (const auto& p : st.pairs) {
+    char tc[32];
+    if (std::isfinite(p.t_contact)) std::snprintf(tc, sizeof tc, "%9.3e", p.t_contact);
+    else std::snprintf(tc, sizeof tc, "%9s", "overdamp");
+    std::printf("  %-14s %9.4g %9.4g %7.4f %s %6.3f %7.4f |  %-9.3e %-9.3e %-9.3e %-9.3e %-9.3e\n", p.name.c_str(),
+                p.m_eff, p.omega0, p.zeta_n, tc, p.restitution, p.zeta_t, p.dt_normal, p.dt_tangential, p.dt_eq26,
+                p.dt_eq21, p.dt_rot_z4);
+  }
+  std::printf("  stability bound of %s: %.4g s (single contact %.4g s, rotation on 4 contacts %.4g s), set by %s;"
+              " dt/bound = %.3f\n", to_string(w.scheme), st.dt_bound, st.dt_single, st.dt_rot_z4, st.limited_by.c_str(),
+              w.dt / st.dt_bound);
+  if (std::isfinite(st.clusters.dt))
+    std::printf("  bonded clusters (%d distinct shapes, neighbours held, contacts sticking): bound %.4g s, set by a"
+                " cluster of %d discs\n", st.clusters.shapes, st.clusters.dt, st.clusters.discs);
+  if (st.clusters.skipped > 0)
+    std::printf("  warning: %d clusters of more than %d discs are not in the bound (their step matrices are too"
+                " large to examine)\n", st.clusters.skipped, kClusterMaxDiscs);
+  if (w.dt > st.dt_rot_z6)
+    std::printf("  warning: dt is above %.4g s, the bound for a disc whose rotation is held by 6 sticking contacts"
+                " (dense packings)\n", st.dt_rot_z6);
+  std::fflush(stdout);
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// The paper's pictures of one run, drawn by the Python layer (compare/figures.py). A missing
+// Python stack costs the PNGs only, never the run.
+void make_plots(const std::string& out, bool quiet) {
+  const std::string base = std::string("PYTHONPATH=") + shell_quote(DEM_SOURCE_DIR) + " " + DEM_PYTHON_EXE +
+                           " -m compare.figures ";
+  const std::string dir = shell_quote(out);
+  const std::string redirect = quiet ? " >/dev/null 2>&1" : " >/dev/null";
+  const int a = std::system((base + "network " + dir + " --out " + shell_quote(out + "/network.png") + redirect).c_str());
+  const int b = std::system((base + "profiles " + dir + " --out " + shell_quote(out + "/side_walls.png") + redirect).c_str());
+  if (a != 0 || b != 0) std::fprintf(stderr, "dem: warning: the PNGs could not be drawn (%s -m compare.figures)\n", DEM_PYTHON_EXE);
+}
+
+int cmd_run(int argc, char** argv) {
+  std::string scene, out;
+  SceneOverrides ov;
+  bool quiet = false, plots = true, resume = false;
+  double checkpoint_every = -1;  // [s] -1: the scene's output.checkpoint_every
+  std::string save_to;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    auto value = [&]() -> const char* { return a + 1 < argc ? argv[++a] : nullptr; };
+    if (k == "--help" || k == "-h") {
+      std::fputs(kRunHelp, stdout);
+      return 0;
+    } else if (k == "--out") {
+      const char* v = value();
+      if (!v) return bad("--out needs a directory");
+      out = v;
+    } else if (k == "--dt") {
+      const char* v = value();
+      if (!v || !number_arg(v, ov.dt) || !(ov.dt > 0)) return bad("--dt needs a number > 0");
+    } else if (k == "--end-time") {
+      const char* v = value();
+      if (!v || !number_arg(v, ov.end_time) || !(ov.end_time > 0)) return bad("--end-time needs a number > 0");
+    } else if (k == "--scheme") {
+      const char* v = value();
+      if (!v) return bad("--scheme needs paper_eq18, paper_eq19 or velocity_verlet");
+      ov.scheme = v;
+    } else if (k == "--force-dt") {
+      ov.force_dt = true;
+    } else if (k == "--threads") {
+      const char* v = value();
+      double x = 0;
+      if (!v || !number_arg(v, x) || !(x >= 1 && x <= kMaxThreads && x == std::floor(x)))
+        return bad("--threads needs an integer in [1, " + std::to_string(kMaxThreads) + "]");
+      ov.threads = static_cast<int>(x);
+    } else if (k == "--quiet") {
+      quiet = true;
+    } else if (k == "--no-plots") {
+      plots = false;
+    } else if (k == "--from") {
+      const char* v = value();
+      if (!v) return bad("--from needs a state file");
+      ov.from = v;
+    } else if (k == "--checkpoint-every") {
+      const char* v = value();
+      if (!v || !number_arg(v, checkpoint_every) || !(checkpoint_every >= 0))
+        return bad("--checkpoint-every needs a number of simulated seconds >= 0");
+    } else if (k == "--resume") {
+      resume = true;
+    } else if (k == "--save-state") {
+      const char* v = value();
+      if (!v) return bad("--save-state needs a file name");
+      save_to = v;
+    } else if (!k.empty() && k[0] == '-') {
+      return bad("unknown option " + k + " (see dem run --help)");
+    } else if (scene.empty()) {
+      scene = k;
+    } else {
+      return bad("more than one scene given: " + scene + ", " + k);
+    }
+  }
+  if (scene.empty()) return bad("no scene file given (see dem run --help)");
+  if (out.empty()) return bad("--out DIR is required (see dem run --help)");
+
+  SceneSpec spec;
+  World world;
+  StabilityReport stab;
+  CheckpointKey key;
+  RunResult res;
+  DischargeState dstate;
+  bool resumed_in_discharge = false;
+  try {
+    spec = load_scene(scene, ov);
+    stab = build_world_releasing_discs(spec, world);  // the world has the discs: 56 B a disc less at the peak
+    key = checkpoint_key(scene, ov);
+    if (!resume && !spec.start_from.empty()) {
+      load_state(world, spec.start_from);
+      release_free_heap();  // the state file's read and the discs it replaced
+    }
+  } catch (const SceneError& e) {
+    return bad(e.what());
+  } catch (const std::runtime_error& e) {
+    return bad(std::string("start.from: ") + e.what());
+  }
+  if (checkpoint_every < 0) checkpoint_every = spec.checkpoint_every;
+  if (!(checkpoint_every / world.dt <= kMaxSteps)) return bad("--checkpoint-every: more than 1e12 steps of dt");
+  // State files hold bonds and moving walls; a checkpoint would also need the shear's series so far.
+  if ((resume || checkpoint_every > 0) && (!world.bonds.empty() || !world.moving.empty()))
+    return bad("checkpoints / --resume: not for shear-box and cluster scenes yet (their state files are: "
+               "compress with --save-state, then shear with start.from or --from)");
+  // The last good state and a discharge's positions at opening are kept in the output directory,
+  // not in memory; they are removed when the run ends.
+  res.last_good.set_file(out + "/last_good.bin");
+  dstate.at_open.set_file(out + "/opening_positions.bin");  // likewise (opening_positions.hpp)
+  if (resume) {
+    // The checkpoint replaces the fill (or start.from): the run goes on from where it was.
+    const std::string path = checkpoint_path(out);
+    if (!std::filesystem::exists(path))
+      return bad("--resume: no checkpoint " + path + " (the run wrote none: run it without --resume)");
+    try {
+      read_checkpoint(path, key, world, res, dstate, resumed_in_discharge);
+    } catch (const std::runtime_error& e) {
+      return bad(std::string("--resume: ") + e.what());
+    }
+    if (resumed_in_discharge)
+      if (const std::string why = series_file_problem(out, dstate); !why.empty()) return bad("--resume: " + why);
+  }
+  // Only a valid scene creates its output directory.
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) return bad("--out " + out + ": cannot create the directory: " + ec.message());
+  if (!quiet) print_header(spec, world, stab);
+  // Checkpoints every checkpoint_every simulated seconds (at step counts that are multiples);
+  // SIGINT / SIGTERM stop after the current step with a final checkpoint.
+  install_stop_handlers();
+  const std::string ckpt = checkpoint_path(out);
+  RunControl ctl;
+  if (checkpoint_every > 0) ctl.checkpoint_every = std::max(1L, static_cast<long>(std::llround(checkpoint_every / world.dt)));
+  ctl.fill_checkpoint = [&](const RunResult& r) { write_checkpoint(ckpt, key, world, r, nullptr); };
+  ctl.discharge_checkpoint = [&](const DischargeState& d) { write_checkpoint(ckpt, key, world, res, &d); };
+  if (resume && !quiet)
+    std::printf("  resumed from %s at t = %.4f s (step %ld, %s)\n", ckpt.c_str(), world.time, world.steps,
+                resumed_in_discharge ? "discharge" : "fill");
+  if (resumed_in_discharge) {
+    res.status = RunStatus::end_time;  // the fill is over; the discharge goes on below
+  } else if (spec.start_from.empty() || resume) {
+    if (!resume) res.last_good.keep(world.discs, world.time);
+    continue_scene(spec, world, spec.progress && !quiet, res, &ctl);  // the fill, to rest
+    if (res.status == RunStatus::interrupted) write_checkpoint(ckpt, key, world, res, nullptr);
+  } else {
+    res.status = RunStatus::end_time;
+    res.last_good.keep(world.discs, world.time);
+    if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
+  }
+  // A state file does not say whether its run reached rest: not reported as "NOT at rest".
+  const char* settled = !resume && !spec.start_from.empty() ? "from the state file"
+                        : res.rest_reached                   ? "at rest"
+                                                             : "NOT at rest";
+  nlohmann::ordered_json extra;
+  if (spec.discharge.enabled && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {
+    std::string why;
+    if (!resumed_in_discharge) {
+      if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, settled);
+      why = open_discharge(spec, world, dstate);
+    }
+    DischargeResult dr;
+    if (why.empty()) {
+      dr = continue_discharge(spec, world, dstate, out, spec.progress && !quiet, &ctl, &res.last_good);
+      if (dr.status == "interrupted") write_checkpoint(ckpt, key, world, res, &dstate);
+      dstate.at_open.discard();  // the checkpoint carries its own copy
+    } else {
+      dr.status = "unstable";
+      dr.reason = why;
+    }
+    res.wall_seconds += dr.wall_seconds;
+    extra["status"] = dr.status;
+    if (dr.status == "unstable") {
+      res.status = RunStatus::unstable;
+      res.reason = dr.reason;
+      extra["reason"] = dr.reason;
+    }
+    if (!quiet)
+      std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
+                  dr.status.c_str(), dr.duration, dr.removals.size(), dr.metrics["discs_out_at_1s"].get<int>(),
+                  dr.metrics["flow_rate_discs"].is_null() ? NAN : dr.metrics["flow_rate_discs"].get<double>(),
+                  dr.metrics["pattern"].get<std::string>().c_str(), dr.metrics["peak_ratio_bottom"].get<double>(),
+                  dr.metrics["peak_ratio_side"].get<double>());
+    extra["discharge"] = std::move(dr.metrics);  // moved, not copied: its series are some MB at a million discs
+  }
+  if (spec.shear_box.shear && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {  // paper 2
+    if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, settled);
+    const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet, &res.last_good);
+    res.wall_seconds += sr.wall_seconds;
+    extra["status"] = sr.status;
+    if (sr.status == "unstable") {
+      res.status = RunStatus::unstable;
+      res.reason = sr.reason;
+      extra["reason"] = sr.reason;
+    }
+    extra["shear"] = sr.metrics;
+    if (!quiet && sr.metrics.contains("peak_ratio"))
+      std::printf("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
+                  sr.status.c_str(), sr.metrics["strain_final"].get<double>(), sr.metrics["peak_ratio"].get<double>(),
+                  sr.metrics["strain_at_peak"].get<double>(), sr.metrics["peak_ratio_windowed"].get<double>(),
+                  sr.metrics["sigma_initial"].get<double>());
+  }
+  // The discharge's or shear's status, read before write_outputs moves `extra` into the summary.
+  const std::string phase_status = extra.contains("status") ? extra["status"].get<std::string>() : "";
+  write_outputs(out, spec, world, res, stab, &extra);
+  res.last_good.discard();  // the outputs hold it when it was needed; a checkpoint carries its own copy
+  if (!save_to.empty() && res.status != RunStatus::unstable) save_state(world, save_to);
+  if (plots && res.status != RunStatus::unstable) make_plots(out, quiet);
+  if (res.status == RunStatus::unstable) {
+    std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),
+                 res.last_good.time(), out.c_str());
+    return 3;
+  }
+  if (res.status == RunStatus::interrupted || phase_status == "interrupted") {
+    std::fprintf(stderr, "dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (dem run %s --out %s --resume goes on)\n",
+                 stop_signal(), world.time, world.steps, ckpt.c_str(), scene.c_str(), out.c_str());
+    return 128 + stop_signal();
+  }
+  if (!quiet) {
+    if (spec.discharge.enabled || spec.shear_box.shear)
+      std::printf("  %s at t = %.4f s after %ld steps", phase_status.c_str(), world.time, world.steps);
+    else
+      std::printf("  %s at t = %.4f s after %ld steps", to_string(res.status), world.time, world.steps);
+    std::printf("; fill rest %s", res.rest_reached ? "reached" : "not reached");
+    if (res.rest_reached) std::printf(" at t = %.4f s", res.rest_time);
+    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s\n", res.wall_seconds,
+                res.wall_seconds > 0 ? world.particle_steps / res.wall_seconds : 0.0, out.c_str());
+  }
+
+  return 0;
+}
+
+int cmd_ensemble(int argc, char** argv) {
+  std::string scene, out;
+  SceneOverrides ov;
+  EnsembleOptions eo;
+  bool quiet = false;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (k == "--help" || k == "-h") {
+      std::fputs(kEnsembleHelp, stdout);
+      return 0;
+    }
+    if (k == "--quiet") { quiet = true; continue; }
+    if (k == "--force-dt") { ov.force_dt = true; continue; }
+    if (!k.empty() && k[0] != '-') {
+      if (!scene.empty()) return bad("more than one scene given");
+      scene = k;
+      continue;
+    }
+    if (a + 1 >= argc) return bad(k + " needs a value (see dem ensemble --help)");
+    const std::string v = argv[++a];
+    double x;
+    if (k == "--out") out = v;
+    else if (k == "--scheme") ov.scheme = v;
+    else if (!number_arg(v.c_str(), x)) return bad(k + ": \"" + v + "\" is not a number");
+    else if (k == "--members") { if (!(x >= 1 && x <= 10000 && x == std::floor(x))) return bad("--members must be an integer in [1, 10000]"); eo.members = static_cast<int>(x); }
+    else if (k == "--seed") { if (!(x >= 0 && x == std::floor(x))) return bad("--seed must be an integer >= 0"); eo.seed = static_cast<unsigned long>(x); }
+    else if (k == "--perturb") { if (!(x >= 0)) return bad("--perturb must be >= 0"); eo.perturb = x; }
+    else if (k == "--jobs") { if (!(x >= 1 && x == std::floor(x))) return bad("--jobs must be an integer >= 1"); eo.jobs = static_cast<int>(x); }
+    else if (k == "--dt") { if (!(x > 0)) return bad("--dt must be > 0"); ov.dt = x; }
+    else return bad("unknown option " + k + " (see dem ensemble --help)");
+  }
+  if (scene.empty()) return bad("no scene file given (see dem ensemble --help)");
+  if (out.empty()) return bad("--out DIR is required (see dem ensemble --help)");
+  try {
+    SceneSpec spec = load_scene(scene, ov);
+    World probe;
+    build_world(spec, probe);  // checks dt against the bound
+    if (!spec.start_from.empty()) return bad("dem ensemble starts from the fill: remove start.from");
+    if (spec.shear_box.shear)  // its members would compress and stop: the shear runs in cmd_run only
+      return bad("dem ensemble runs fills and discharges; a [shear] scene runs with dem run");
+    return run_ensemble(spec, eo, out, quiet);
+  } catch (const SceneError& e) {
+    return bad(e.what());
+  }
+}
+
+int cmd_params(int argc, char** argv) {
+  ElasticInputs in{};
+  std::vector<double> E = {7.5e2, 1e3, 1e4, 1e5, 1e6};
+  double q_gf = 30.0;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (k == "--help" || k == "-h") {
+      std::fputs(kParamsHelp, stdout);
+      return 0;
+    }
+    if (a + 1 >= argc) return bad("option " + k + " needs a value (see dem params --help)");
+    const char* v = argv[++a];
+    double x;
+    if (k == "--E") {
+      E.clear();
+      std::string s = v;
+      std::size_t pos = 0;
+      while (pos <= s.size()) {
+        const std::size_t c = s.find(',', pos);
+        const std::string item = s.substr(pos, c == std::string::npos ? std::string::npos : c - pos);
+        if (!number_arg(item.c_str(), x) || !(x > 0)) return bad("--E: \"" + item + "\" is not a number > 0");
+        E.push_back(x);
+        if (c == std::string::npos) break;
+        pos = c + 1;
+      }
+      continue;
+    }
+    if (!number_arg(v, x)) return bad(k + ": \"" + std::string(v) + "\" is not a number");
+    if (k == "--nu") { if (!(x >= 0 && x < 0.5)) return bad("--nu must be in [0, 0.5)"); in.nu = x; }
+    else if (k == "--r") { if (!(x > 0)) return bad("--r must be > 0"); in.r = x; }
+    else if (k == "--rho") { if (!(x > 0)) return bad("--rho must be > 0"); in.rho = x; }
+    else if (k == "--q") { if (!(x > 0)) return bad("--q must be > 0"); q_gf = x; }
+    else if (k == "--s") { if (!(x > 0)) return bad("--s must be > 0"); in.s = x; }
+    else if (k == "--g") { if (!(x > 0)) return bad("--g must be > 0"); in.g = x; }
+    else return bad("unknown option " + k + " (see dem params --help)");
+  }
+  in.q = q_gf * 980.665;
+  const double rg = in.rho * in.g;
+  std::printf("Table 1: nu = %g, r = %g cm, rho = %g g/cm^3, q = %g gf/cm, s = %g, g = %g cm/s^2\n", in.nu, in.r,
+              in.rho, q_gf, in.s, in.g);
+  std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "E [kgf/cm^2]", "K_n/(rho g)", "eta_n/(rho g)", "dt eq.26 [s]",
+              "K_s/(rho g)", "b [cm]");
+  std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "", "[cm]", "[cm s]", "", "[cm]", "");
+  for (double e : E) {
+    in.E = e * kKgfPerCm2;
+    const ElasticParams p = elastic_params(in);
+    std::printf("%-14.4g %-14.4g %-16.4g %-14.4g %-14.4g %-12.4g\n", e, p.kn / rg, p.eta_n / rg, p.dt_eq26, p.ks / rg,
+                p.b);
+  }
+  return 0;
+}
+
+}  // namespace
+
+// The validated scene as JSON (stdout or --out): what the comparison layer translates.
+int cmd_resolve(int argc, char** argv) {
+  std::string scene, out;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (k == "--out" && a + 1 < argc) out = argv[++a];
+    else if (k == "--help" || k == "-h") {
+      std::printf("usage: dem resolve SCENE.toml [--out FILE.json]\n");
+      return 0;
+    } else if (!k.empty() && k[0] != '-' && scene.empty()) scene = k;
+    else return bad("resolve: unknown or incomplete argument \"" + k + "\"");
+  }
+  if (scene.empty()) return bad("resolve: no scene file given");
+  try {
+    const SceneSpec s = load_scene(scene);
+    const std::string text = resolved_scene_json(s).dump(1) + "\n";
+    if (out.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
+    else write_file_atomic(out, text);
+  } catch (const SceneError& e) {
+    return bad(e.what());
+  }
+  return 0;
+}
+
+// dem compare: the comparison layer (compare/, Python) with this binary as the native engine.
+// The process becomes `python3 -m compare scene ARGS` (its help: dem compare --help).
+int cmd_compare(int argc, char** argv) {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
+  const char* old = std::getenv("PYTHONPATH");
+  const std::string path = std::string(DEM_SOURCE_DIR) + (old && *old ? std::string(":") + old : "");
+  setenv("PYTHONPATH", path.c_str(), 1);
+  std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m"),
+                             const_cast<char*>("compare"), const_cast<char*>("scene")};
+  for (int k = 0; k < argc; ++k) args.push_back(argv[k]);
+  args.push_back(nullptr);
+  execv(DEM_PYTHON_EXE, args.data());
+  std::fprintf(stderr, "dem compare: cannot start %s: %s\n", DEM_PYTHON_EXE, std::strerror(errno));
+  return 4;
+}
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::fputs(kMainHelp, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string cmd = argv[1];
+  // What the commands do not turn into an exit code of their own (a file that cannot be written
+  // in the middle of a run, say) ends the run with a message naming it, not with an abort.
+  try {
+    if (cmd == "run") return cmd_run(argc - 2, argv + 2);
+    if (cmd == "params") return cmd_params(argc - 2, argv + 2);
+    if (cmd == "resolve") return cmd_resolve(argc - 2, argv + 2);
+    if (cmd == "ensemble") return cmd_ensemble(argc - 2, argv + 2);
+    if (cmd == "compare") return cmd_compare(argc - 2, argv + 2);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dem: the run could not go on: %s\n", e.what());
+    return 4;
+  }
+  return bad("unknown command " + cmd + " (dem --help)");
+}

@@ -1,0 +1,469 @@
+#include "io/outputs.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+#include "run/opening_positions.hpp"
+
+namespace dem {
+
+using json = nlohmann::ordered_json;
+
+void write_stream_atomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    write(out);
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+void write_file_atomic(const std::string& path, const std::string& text) {
+  write_stream_atomic(path, [&](std::ostream& out) { out << text; });
+}
+
+void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points) {
+  const Geometry& g = w.geometry;
+  const int nw = static_cast<int>(g.walls.size());
+  walls.clear();
+  points.clear();
+  for (const Wall& wl : g.walls) {
+    WallLoad L;
+    L.name = wl.name;
+    L.group = wl.group;
+    L.bin = bin;
+    L.length = std::hypot(wl.bx - wl.ax, wl.by - wl.ay);
+    const std::size_t nb = static_cast<std::size_t>(std::ceil(L.length / bin - 1e-9));
+    L.bin_normal.assign(nb, 0);
+    L.bin_shear.assign(nb, 0);
+    L.bin_contacts.assign(nb, 0);
+    walls.push_back(L);
+  }
+  for (const Point& p : g.points) points.push_back({p.name, p.group, p.x, p.y});
+  for (const WallContact& c : w.neighbors.walls) {
+    if (!c.touching) continue;
+    // Force on the obstacle: f_n n + f_s t, t = (-n_y, n_x) (the opposite of eq. 15 on the disc).
+    const double fx = c.fn * c.nx - c.fs * c.ny, fy = c.fn * c.ny + c.fs * c.nx;
+    if (c.k < nw) {
+      const Wall& wl = g.walls[c.k];
+      WallLoad& L = walls[c.k];
+      const double ex = (wl.bx - wl.ax) / L.length, ey = (wl.by - wl.ay) / L.length;
+      const double shear = fx * ex + fy * ey;
+      L.fx += fx; L.fy += fy;
+      L.normal += c.fn;
+      L.shear += shear;
+      ++L.contacts;
+      const double s = (c.px - wl.ax) * ex + (c.py - wl.ay) * ey;
+      std::size_t b = static_cast<std::size_t>(std::max(0.0, std::floor(s / bin)));
+      b = std::min(b, L.bin_normal.size() - 1);
+      L.bin_normal[b] += c.fn;
+      L.bin_shear[b] += shear;
+      ++L.bin_contacts[b];
+    } else {
+      PointLoad& P = points[c.k - nw];
+      P.fx += fx; P.fy += fy;
+      ++P.contacts;
+    }
+  }
+}
+
+std::string fmt17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+namespace {
+
+std::string fmt(double v) { return fmt17(v); }
+
+// Streamed to the file: a 1M-disc VTU never sits in memory, as text or as copies of its
+// columns: every column is read through an accessor from the arrays it comes from.
+struct Column {
+  std::string name;
+  std::function<double(std::size_t)> at;
+};
+struct Column2 {  // a vector in the plane, written with z = 0
+  std::string name;
+  std::function<void(std::size_t, double&, double&)> at;
+};
+struct IntColumn {
+  std::string name;
+  std::function<long long(std::size_t)> at;
+};
+
+// np points (point(k, x, y)) in cells of points_per_cell consecutive points; the columns have
+// one value a cell (cell_data) or a point.
+void vtu(std::ostream& o, std::size_t np, const std::function<void(std::size_t, double&, double&)>& point,
+         int points_per_cell, int vtk_type, const std::vector<Column>& scalars, const std::vector<Column2>& vectors,
+         const std::vector<IntColumn>& ints, bool cell_data) {
+  const std::size_t nc = np / points_per_cell, nv = cell_data ? nc : np;
+  o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+    << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nc << "\">\n";
+  o << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < np; ++i) {
+    double x, y;
+    point(i, x, y);
+    o << fmt(x) << ' ' << fmt(y) << " 0\n";
+  }
+  o << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < np; ++i) o << i << '\n';
+  o << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < nc; ++c) o << (c + 1) * points_per_cell << '\n';
+  o << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (std::size_t c = 0; c < nc; ++c) o << vtk_type << '\n';
+  o << "</DataArray>\n</Cells>\n";
+  o << (cell_data ? "<CellData>\n" : "<PointData>\n");
+  for (const Column& c : scalars) {
+    o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < nv; ++i) o << fmt(c.at(i)) << '\n';
+    o << "</DataArray>\n";
+  }
+  for (const Column2& c : vectors) {
+    o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < nv; ++i) {
+      double x, y;
+      c.at(i, x, y);
+      o << fmt(x) << ' ' << fmt(y) << " 0\n";
+    }
+    o << "</DataArray>\n";
+  }
+  for (const IntColumn& c : ints) {
+    o << "<DataArray type=\"Int32\" Name=\"" << c.name << "\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < nv; ++i) o << c.at(i) << '\n';
+    o << "</DataArray>\n";
+  }
+  o << (cell_data ? "</CellData>\n" : "</PointData>\n") << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+}
+
+json pair_json(const PairReport& r) {
+  return json{{"name", r.name},
+              {"kind", r.disc_disc ? "disc-disc" : "disc-obstacle"},
+              {"kn", r.p.kn}, {"ks", r.p.ks}, {"eta_n", r.p.eta_n}, {"eta_s", r.p.eta_s}, {"mu", r.p.mu},
+              {"m_eff", r.m_eff}, {"m_t", r.m_t},
+              {"omega0", r.omega0}, {"zeta_n", r.zeta_n},
+              {"t_contact", finite_or_null(r.t_contact)}, {"restitution", r.restitution},
+              {"omega_t", r.omega_t}, {"zeta_t", r.zeta_t},
+              {"dt_bound_normal", finite_or_null(r.dt_normal)}, {"dt_bound_tangential", finite_or_null(r.dt_tangential)},
+              {"dt_bound_eq26", r.dt_eq26}, {"dt_bound_eq21", r.dt_eq21},
+              {"dt_bound_rotation_z4", finite_or_null(r.dt_rot_z4)}, {"dt_bound_rotation_z6", finite_or_null(r.dt_rot_z6)}};
+}
+
+}  // namespace
+
+
+namespace {
+
+// The k-th index of a list that `keep` accepts, asked for in increasing k: a k below the last one
+// asked starts the scan again from the list's start. The contact files read their contacts in
+// order, once a section of the VTU, so no list of the accepted indices is kept (at the end of a
+// dense 1M-disc run such lists, 8 bytes a touching pair, set the run's peak memory).
+class NthKept {
+ public:
+  template <class Keep>
+  std::size_t find(std::size_t k, Keep&& keep) {  // k below the number of accepted entries
+    if (!started_ || k < k_) {
+      started_ = true;
+      k_ = 0;
+      at_ = 0;
+      while (!keep(at_)) ++at_;
+    }
+    for (; k_ < k; ++k_)
+      for (++at_; !keep(at_);) ++at_;
+    return at_;
+  }
+
+ private:
+  bool started_ = false;
+  std::size_t k_ = 0, at_ = 0;
+};
+
+}  // namespace
+
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
+  const Discs& d = w.discs;
+  // The contacts written, in this order: the touching disc-disc pairs (list order), the bonds
+  // between distinct places, the touching obstacle contacts. Counted first, then read in order.
+  const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
+  const auto touching = [&](std::size_t p) {
+    const PairContact& c = w.neighbors.pairs[p];
+    const double R = dist(c.i, c.j);
+    return R <= d.r(c.i) + d.r(c.j) && R != 0;
+  };
+  const auto bonded = [&](std::size_t p) { return dist(w.bonds[p].i, w.bonds[p].j) != 0; };
+  const auto wall_touching = [&](std::size_t p) { return w.neighbors.walls[p].touching; };
+  std::size_t np = 0, nb = 0, nwc = 0;
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) np += touching(p);
+  for (std::size_t p = 0; p < w.bonds.size(); ++p) nb += bonded(p);
+  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) nwc += wall_touching(p);
+  const std::size_t n = np + nb + nwc;
+  // A pair's totals: its entry in the recorded totals of this step, found by a cursor walking
+  // them beside the pairs (PairTotals::at); (0, 0) for a pair that pass found apart, NaN when this
+  // step's forces were not recorded (the run loops record them).
+  const bool recorded = w.pair_forces_current();
+  const auto totals = [&](std::size_t p, PairTotals::Cursor& r, double& fn, double& fs) {
+    const PairTotals::Force* f = recorded ? w.pair_totals.at(w.neighbors.pairs, p, r) : nullptr;
+    fn = !recorded ? NAN : f ? f->fn : 0.0;
+    fs = !recorded ? NAN : f ? f->fs : 0.0;
+  };
+  // Contact c of the VTU: its forces, its disc i and its other end (disc j, or the obstacle point).
+  struct Entry {
+    double en, es, fn, fs;
+    int kind;  // 0 disc-disc, 1 disc-wall, 2 disc-point, 3 bond
+    int i, j;  // j < 0: the other end is (px, py)
+    double px, py;
+  };
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  NthKept pair_at, bond_at, wall_at;
+  PairTotals::Cursor rec_at;  // the record cursor (a section read from its start again restarts it)
+  const auto entry = [&](std::size_t c) -> Entry {
+    if (c < np) {
+      const std::size_t p = pair_at.find(c, touching);
+      const PairContact& q = w.neighbors.pairs[p];
+      double fn, fs;
+      totals(p, rec_at, fn, fs);
+      return {q.en, q.es, fn, fs, 0, q.i, q.j, 0, 0};
+    }
+    if (c < np + nb) {
+      const Bond& q = w.bonds[bond_at.find(c - np, bonded)];
+      return {q.en, q.es, q.fn, q.fs, 3, q.i, q.j, 0, 0};
+    }
+    const WallContact& q = w.neighbors.walls[wall_at.find(c - np - nb, wall_touching)];
+    return {q.en, q.es, q.fn, q.fs, q.k < nw ? 1 : 2, q.i, -1, q.px, q.py};
+  };
+  const auto point = [&](std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
+    const Entry e = entry(k / 2);
+    const int i = k % 2 ? e.j : e.i;
+    x = i >= 0 ? d.x[i] : e.px;
+    y = i >= 0 ? d.y[i] : e.py;
+  };
+
+  std::ofstream o;  // NAME.csv.tmp, renamed when complete
+  const std::string csv = dir + "/" + stem + ".csv";
+  o.open(csv + ".tmp", std::ios::binary);
+  o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
+  PairTotals::Cursor r;
+  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
+    if (!touching(p)) continue;
+    const PairContact& c = w.neighbors.pairs[p];
+    double fn, fs;
+    totals(p, r, fn, fs);
+    const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+    const double R = std::hypot(dx, dy);
+    const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;
+    const double cx = d.x[c.i] + nx * (d.r(c.i) - 0.5 * ov), cy = d.y[c.i] + ny * (d.r(c.i) - 0.5 * ov);
+    o << "dd," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
+      << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
+  }
+  for (std::size_t p = 0; p < w.bonds.size(); ++p) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+    if (!bonded(p)) continue;
+    const Bond& c = w.bonds[p];
+    const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+    const double R = std::hypot(dx, dy);
+    const double nx = dx / R, ny = dy / R, at = c.ai / (c.ai + c.aj) * R;
+    o << "db," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(d.x[c.i] + nx * at) << ',' << fmt(d.y[c.i] + ny * at)
+      << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+      << fmt(c.fs) << '\n';
+  }
+  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) {
+    if (!wall_touching(p)) continue;
+    const WallContact& c = w.neighbors.walls[p];
+    const bool is_wall = c.k < nw;
+    const std::string& name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
+    o << (is_wall ? "dw," : "dp,") << d.id_at(c.i) << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
+      << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+      << fmt(c.fs) << '\n';
+  }
+  o.close();
+  if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
+  std::filesystem::rename(csv + ".tmp", csv);
+  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
+    vtu(out, 2 * n, point, 2, 3,
+        {{"f_n", [&](std::size_t c) { return entry(c).fn; }}, {"f_s", [&](std::size_t c) { return entry(c).fs; }},
+         {"e_n", [&](std::size_t c) { return entry(c).en; }}, {"e_s", [&](std::size_t c) { return entry(c).es; }}},
+        {}, {{"kind", [&](std::size_t c) { return static_cast<long long>(entry(c).kind); }}}, true);
+  });
+}
+
+void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
+                      const OpeningPositions* at_open) {
+  const bool disp = at_open != nullptr;
+  // Read in id order, the discs' order: a block of positions at a time (opening_positions.hpp).
+  std::optional<OpeningPositions::Reader> open_at;
+  if (disp) open_at.emplace(*at_open);
+  const auto displacement = [&](std::size_t i, double& dx, double& dy) {
+    double x0, y0;
+    open_at->at(d.id_at(i), x0, y0);
+    dx = d.x[i] - x0;
+    dy = d.y[i] - y0;
+  };
+  std::ofstream o;  // NAME.csv.tmp, renamed when complete
+  const std::string csv = dir + "/" + stem + ".csv";
+  o.open(csv + ".tmp", std::ios::binary);
+  const bool angle = !d.phi.empty();  // output.rotation_angle
+  o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << (angle ? ",phi" : "") << "\n";
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    o << d.id_at(i) << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r(i)) << ',' << fmt(d.vx[i]) << ','
+      << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material(i)];
+    if (disp) {
+      double dx, dy;
+      displacement(i, dx, dy);
+      o << ',' << fmt(dx) << ',' << fmt(dy);
+    }
+    if (angle) o << ',' << fmt(d.phi[i]);
+    o << '\n';
+  }
+  o.close();
+  if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
+  std::filesystem::rename(csv + ".tmp", csv);
+  std::vector<Column2> vec;
+  vec.push_back({"velocity", [&](std::size_t i, double& vx, double& vy) { vx = d.vx[i]; vy = d.vy[i]; }});
+  if (disp) vec.push_back({"displacement", displacement});
+  std::vector<Column> scalars = {{"radius", [&](std::size_t i) { return d.r(i); }},
+                                 {"omega", [&](std::size_t i) { return d.omega[i]; }}};
+  if (angle) scalars.push_back({"phi", [&](std::size_t i) { return d.phi[i]; }});
+  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
+    vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1, scalars, vec,
+        {{"id", [&](std::size_t i) { return static_cast<long long>(d.id_at(i)); }}}, false);
+  });
+}
+
+void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
+                   const StabilityReport& stab, json* extra) {
+  const bool unstable = res.status == RunStatus::unstable;
+  // An unstable run writes its discs as they were in the last good state (a discharge may have
+  // removed some since); wall loads and the summary's counters are those of the stop.
+  const bool rewind = unstable && res.last_good.has();
+  const Discs good = rewind ? res.last_good.load() : Discs{};
+  const Discs& d = rewind ? good : w.discs;
+  std::vector<WallLoad> walls;
+  std::vector<PointLoad> points;
+  measure_loads(w, spec.profile_bin, walls, points);
+  const double g = std::hypot(w.gx, w.gy);
+  const double ghx = w.gx / g, ghy = w.gy / g;
+  double weight = 0;
+  for (std::size_t i = 0; i < d.size(); ++i) weight += d.mass(i) * g;
+  const double top = w.geometry.max_y();
+
+  json js;
+  js["engine"] = std::string("dem ") + DEM_VERSION;
+  js["scene"] = {{"name", spec.name}, {"file", spec.file}, {"description", spec.description}, {"fill", spec.fill_summary}};
+  js["status"] = to_string(res.status);
+  if (unstable) js["reason"] = res.reason;
+  js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt},
+                   {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},
+                   {"friction_cap", to_string(w.options.friction_cap)}, {"lever_arm", to_string(w.options.lever_arm)},
+                   {"gravity", {w.gx, w.gy}},
+                   {"skin", w.neighbors.skin}, {"cell", w.neighbors.cell_size()}, {"profile_bin", spec.profile_bin}};
+  js["n_discs"] = d.size();
+  js["steps"] = w.steps;
+  js["time"] = w.time;
+  js["wall_time_s"] = res.wall_seconds;
+  js["particle_steps"] = w.particle_steps;
+  js["particle_steps_per_s"] = res.wall_seconds > 0 ? w.particle_steps / res.wall_seconds : 0.0;
+  js["neighbor_rebuilds"] = w.neighbors.rebuilds;
+  js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(res.rest_time) : json(nullptr)},
+                {"criterion", "mean over discs of |du| and of |dv| per step < rest_factor * g * dt^2 (paper note 3)"},
+                {"rest_factor", spec.rest_factor}, {"threshold", res.rest_threshold},
+                {"mean_abs_du", res.mean_abs_du}, {"mean_abs_dv", res.mean_abs_dv}};
+  js["weight"] = weight;
+  js["disc_weight"] = d.size() == 0 ? 0.0 : d.mass(0) * g;
+  js["width"] = w.geometry.max_x() - w.geometry.min_x();
+  js["height"] = top - w.geometry.min_y();
+  json jw = json::array();
+  double vertical = 0;
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    const WallLoad& L = walls[k];
+    const Wall& wl = w.geometry.walls[k];
+    vertical += L.fx * ghx + L.fy * ghy;
+    json prof;
+    std::vector<double> slo, shi, dm, xm, ym;
+    for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
+      const double lo = b * L.bin, hi = std::min(L.length, (b + 1) * L.bin), mid = 0.5 * (lo + hi);
+      const double x = wl.ax + (wl.bx - wl.ax) * mid / L.length, y = wl.ay + (wl.by - wl.ay) * mid / L.length;
+      slo.push_back(lo); shi.push_back(hi); xm.push_back(x); ym.push_back(y); dm.push_back(top - y);
+    }
+    prof = {{"s_lo", slo}, {"s_hi", shi}, {"depth_mid", dm}, {"x_mid", xm}, {"y_mid", ym},
+            {"normal", L.bin_normal}, {"shear", L.bin_shear}, {"contacts", L.bin_contacts}};
+    jw.push_back({{"name", L.name}, {"group", L.group}, {"from", {wl.ax, wl.ay}}, {"to", {wl.bx, wl.by}},
+                  {"normal_total", L.normal}, {"shear_total", L.shear}, {"force", {L.fx, L.fy}},
+                  {"contacts", L.contacts}, {"profile", prof}});
+  }
+  js["walls"] = jw;
+  json jp = json::array();
+  for (const PointLoad& P : points) {
+    vertical += P.fx * ghx + P.fy * ghy;
+    jp.push_back({{"name", P.name}, {"group", P.group}, {"at", {P.x, P.y}}, {"force", {P.fx, P.fy}}, {"contacts", P.contacts}});
+  }
+  js["points"] = jp;
+  std::map<std::string, std::array<double, 4>> groups;
+  for (const WallLoad& L : walls) {
+    auto& G = groups[L.group];
+    G[0] += L.normal; G[1] += L.shear; G[2] += L.fx; G[3] += L.fy;
+  }
+  for (const PointLoad& P : points) {
+    auto& G = groups[P.group];
+    G[2] += P.fx; G[3] += P.fy;
+  }
+  json jg = json::object();
+  for (const auto& [name, G] : groups)
+    jg[name] = {{"normal_total", G[0]}, {"shear_total", G[1]}, {"force", {G[2], G[3]}}};
+  js["groups"] = jg;
+  js["balance"] = {{"weight", weight}, {"walls_vertical", vertical},
+                   {"residual_relative", weight > 0 ? std::abs(weight - vertical) / weight : 0.0},
+                   {"note", "weight of all discs against the vertical load on walls and points; equal at rest"}};
+  json jd = json::array();
+  for (const auto& p : stab.pairs) jd.push_back(pair_json(p));
+  js["derived"] = jd;
+  js["stability"] = {{"dt_bound", stab.dt_bound}, {"limited_by", stab.limited_by},
+                     {"dt_single_contact", stab.dt_single},
+                     {"dt_rotation_z4", finite_or_null(stab.dt_rot_z4)},
+                     {"dt_rotation_z6", finite_or_null(stab.dt_rot_z6)},
+                     {"dt_clusters", finite_or_null(stab.clusters.dt)},
+                     {"cluster_shapes", stab.clusters.shapes},
+                     {"clusters_not_examined", stab.clusters.skipped},
+                     {"note", "bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
+                              "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
+                              "sticking contacts (disc-disc or disc-wall constants); with bonded clusters, on each "
+                              "distinct cluster of at most 10 discs (its discs, bonds and the contacts to neighbours "
+                              "within 0.01 cm, those held fixed, every contact sticking); dt_bound = min(single contact, rotation "
+                              "on 4, clusters) is enforced"}};
+
+  // wall_profiles.csv
+  {
+    std::ostringstream o;
+    o << "wall,group,bin,s_lo,s_hi,x_mid,y_mid,depth_mid,normal,shear,contacts\n";
+    for (const auto& pw : jw) {
+      const auto& p = pw["profile"];
+      for (std::size_t b = 0; b < p["normal"].size(); ++b)
+        o << pw["name"].get<std::string>() << ',' << pw["group"].get<std::string>() << ',' << b << ','
+          << fmt(p["s_lo"][b]) << ',' << fmt(p["s_hi"][b]) << ',' << fmt(p["x_mid"][b]) << ',' << fmt(p["y_mid"][b])
+          << ',' << fmt(p["depth_mid"][b]) << ',' << fmt(p["normal"][b]) << ',' << fmt(p["shear"][b]) << ','
+          << p["contacts"][b].get<int>() << '\n';
+    }
+    write_file_atomic(dir + "/wall_profiles.csv", o.str());
+  }
+  if (extra)
+    for (auto& [k, v] : extra->items()) js[k] = std::move(v);
+  if (!unstable) write_contact_files(dir, "contacts", w);
+  write_disc_files(dir, "discs", spec, d, nullptr);
+  // Serialised straight to the file (some 1.3 MB of text at a million discs, which a string
+  // built first held twice over as it grew, at the run's peak): the bytes of js.dump(2).
+  write_stream_atomic(dir + "/summary.json", [&](std::ostream& out) { out << std::setw(2) << js << '\n'; });
+}
+
+}  // namespace dem

@@ -1,0 +1,66 @@
+// The paper's contact law for one contact over one step, eqs. (6)-(14). The options are
+// template parameters so the per-contact loop carries no branch for a variant a scene does not
+// use (docs/scene.md lists them).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "physics/model.hpp"
+
+namespace dem {
+
+// du_n: approach increment (5a); du_s: shear increment (5b); overlap = r_i + r_j - R >= 0.
+// en, es: elastic forces carried from the last step (updated). fn, fs: total forces (out).
+// SHEAR = false: every pair of the scene is shear-free (no shear spring and dashpot, or mu = 0
+// with a shear spring, so the cap holds e_s at 0): the shear part is not computed (same result).
+// DASH = false: no pair has a dashpot: the dashpot terms are not computed (same result).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR = true, bool DASH = true>
+inline void contact_law(const PairProps& p, double overlap, double du_n, double du_s, double inv_dt,
+                        double& en, double& es, double& fn, double& fs) {
+  // Choices are selects, not branches: in a dense packing whether a contact slides or goes slack
+  // is data the branch predictor cannot learn, and a select gives the very same values.
+  // Normal: spring and dashpot in parallel.
+  if constexpr (NS == NormalSpring::incremental)
+    en += p.kn * du_n;  // (6a), (7a)
+  else
+    en = p.kn * overlap;
+  double dn = 0;
+  if constexpr (DASH) dn = p.eta_n * du_n * inv_dt;  // (6b), (7b): the dashpot is not accumulated
+
+  bool slack = false;  // NoTension::elastic, (8), (12): the elastic part in tension; the contact carries nothing
+  if constexpr (NT == NoTension::elastic) {
+    slack = en < 0;
+    fn = en + dn;  // (9) -- may be tensile through the dashpot alone, as written
+  } else if constexpr (NT == NoTension::total) {
+    en = std::max(en, 0.0);
+    fn = std::max(en + dn, 0.0);
+  } else {
+    fn = en + dn;  // viscous pull allowed while the discs overlap
+  }
+
+  double s = 0;  // the new e_s
+  if constexpr (SHEAR) {
+    // Shear: spring and dashpot in parallel, the spring capped by Coulomb friction.
+    s = es + p.ks * du_s;                       // (10a), (11a)
+    double ds = 0;
+    if constexpr (DASH) ds = p.eta_s * du_s * inv_dt;  // (10b), (11b)
+    const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
+    const bool slide = std::abs(s) > cap;       // (13a): capped, not reset
+    s = slide ? std::copysign(cap, s) : s;
+    ds = slide ? 0.0 : ds;                      // (13b): no shear dashpot while sliding
+    fs = s + ds;                                // (14)
+  } else {
+    fs = 0;
+  }
+  if constexpr (NT == NoTension::elastic) {
+    en = slack ? 0.0 : en;
+    fn = slack ? 0.0 : fn;
+    s = slack ? 0.0 : s;
+    fs = slack ? 0.0 : fs;
+  }
+  if constexpr (SHEAR) es = s;
+  else if constexpr (NT == NoTension::elastic) es = slack ? 0.0 : es;
+}
+
+}  // namespace dem

@@ -1,0 +1,94 @@
+// World's moving obstacles: prescribed wall rotations and rigid plates (moving_walls.hpp).
+#include <algorithm>
+#include <cmath>
+
+#include "physics/world.hpp"
+
+namespace dem {
+
+namespace {
+void place_rotated(Wall& w, const RotatingWall& r) {
+  const double c = std::cos(r.theta), s = std::sin(r.theta);
+  auto turn = [&](double x, double y, double& ox, double& oy) {
+    const double dx = x - r.pivot_x, dy = y - r.pivot_y;
+    ox = r.pivot_x + c * dx - s * dy;
+    oy = r.pivot_y + s * dx + c * dy;
+  };
+  turn(r.ax0, r.ay0, w.ax, w.ay);
+  turn(r.bx0, r.by0, w.bx, w.by);
+}
+
+void place_plate(Wall& w, const RigidPlate& p) {
+  w.ax = p.ax0 + p.x; w.ay = p.ay0 + p.y;
+  w.bx = p.bx0 + p.x; w.by = p.by0 + p.y;
+}
+
+// Horizontal displacement of a following plate: the rotating wall's offset at the plate's height.
+double followed_x(const RigidPlate& p, const RotatingWall& r) {
+  const double height = 0.5 * (p.ay0 + p.by0) + p.y - r.pivot_y;
+  return p.x_free - height * std::tan(r.theta);
+}
+}  // namespace
+
+void World::kick_walls(double h) {
+  for (RigidPlate& p : moving.plates) {  // (16), (17) for the plate; it does not rotate
+    const ObstacleMotion& m = moving.motion[p.wall];
+    if (p.follow < 0) p.vx += (m.fx + p.mass * gx) / p.mass * h;
+    p.vy += (m.fy + p.mass * gy) / p.mass * h;
+  }
+}
+
+void World::drift_walls(bool eq19) {
+  for (RotatingWall& r : moving.rotating) {  // prescribed: the exact turn of this step
+    const double dtheta = r.omega * dt;
+    r.theta += dtheta;
+    place_rotated(geometry.walls[r.wall], r);
+    ObstacleMotion& m = moving.motion[r.wall];
+    m.dux = m.duy = 0;
+    m.dtheta = dtheta;
+    m.pivot_x = r.pivot_x;
+    m.pivot_y = r.pivot_y;
+  }
+  for (RigidPlate& p : moving.plates) {
+    // (18) or (19), as for the discs.
+    p.duy = eq19 ? 0.5 * (p.duy + p.vy * dt) : p.vy * dt;
+    p.y += p.duy;
+    if (p.follow >= 0) {
+      const double x = followed_x(p, moving.rotating[p.follow]);
+      p.dux = x - p.x;
+      p.vx = p.dux / dt;
+    } else {
+      p.dux = eq19 ? 0.5 * (p.dux + p.vx * dt) : p.vx * dt;
+    }
+    p.x += p.dux;
+    place_plate(geometry.walls[p.wall], p);
+    ObstacleMotion& m = moving.motion[p.wall];
+    m.dux = p.dux;
+    m.duy = p.duy;
+    m.dtheta = 0;
+  }
+}
+
+void World::place_moving_walls() {
+  for (const RotatingWall& r : moving.rotating) place_rotated(geometry.walls[r.wall], r);
+  for (const RigidPlate& p : moving.plates) place_plate(geometry.walls[p.wall], p);
+}
+
+bool World::walls_moved_far() const {
+  const double lim = 0.5 * neighbors.skin;
+  for (const RotatingWall& r : moving.rotating)
+    if (std::abs(r.theta - r.theta_listed) * r.reach > lim) return true;
+  for (const RigidPlate& p : moving.plates)
+    if (std::hypot(p.x - p.x_listed, p.y - p.y_listed) > lim) return true;
+  return false;
+}
+
+void World::walls_listed() {
+  for (RotatingWall& r : moving.rotating) r.theta_listed = r.theta;
+  for (RigidPlate& p : moving.plates) {
+    p.x_listed = p.x;
+    p.y_listed = p.y;
+  }
+}
+
+}  // namespace dem

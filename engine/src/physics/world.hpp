@@ -1,0 +1,214 @@
+// The simulated world and its time step.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "physics/clusters.hpp"
+#include "physics/discs.hpp"
+#include "physics/geometry.hpp"
+#include "physics/model.hpp"
+#include "physics/moving_walls.hpp"
+#include "physics/neighbors.hpp"
+#include "physics/pair_totals.hpp"
+
+namespace dem {
+
+// A block of touching pairs on its way through the law (World::pair_pass): the gathered geometry
+// and history in, the forces out. 128 pairs: some 20 kB, on the stack of the thread that runs the
+// pass (hot in its own cache; one vector of blocks for all threads, on the heap, made the second
+// thread's pass 1.8x slower than the first's).
+struct alignas(64) PairBlock {
+  static constexpr int kSize = 128;
+  int pair[kSize];  // offset in the pass's part of the list
+  int prop[kSize];  // index of the pair's constants (several kinds of disc)
+  double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j (several kinds)
+  double ddx[kSize], ddy[kSize], rot_i[kSize], rot_j[kSize];  // (5): du_i - du_j, r_i dphi_i, r_j dphi_j
+  // LeverArm::contact_point: rot_i, rot_j hold dphi_i, dphi_j; arm_i, arm_j the radii in (several
+  // kinds) and the lever arms r - overlap/2 out.
+  double arm_i[kSize], arm_j[kSize];
+  double en[kSize], es[kSize];  // history in, history out
+  double overlap[kSize], fn[kSize], fs[kSize], fx[kSize], fy[kSize];  // out: fx, fy on i
+};
+
+class World {
+ public:
+  Discs discs;
+  Geometry geometry;
+  Neighbors neighbors;
+  int n_materials = 1;
+  std::vector<PairProps> props;  // n_materials x n_materials, symmetric
+  ContactOptions options;
+  // Paper 2's cluster bonds, sorted by (i, j); never in the neighbour lists. Empty: no bond code.
+  std::vector<Bond> bonds;
+  // Moving walls and plates (shear box). Empty: fixed geometry, no wall-motion code.
+  MovingWalls moving;
+  Scheme scheme = Scheme::paper_eq19;
+  double dt = 1e-4;         // [s]
+  // Integrate each disc's rotation angle phi (the last line of eqs. 18, 19), an output only: the
+  // law reads the increments, never the angle. Off: Discs::phi is empty and the drift skips it
+  // (output.rotation_angle).
+  bool rotation_angle = false;
+  // Threads of the force and integration loops (OpenMP; run.threads, --threads). A given count
+  // always gives bit-identical results; 1 is the plain serial loop. Scenes with bonds or moving
+  // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
+  int threads = 1;
+  static constexpr int kMinDiscsPerThread = 2048;
+  // Doubles a vector in the pair law and the integration loops: 8 (AVX-512), 4 (AVX2) or 2
+  // (SSE2), the widest the processor has (cpu_vector_width); the same bits at every width. Tests
+  // and benchmarks may set a narrower one (never wider than cpu_vector_width()).
+  static int vector_width;
+  static int cpu_vector_width();
+  int threads_for(int n) const;  // the thread count used for n discs
+  double gx = 0, gy = -980; // gravity [cm/s^2]
+
+  double time = 0;
+  long steps = 0;
+  double particle_steps = 0;  // sum over steps of the number of discs (throughput)
+  double max_overlap = 0;  // largest overlap seen by the last force computation [cm]
+
+  // The total forces of the pairs that touched in the force pass of step `pair_forces_step`, in
+  // the list's order (PairTotals: 16 bytes a touching pair while the list is the pass's). They are
+  // outputs, not history (the next step needs e_n and e_s alone), so a pass records them only
+  // when record_pair_forces is set: the run loops set it before the steps whose contacts they
+  // write or read. Keeping them in the pair list cost 16 bytes a pair and a third of the force
+  // pass's memory traffic.
+  bool record_pair_forces = false;
+  PairTotals pair_totals;
+  long pair_forces_step = -1;
+  bool pair_forces_current() const { return pair_forces_step == steps; }
+
+  // The threads' blocks of discs in the force pass (thread t owns discs [force_blocks[t],
+  // force_blocks[t + 1]); empty with one thread). Set every kRebalanceEvery steps so that each
+  // block has about the same work: a disc 1 unit, a pair that touched in the last pass (non-zero
+  // history) 1 more, on its i. Equal numbers of discs left a settled silo's lower half (its pairs
+  // in contact) to one thread and the looser top to the other: 12.8 against 4.5 ms a step at 1M
+  // discs. The law runs eight pairs a vector, so a touching pair costs about what a disc does:
+  // weighed at 3 units a pair against 1 a disc, the thread of the upper, looser discs had 1.6
+  // times the other's work at 1M discs (perf). Candidate pairs are
+  // not counted: a state file's restart builds its lists at another time than the run in one
+  // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's
+  // edge its sum is ordered by the blocks, so they are part of the state (saved with it) and are
+  // remapped, not rebuilt, on removals; they depend on the step count and the history only,
+  // which a resumed run has.
+  std::vector<int> force_blocks;
+  static constexpr long kRebalanceEvery = 64;
+  bool blocks_fit() const;  // force_blocks fit the thread count and the discs
+  void balance_blocks();  // force_blocks from the lists as they are
+  // f(p, rec) for each pair p of the list, in order, with its recorded totals rec (nullptr for a
+  // pair the recorded pass found apart or did not have).
+  template <class F>
+  void each_pair_with_forces(F&& f) const {
+    PairTotals::Cursor r;
+    for (std::size_t p = 0; p < neighbors.pairs.size(); ++p) f(p, pair_totals.at(neighbors.pairs, p, r));
+  }
+  // f(i, j, fn, fs) for each recorded total, in (i, j) order.
+  template <class F>
+  void each_recorded_pair(F&& f) const { pair_totals.each(neighbors.pairs, f); }
+  std::vector<PairForce> recorded_pairs() const { return pair_totals.records(neighbors.pairs); }  // (tests)
+
+  const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
+  // Selects the specialised force kernel and computes the first forces (call before step()).
+  void init();
+  // The same without computing forces: for a state restored with its forces and history. Without
+  // build_lists the contact lists are taken as they are (a checkpoint restores them exactly).
+  void prepare(bool build_lists = true);
+  // Puts the moving walls where their restored angles and plate displacements say (state files).
+  void place_moving_walls();
+  // One time step; the whole algorithm is here.
+  void step();
+  // Recomputes the forces from the last increments (as the start of a step does); for tests.
+  void compute_forces_now() { force_pass(Then::nothing, 0.0); }
+  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp): the kick
+  // v += a h of eq. 17 and a drift. They return whether some disc is now more than skin/2 from
+  // where the lists were built (the lists must be rebuilt before the next force pass).
+  bool kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
+  bool kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
+
+  // Removes the discs of `removed` from every array (order kept; lists remapped).
+  void remove_discs(const RemovedDiscs& removed);
+  // Removes a wall (the slit's gate) from the computation; false if there is no such wall.
+  bool deactivate_wall(const std::string& name);
+
+  // The increments du, dv, dphi of the last move (eqs. 5), as arrays times a factor. Eq. (19)
+  // keeps its own (the mean of the last one and v dt: Discs::dux, duy, dphi, factor 1). Eq. (18)
+  // and Verlet move by exactly v dt, and that v is still in vx, vy, omega when the forces and the
+  // rest measure read it: they read v and multiply by dt (the same bits), and keep no increment
+  // arrays (24 bytes a disc).
+  struct Increments {
+    const double *x, *y, *phi;
+    double factor;
+  };
+  Increments increments() const;
+  // Paper's rest measure (note 3): mean over discs of |du| and |dv| of the last step. Verlet's
+  // closing half kick overwrites the v of its move, so a Verlet step adds them up before it
+  // when measure_increments is set (the run loop sets it for its check steps); otherwise the
+  // last step must be of another scheme.
+  void mean_abs_increment(double& mx, double& my) const;
+  bool measure_increments = false;
+  double kinetic_energy() const;
+  bool all_finite() const;
+
+ private:
+  // What a force pass does next to each thread's discs, in the same parallel region.
+  enum class Then { nothing, kick, kick_drift_eq18, kick_drift_eq19 };
+  using ForceKernel = bool (World::*)(Then, double);
+  ForceKernel force_kernel_ = nullptr;
+  bool force_pass(Then then, double h);  // the selected kernel, and the bookkeeping of a recorded pass
+ public:
+  // What the selected kernel skips (for the header and the skip benchmark).
+  bool kernel_shear = true, kernel_dashpots = true;
+ private:
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
+  bool compute_forces(Then then, double h);  // then's drift result
+  struct Deferred {  // a pair's reaction on a disc of another thread's block
+    int j;
+    double fx, fy, tq;
+  };
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
+  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                   PairTotals::Force* record);
+  // pair_pass for this pass: recording or not (record null), one kind of disc or several.
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH>
+  double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
+                       PairTotals::Force* record);
+  // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).
+  static bool apart(double R2, double sum) { return R2 > sum * sum; }
+  std::size_t touching_pairs(std::size_t p0, std::size_t p1) const;  // pairs of [p0, p1) that touch now
+  void size_pair_forces(std::size_t count);  // room for exactly count recorded totals over the list
+  void drop_pair_forces();  // frees the recorded totals (pair_forces_current() is false after)
+  std::vector<Padded<std::size_t>> touching_;  // per thread: touching pairs of a recorded pass
+  // Every disc of one kind: the kernels keep its constants in registers instead of reading them
+  // through each disc's kind.
+  bool one_kind() const { return discs.kinds.size() == 1; }
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
+  double wall_forces(std::size_t w0, std::size_t w1, int slot);
+  enum class Drift { none, eq18, eq19 };
+  bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region
+  // Eq. 17 kick, then the drift D, for discs [i0, i1); with a drift, returns whether some disc
+  // of them is now more than skin/2 from its list position (or the lists are stale).
+  template <Drift D, bool ONE_KIND, bool PHI>
+  bool kick_drift_block(double h, int i0, int i1);
+  template <Drift D>
+  bool kick_drift_for(double h, int i0, int i1);  // kick_drift_block for this pass's kinds and angle
+  bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
+  void measure_increment_sums();  // Verlet: sums of |v dt| of parallel_sum's blocks, before the closing kick
+  std::vector<Padded<std::array<double, 2>>> increment_sums_;  // by parallel_sum's blocks
+  long increments_measured_step_ = -1;
+  void start_resultants(int i0, int i1);
+  std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
+  std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
+  void select_kernel();
+  void rebuild_lists();       // neighbour lists without the bonded pairs
+  void kick_walls(double h);  // plates: v += F/M h (moving_walls.cpp)
+  void drift_walls(bool eq19);  // rotating walls and plates: increments and new positions
+  bool walls_moved_far() const;  // some wall moved skin/2 since the lists were built
+  void walls_listed();        // remember the wall positions of this list build
+  bool adjacent(int k1, int k2) const;  // a wall and a point at its end
+  // Per thread: per wall entry of one disc, touching now and its centre distance.
+  std::vector<std::vector<char>> touch_scratch_;
+  std::vector<std::vector<double>> dist_scratch_;
+};
+
+}  // namespace dem

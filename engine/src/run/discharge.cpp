@@ -1,0 +1,736 @@
+#include "run/discharge.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "io/outputs.hpp"
+#include "physics/parallel.hpp"
+#include "io/state.hpp"
+
+namespace dem {
+
+using json = nlohmann::ordered_json;
+
+namespace {
+
+std::string fmt(double v) { return fmt17(v); }
+json num_or_null(double v) { return finite_or_null(v); }
+
+// Where the slit is: the gate's ends (or the points L and R).
+struct Slit {
+  double left = 0, right = 0, floor = 0;
+};
+
+Slit find_slit(const World& w, const std::string& gate) {
+  Slit s;
+  s.floor = w.geometry.min_y();
+  for (const Wall& wl : w.geometry.walls)
+    if (wl.name == gate) {
+      s.left = std::min(wl.ax, wl.bx);
+      s.right = std::max(wl.ax, wl.bx);
+      s.floor = std::min(wl.ay, wl.by);
+    }
+  return s;
+}
+
+// Top of the fill in a column [x0, x1]: the highest disc top among discs inside the silo.
+double surface(const Discs& d, double x0, double x1, double floor) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (d.x[i] >= x0 && d.x[i] < x1 && d.y[i] > floor) top = std::max(top, d.y[i] + d.r(i));
+  return top;
+}
+
+}  // namespace
+
+namespace {
+
+using Feet = std::vector<std::pair<int, char>>;  // (disc, bits): sorted by disc, one entry a disc
+constexpr char kLeftFoot = 1, kRightFoot = 2;
+
+enum class ArchSearch { found, none, too_far };
+
+// One breadth-first search for the arch over the compressive pairs `above` (their (i, j), sorted).
+// A disc's partners, in the order of the pairs: first those below it (their pairs come first), by
+// increasing index, from `below` (the (j, i) of each pair, sorted); then those above it, from its
+// own run of pairs. `reach2`: the pairs hold every partner of the discs within sqrt(reach2) of
+// (ax, ay) only; popping a disc farther out gives too_far (the search may differ from one over
+// all pairs from there).
+using Pairs = std::vector<std::pair<int, int>>;
+ArchSearch arch_bfs(const Discs& d, const Pairs& above, const Feet& feet, double floor_y, double ax, double ay,
+                    double reach2, std::vector<int>& path) {
+  const auto foot = [&](int i) -> char {
+    const auto it = std::lower_bound(feet.begin(), feet.end(), std::make_pair(i, char(0)));
+    return it != feet.end() && it->first == i ? it->second : 0;
+  };
+  const std::size_t nrec = above.size();
+  Pairs below;
+  below.reserve(nrec);
+  for (const auto& a : above) below.emplace_back(a.second, a.first);
+  std::sort(below.begin(), below.end());
+  // The discs the search can reach or start from (those of the compressive pairs, and the
+  // feet), sorted: a disc's place here indexes its predecessor on the search.
+  std::vector<int> ids;
+  {
+    std::size_t a = 0, b = 0, f = 0;
+    const auto next_rec = [&] {  // the i of the next pair, or INT_MAX
+      return a < nrec ? above[a].first : std::numeric_limits<int>::max();
+    };
+    for (;;) {
+      const int r = next_rec();
+      const int q = b < below.size() ? below[b].first : std::numeric_limits<int>::max();
+      const int t = f < feet.size() ? feet[f].first : std::numeric_limits<int>::max();
+      const int k = std::min(r, std::min(q, t));
+      if (k == std::numeric_limits<int>::max()) break;
+      if (ids.empty() || ids.back() != k) ids.push_back(k);
+      if (k == r) ++a;
+      else if (k == q) ++b;
+      else ++f;
+    }
+  }
+  const auto place = [&](int i) { return std::lower_bound(ids.begin(), ids.end(), i) - ids.begin(); };
+  std::vector<int> prev(ids.size(), -2);
+  std::deque<int> q;
+  for (const auto& f : feet)
+    if (f.second & kLeftFoot) {
+      prev[place(f.first)] = -1;
+      q.push_back(f.first);
+    }
+  const auto visit = [&](int i, int j) {
+    if (int& p = prev[place(j)]; p == -2 && d.y[j] > floor_y) {
+      p = i;
+      q.push_back(j);
+    }
+  };
+  while (!q.empty()) {
+    const int i = q.front();
+    q.pop_front();
+    if (foot(i) & kRightFoot) {
+      path.clear();
+      for (int k = i; k >= 0; k = prev[place(k)]) path.push_back(k);
+      if (path.size() < 2) path.clear();  // one disc on both ends is not an arch
+      return path.empty() ? ArchSearch::none : ArchSearch::found;
+    }
+    if (reach2 < std::numeric_limits<double>::infinity()) {  // all records (infinite reach): no test
+      const double ex = d.x[i] - ax, ey = d.y[i] - ay;
+      if (!(ex * ex + ey * ey <= reach2)) return ArchSearch::too_far;  // its partners may be missing
+    }
+    const auto lo = std::lower_bound(below.begin(), below.end(), std::make_pair(i, std::numeric_limits<int>::min()));
+    for (auto it = lo; it != below.end() && it->first == i; ++it) visit(i, it->second);
+    const auto first = std::lower_bound(above.begin(), above.end(), std::make_pair(i, std::numeric_limits<int>::min()));
+    for (auto it = first; it != above.end() && it->first == i; ++it) visit(i, it->second);
+  }
+  return ArchSearch::none;
+}
+
+}  // namespace
+
+std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y, ArchStats* stats) {
+  const Discs& d = w.discs;
+  if (stats) *stats = ArchStats{};
+  if (d.size() == 0) return {};
+  double rmax = 0;
+  for (std::size_t i = 0; i < d.size(); ++i) rmax = std::max(rmax, d.r(i));
+  // Nothing here is sized by the number of discs: a loose packing (a silo started from its
+  // lattice) has few contacts, and arrays of all discs (9 bytes a disc) set the peak of such a
+  // run at 1M discs. Everything below is sized by the compressive pairs near the slit and the feet.
+  // Feet: discs touching a slit end, as a point or as the bottom wall within 2 r of it; bit 1 a
+  // left foot, bit 2 a right foot. A short list, sorted by disc.
+  Feet feet;
+  const int nw = static_cast<int>(w.geometry.walls.size());
+  for (const WallContact& c : w.neighbors.walls) {
+    if (!c.touching) continue;
+    const bool near_floor = std::abs(c.py - floor_y) < 1e-9 * (1 + std::abs(floor_y));
+    if (c.k >= nw || near_floor) {
+      const char bits = static_cast<char>((std::abs(c.px - slit_left) <= 2 * rmax ? kLeftFoot : 0) |
+                                          (std::abs(c.px - slit_right) <= 2 * rmax ? kRightFoot : 0));
+      if (bits) feet.emplace_back(c.i, bits);
+    }
+  }
+  std::sort(feet.begin(), feet.end());
+  std::size_t nf = 0;
+  for (const auto& f : feet) {  // one entry a disc, its bits or-ed
+    if (nf > 0 && feet[nf - 1].first == f.first) feet[nf - 1].second |= f.second;
+    else feet[nf++] = f;
+  }
+  feet.resize(nf);
+  if (!w.pair_forces_current()) throw std::logic_error("find_arch: the pair forces of this step were not recorded");
+  // The search in a disc of radius rho around the slit's centre first, over the compressive
+  // records whose disc i lies in it (a copy sized by the slit's neighbourhood, not by the silo):
+  // the whole packing's records sorted cost a serial sort of every compressive pair at each
+  // sample. A partner is at most `hop` (the longest compressive pair) from its disc, so every
+  // partner of a disc within rho - hop of the centre is among those records (its own pairs
+  // through i, the others through their partner's i, within rho). A search that pops only such
+  // discs runs exactly as over all records: the same chain. One that pops a disc farther out is
+  // given up and run again in twice the radius, at last over all records.
+  const double ax = 0.5 * (slit_left + slit_right), ay = floor_y;
+  const auto dist2 = [&](int i) {
+    const double ex = d.x[i] - ax, ey = d.y[i] - ay;
+    return ex * ex + ey * ey;
+  };
+  double far2 = 0, hop2 = 0;  // the farthest compressive disc i, the longest compressive pair
+  w.each_recorded_pair([&](int i, int j, double fn, double) {
+    if (!(fn > 0)) return;
+    far2 = std::max(far2, dist2(i));
+    const double ex = d.x[j] - d.x[i], ey = d.y[j] - d.y[i];
+    hop2 = std::max(hop2, ex * ex + ey * ey);
+  });
+  const double hop = std::sqrt(hop2);
+  double feet_far = 0;
+  for (const auto& f : feet) feet_far = std::max(feet_far, std::sqrt(dist2(f.first)));
+  std::vector<int> path;
+  Pairs near;  // the compressive pairs searched: (i, j), 8 bytes each
+  for (double rho = feet_far + 8 * hop + rmax;; rho *= 2) {
+    if (stats) ++stats->searches;
+    near.clear();
+    if (!(rho > 0) || !(rho * rho < far2)) {  // every record: the search as over the whole packing
+      if (stats) stats->records += w.pair_totals.size();
+      w.each_recorded_pair([&](int i, int j, double fn, double) {
+        if (fn > 0) near.emplace_back(i, j);
+      });
+      arch_bfs(d, near, feet, floor_y, ax, ay, std::numeric_limits<double>::infinity(), path);
+      return path;
+    }
+    w.each_recorded_pair([&](int i, int j, double fn, double) {
+      if (fn > 0 && !(dist2(i) > rho * rho)) near.emplace_back(i, j);  // NaN: kept
+    });
+    if (stats) stats->records += near.size();
+    // Margins of 1e-9: rounding in the distances never admits a disc whose partner is outside.
+    const double reach = rho * (1 - 1e-9) - hop * (1 + 1e-9);
+    const ArchSearch r = arch_bfs(d, near, feet, floor_y, ax, ay, reach > 0 ? reach * reach : -1.0, path);
+    if (r != ArchSearch::too_far) return path;
+  }
+}
+
+double flow_rate(const std::vector<Removal>& removals) {
+  std::vector<double> t, m;
+  double cum = 0;
+  for (const Removal& r : removals) {
+    if (r.keystone) continue;
+    cum += r.mass;
+    t.push_back(r.t);
+    m.push_back(cum);
+  }
+  if (t.size() < 10) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t a = 4;
+  double st = 0, sm = 0, stt = 0, stm = 0, k = 0;
+  for (std::size_t i = a; i < t.size(); ++i) {
+    st += t[i]; sm += m[i]; stt += t[i] * t[i]; stm += t[i] * m[i]; k += 1;
+  }
+  const double den = k * stt - st * st;
+  return den > 0 ? (k * stm - st * sm) / den : std::numeric_limits<double>::quiet_NaN();
+}
+
+namespace {
+
+// Geometry of the opening, derived from the scene and the walls (the same at every resume).
+struct Frame {
+  Slit slit;
+  double width, x_left, x_right, xc, top, y_out, g;
+};
+
+Frame frame(const SceneSpec& spec, const World& w) {
+  Frame f;
+  f.slit = find_slit(w, spec.discharge.gate);
+  f.width = w.geometry.max_x() - w.geometry.min_x();
+  f.x_left = w.geometry.min_x();
+  f.x_right = w.geometry.max_x();
+  f.xc = 0.5 * (f.slit.left + f.slit.right);
+  f.top = w.geometry.max_y();
+  f.y_out = f.slit.floor - spec.discharge.outlet_depth;
+  f.g = std::hypot(w.gx, w.gy);
+  return f;
+}
+
+// Top of the fill in the left wall, centre and right wall columns.
+void surfaces(const World& w, const Frame& f, double col, double s[3]) {
+  s[0] = surface(w.discs, f.x_left, f.x_left + col, f.slit.floor);
+  s[1] = surface(w.discs, f.xc - 0.5 * col, f.xc + 0.5 * col, f.slit.floor);
+  s[2] = surface(w.discs, f.x_right - col, f.x_right + 1e-12, f.slit.floor);
+}
+
+void save_load(BinaryOut& o, const WallLoad& L) {
+  o.str(L.name); o.str(L.group);
+  o.put(L.fx); o.put(L.fy); o.put(L.normal); o.put(L.shear); o.put(L.contacts);
+  o.vec(L.bin_normal); o.vec(L.bin_shear); o.vec(L.bin_contacts);
+  o.put(L.bin); o.put(L.length);
+}
+
+void load_load(BinaryIn& r, WallLoad& L) {
+  L.name = r.str(1 << 20); L.group = r.str(1 << 20);
+  L.fx = r.get<double>(); L.fy = r.get<double>(); L.normal = r.get<double>(); L.shear = r.get<double>();
+  L.contacts = r.get<int>();
+  r.vec(L.bin_normal); r.vec(L.bin_shear); r.vec(L.bin_contacts);
+  L.bin = r.get<double>(); L.length = r.get<double>();
+}
+
+}  // namespace
+
+void DischargeState::save(BinaryOut& o) const {
+  o.put(t_open); o.put(n_initial); o.put(overlap_limit); o.put(rmean); o.put(fill_top);
+  for (double v : surf0) o.put(v);
+  at_open.write_to(o);
+  o.put<std::uint64_t>(static_walls.size());
+  for (const WallLoad& L : static_walls) save_load(o, L);
+  o.put(next_s);
+  o.str(status);
+  o.vec(removals);
+  o.put(jam_at); o.put(jams);
+  for (double v : sink_time) o.put(v);
+  o.put(series_bytes);
+  for (const std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) o.str(s->str());
+  const auto put_peaks = [&](const PeakTracker& p) {
+    o.put(p.raw); o.put(p.windowed); o.put(p.acc); o.put(p.count);
+    o.vec(p.last);
+  };
+  o.put<std::uint64_t>(bin_peaks.size());
+  for (const auto& wall : bin_peaks) {
+    o.put<std::uint64_t>(wall.size());
+    for (const auto& bin : wall) put_peaks(bin);
+  }
+  o.put<std::uint64_t>(total_peaks.size());
+  for (const auto& p : total_peaks) put_peaks(p);
+  o.vec(sample_t);
+  o.put<std::uint64_t>(next_snap);
+  o.put(last_removal); o.put(removed_mass); o.put(moved_fraction);
+  o.put(wall_seconds);
+  o.put(energy.active); o.put(energy.budget); o.put(energy.scale); o.put(energy.gain);
+}
+
+void DischargeState::load(BinaryIn& r) {
+  t_open = r.get<double>(); n_initial = r.get<int>(); overlap_limit = r.get<double>(); rmean = r.get<double>();
+  fill_top = r.get<double>();
+  for (double& v : surf0) v = r.get<double>();
+  at_open.read_from(r);
+  static_walls.resize(r.count(1 << 20));
+  for (WallLoad& L : static_walls) load_load(r, L);
+  next_s = r.get<long>();
+  status = r.str(64);
+  if (status == "interrupted") status = "discharged";  // it goes on
+  r.vec(removals);
+  jam_at = r.get<double>(); jams = r.get<int>();
+  for (double& v : sink_time) v = r.get<double>();
+  series_bytes = r.get<std::uint64_t>();
+  for (std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) {
+    s->str(r.str());
+    s->seekp(0, std::ios_base::end);  // append after the restored text
+  }
+  const auto get_peaks = [&](PeakTracker& p) {
+    p.raw = r.get<double>(); p.windowed = r.get<double>(); p.acc = r.get<double>();
+    p.count = r.get<std::uint64_t>();
+    r.vec(p.last);
+  };
+  bin_peaks.resize(r.count(1 << 20));
+  for (auto& wall : bin_peaks) {
+    wall.resize(r.count(1 << 24));
+    for (auto& bin : wall) get_peaks(bin);
+  }
+  total_peaks.resize(r.count(1 << 20));
+  for (auto& p : total_peaks) get_peaks(p);
+  r.vec(sample_t);
+  next_snap = r.get<std::uint64_t>();
+  last_removal = r.get<double>(); removed_mass = r.get<double>(); moved_fraction = r.get<double>();
+  wall_seconds = r.get<double>();
+  energy.active = r.get<bool>(); energy.budget = r.get<double>(); energy.scale = r.get<double>();
+  energy.gain = r.get<double>();
+  if (static_walls.size() != bin_peaks.size() || static_walls.size() != total_peaks.size())
+    r.fail("corrupt discharge state (walls)");
+  for (std::size_t k = 0; k < static_walls.size(); ++k)
+    if (bin_peaks[k].size() != static_walls[k].bin_normal.size()) r.fail("corrupt discharge state (bins)");
+}
+
+std::string series_file_problem(const std::string& out, const DischargeState& st) {
+  if (st.next_s == 0) return "";  // made at the opening
+  namespace fs = std::filesystem;
+  const std::string path = out + "/wall_series.csv", tmp = path + ".tmp";
+  std::error_code ec;
+  const std::string& f = fs::exists(tmp, ec) ? tmp : path;
+  const auto size = fs::file_size(f, ec);
+  if (ec) return "the wall series so far (" + tmp + ", or " + path + " after a stop on a signal) is missing";
+  if (size < st.series_bytes)
+    return f + " (the wall series so far) has " + std::to_string(size) + " bytes, fewer than the checkpoint's " +
+           std::to_string(st.series_bytes);
+  return "";
+}
+
+std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) {
+  const Frame f = frame(spec, w);
+  double rmin = std::numeric_limits<double>::infinity(), rmean = 0;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) {
+    const double r = w.discs.r(i);
+    rmin = std::min(rmin, r);
+    rmean += r;
+  }
+  rmean /= std::max<std::size_t>(1, w.discs.size());
+  st.overlap_limit = spec.max_overlap_fraction * rmin;
+  st.rmean = rmean;
+
+  // The static state: loads and positions at opening.
+  std::vector<PointLoad> static_points;
+  measure_loads(w, spec.profile_bin, st.static_walls, static_points);
+  st.t_open = w.time;
+  st.n_initial = static_cast<int>(w.discs.size());
+  st.at_open.keep(w.discs);
+  st.fill_top = -1e300;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) st.fill_top = std::max(st.fill_top, w.discs.y[i]);
+  surfaces(w, f, spec.discharge.surface_column, st.surf0);
+  for (double& v : st.sink_time) v = NAN;
+
+  if (!w.deactivate_wall(spec.discharge.gate)) return "no gate wall \"" + spec.discharge.gate + "\" to open";
+  st.energy.start(w, spec.max_energy_gain);
+
+  st.totals << "t,name,normal,shear,fx,fy\n";
+  st.flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,"
+             "surface_right,arch_discs,arch_crown_y\n";
+  // Per wall and bin: series of normal force (for the ratios).
+  st.bin_peaks.assign(st.static_walls.size(), {});
+  for (std::size_t k = 0; k < st.static_walls.size(); ++k) st.bin_peaks[k].resize(st.static_walls[k].bin_normal.size());
+  st.total_peaks.assign(st.static_walls.size(), {});
+  st.next_s = 0;
+  st.status = "discharged";
+  return "";
+}
+
+DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress, LastGood* good) {
+  DischargeState st;
+  st.at_open.set_file(out + "/opening_positions.bin");
+  const std::string why = open_discharge(spec, w, st);
+  if (!why.empty()) {
+    DischargeResult res;
+    res.status = "unstable";
+    res.reason = why;
+    return res;
+  }
+  DischargeResult res = continue_discharge(spec, w, st, out, progress, nullptr, good);
+  st.at_open.discard();
+  return res;
+}
+
+DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out,
+                                   bool progress, const RunControl* ctl, LastGood* good) {
+  const DischargeSpec& ds = spec.discharge;
+  DischargeResult res;
+  const Frame f = frame(spec, w);
+  const Slit& slit = f.slit;
+  const double xc = f.xc, top = f.top, y_out = f.y_out;
+
+  namespace fs = std::filesystem;
+  const std::string snapdir = out + "/snapshots";
+  fs::create_directories(snapdir);
+
+  // The wall series file: new at the opening; a resumed run cut back to the checkpoint's length
+  // (a run killed after it wrote on), from its temporary name or, after a stop on a signal, from
+  // the complete file that stop wrote.
+  const std::string series_path = out + "/wall_series.csv", series_tmp = series_path + ".tmp";
+  if (const std::string why = series_file_problem(out, st); !why.empty()) throw std::runtime_error(why);
+  if (st.next_s == 0) {
+    static const char header[] = "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
+    st.series_out.open(series_tmp, std::ios::binary | std::ios::trunc);
+    st.series_out << header;
+    st.series_bytes = sizeof header - 1;
+  } else {
+    std::error_code ec;
+    if (!fs::exists(series_tmp, ec)) fs::rename(series_path, series_tmp);
+    fs::resize_file(series_tmp, st.series_bytes);
+    st.series_out.open(series_tmp, std::ios::binary | std::ios::app);
+  }
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
+
+  RemovedDiscs dead;  // the discs leaving at a step: a few indices, not a mask of all discs
+  const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
+  const long sample_every = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
+  // The moving average of the peak ratios: peak_window in samples.
+  const std::size_t win = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every * w.dt))));
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_print = t0;
+  if (st.status == "interrupted") st.status = "discharged";
+  std::string reason;
+
+  for (long s = st.next_s; s <= steps_total; ++s) {
+    if (s > 0) {
+      // Record the pair forces of the steps that read them: a sample's (the arch), the last, a
+      // snapshot's, and a jam check's (the arch). A step that ends the run early (jam, empty) is a
+      // jam check's or has no pairs.
+      const double t_next = w.time + w.dt - st.t_open;
+      w.record_pair_forces = s % sample_every == 0 || s == steps_total || stop_signal() ||
+                             t_next - st.last_removal > ds.jam_time ||
+                             (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t_next + 0.5 * w.dt);
+      w.step();
+    }
+    const double t = w.time - st.t_open;
+    if (s > 0) {
+      // The finiteness scan (five arrays) every 10 steps, with the energy check: a NaN stops the
+      // run a few steps later at most, and the overlap check runs every step.
+      if (!(w.max_overlap <= st.overlap_limit) || (s % 10 == 0 && !w.all_finite())) {
+        st.status = "unstable";
+        std::ostringstream os;
+        os << "overlap " << w.max_overlap << " cm (limit " << st.overlap_limit << ") or non-finite state at t = "
+           << t << " s after opening";
+        reason = os.str();
+        break;
+      }
+      if (s % 10 == 0) {  // energy created: a blow-up on its way (discs leaving only lower it)
+        reason = st.energy.check(w);
+        if (!reason.empty()) {
+          st.status = "unstable";
+          break;
+        }
+        if (good && s % kKeepEvery == 0) good->keep(w.discs, w.time);  // checked: finite, within budget
+      }
+      // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
+      // One read of y per step; the removal mask is built only on the steps that remove.
+      const long n_now = static_cast<long>(w.discs.size());
+      const bool some_out = parallel_any(n_now, w.threads_for(static_cast<int>(n_now)),
+                                         [&](long i) { return w.discs.y[i] < y_out; });
+      bool any = false;
+      dead.sorted.clear();
+      for (std::size_t i = 0; some_out && i < w.discs.size(); ++i)
+        if (w.discs.y[i] < y_out) {
+          dead.sorted.push_back(static_cast<int>(i));
+          any = true;
+          st.removals.push_back({t, w.discs.id_at(i), w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
+          st.removed_mass += w.discs.mass(i);
+        }
+      if (any) {
+        w.remove_discs(dead);
+        st.last_removal = t;
+      }
+      if (w.discs.size() == 0) {
+        st.status = "emptied";
+      }
+      // Jam: nothing left through the outlet for jam_time while discs remain in the silo.
+      if (st.status != "emptied" && t - st.last_removal > ds.jam_time) {
+        bool inside = false;
+        for (double y : w.discs.y) inside |= y > slit.floor;
+        if (inside) {
+          ++st.jams;
+          if (st.jam_at < 0) st.jam_at = t;
+          const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
+          if (!ds.remove_keystone) {
+            st.status = "jammed";
+          } else {
+            // Note 4: remove the arch's top (crown) disc; without a found arch, the lowest disc over the slit.
+            int pick = -1;
+            for (int i : arch)
+              if (pick < 0 || w.discs.y[i] > w.discs.y[pick]) pick = i;
+            if (pick < 0)
+              for (std::size_t i = 0; i < w.discs.size(); ++i)
+                if (std::abs(w.discs.x[i] - xc) <= 0.5 * (slit.right - slit.left) + w.discs.r(i) &&
+                    w.discs.y[i] > slit.floor - w.discs.r(i) &&
+                    (pick < 0 || w.discs.y[i] < w.discs.y[pick]))
+                  pick = static_cast<int>(i);
+            if (pick < 0) {
+              st.status = "jammed";
+            } else {
+              st.removals.push_back({t, w.discs.id_at(pick), w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
+              dead.sorted.assign(1, pick);
+              w.remove_discs(dead);
+              st.last_removal = t;
+            }
+          }
+        }
+      }
+    }
+    const bool last = s == steps_total || st.status == "jammed" || st.status == "emptied";
+    // Samples: wall forces, flow, surface, arch.
+    if (s % sample_every == 0 || last) {
+      std::vector<WallLoad> walls;
+      std::vector<PointLoad> points;
+      measure_loads(w, spec.profile_bin, walls, points);
+      st.sample_t.push_back(t);
+      std::ostringstream series;  // this sample's rows of the wall series
+      for (std::size_t k = 0; k < walls.size(); ++k) {
+        const WallLoad& L = walls[k];
+        const Wall& wl = w.geometry.walls[k];
+        st.totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
+                  << fmt(L.fy) << '\n';
+        st.total_peaks[k].add(L.normal, win);
+        for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
+          const double mid = std::min(L.length, (b + 0.5) * L.bin);
+          const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
+          st.bin_peaks[k][b].add(L.bin_normal[b], win);
+          series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
+                 << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
+        }
+      }
+      const std::string rows = series.str();
+      st.series_out.write(rows.data(), static_cast<std::streamsize>(rows.size()));
+      st.series_bytes += rows.size();
+      for (const PointLoad& P : points)
+        st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
+                  << fmt(P.fy) << '\n';
+      int inside = 0, below = 0, moved = 0;
+      OpeningPositions::Reader open_at(st.at_open);  // in id order, the discs' order: block by block
+      for (std::size_t i = 0; i < w.discs.size(); ++i) {
+        (w.discs.y[i] > slit.floor ? inside : below)++;
+        double x0, y0;
+        open_at.at(w.discs.id_at(i), x0, y0);
+        if (std::hypot(w.discs.x[i] - x0, w.discs.y[i] - y0) >= w.discs.r(i)) ++moved;
+      }
+      const int removed = static_cast<int>(st.removals.size());
+      st.moved_fraction = st.n_initial ? double(moved + removed) / st.n_initial : 0.0;
+      double sf[3];
+      surfaces(w, f, ds.surface_column, sf);
+      for (int c = 0; c < 3; ++c)
+        if (std::isnan(st.sink_time[c]) && !(sf[c] > st.surf0[c] - st.rmean)) st.sink_time[c] = t;
+      const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
+      double crown = NAN;
+      for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
+      st.flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
+              << fmt(st.moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
+              << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
+    }
+    // Snapshots at the requested times (and at the end).
+    while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
+      char stem[32];
+      std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
+      write_disc_files(snapdir, std::string("discs_") + stem, spec, w.discs, &st.at_open);
+      write_contact_files(snapdir, std::string("contacts_") + stem, w);
+      st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
+      st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+      ++st.next_snap;
+    }
+    if (progress && (s & 1023) == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
+        last_print = now;
+        std::fprintf(stderr, "\r  discharge t = %.3f / %.3f s, %zu removed   ", t, ds.time, st.removals.size());
+        std::fflush(stderr);
+      }
+    }
+    if (st.status != "discharged" || last) break;
+    st.next_s = s + 1;
+    // A stop request ends the run here (the caller writes the final checkpoint), on a step that
+    // recorded its pair forces (the next one if the request came during this one); checkpoints
+    // follow the world's step count, so a resumed run writes them at the same steps.
+    if (stop_signal() && w.pair_forces_current()) {
+      st.status = "interrupted";
+      break;
+    }
+    if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->discharge_checkpoint) {
+      const double before = st.wall_seconds;
+      st.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      st.series_out.flush();  // the file holds at least what the checkpoint says
+      if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
+      ctl->discharge_checkpoint(st);
+      st.wall_seconds = before;
+    }
+  }
+  if (progress && last_print != t0) std::fprintf(stderr, "\n");
+  res.status = st.status;
+  res.reason = reason;
+  res.t_open = st.t_open;
+  res.n_initial = st.n_initial;
+  res.removals = st.removals;
+  res.jam_at = st.jam_at;
+  res.jams = st.jams;
+  res.duration = w.time - st.t_open;
+  res.wall_seconds = st.wall_seconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  st.wall_seconds = res.wall_seconds;  // a final checkpoint (interrupted) counts this session
+
+  st.series_out.close();
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
+  fs::rename(series_tmp, series_path);
+  write_file_atomic(out + "/wall_totals_series.csv", st.totals.str());
+  write_file_atomic(out + "/flow_series.csv", st.flow.str());
+  {
+    std::ostringstream o;
+    o << "t,id,mass,vx,vy,how\n";
+    for (const Removal& r : res.removals)
+      o << fmt(r.t) << ',' << r.id << ',' << fmt(r.mass) << ',' << fmt(r.vx) << ',' << fmt(r.vy) << ','
+        << (r.keystone ? "keystone" : "outlet") << '\n';
+    write_file_atomic(out + "/removals.csv", o.str());
+  }
+  for (auto [name, body] : {std::pair{"discharge_discs.pvd", st.pvd_d.str()}, std::pair{"discharge_contacts.pvd", st.pvd_c.str()}})
+    write_file_atomic(out + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
+                                            body + "  </Collection>\n</VTKFile>\n");
+
+  // Ratios of peak to static: raw maximum and the maximum of a moving average.
+  const std::vector<WallLoad>& static_walls = st.static_walls;
+  const double* sink_time = st.sink_time;
+  const double moved_fraction = st.moved_fraction, fill_top = st.fill_top, width = f.width, g = f.g;
+  json walls_json = json::array();
+  double best_bottom[2] = {0, 0}, best_side[2] = {0, 0};
+  for (std::size_t k = 0; k < static_walls.size(); ++k) {
+    const WallLoad& S = static_walls[k];
+    const double raw = st.total_peaks[k].raw, wnd = st.total_peaks[k].windowed;
+    json bins = json::array();
+    double smax = 0;
+    for (double v : S.bin_normal) smax = std::max(smax, v);
+    for (std::size_t b = 0; b < S.bin_normal.size(); ++b) {
+      const double br = st.bin_peaks[k][b].raw, bw = st.bin_peaks[k][b].windowed;
+      // Bins that carried little at rest have no meaningful ratio (one contact of 1 disc weight).
+      const bool ok = S.bin_normal[b] >= 0.25 * smax && smax > 0;
+      const double rr = ok ? br / S.bin_normal[b] : NAN, rw = ok ? bw / S.bin_normal[b] : NAN;
+      bins.push_back({{"bin", b}, {"static", S.bin_normal[b]}, {"peak", br}, {"peak_windowed", bw},
+                      {"ratio", num_or_null(rr)}, {"ratio_windowed", num_or_null(rw)}});
+      if (ok && S.name != ds.gate) {
+        double* best = S.group == "bottom" ? best_bottom : (S.group.rfind("side", 0) == 0 ? best_side : nullptr);
+        if (best) {
+          best[0] = std::max(best[0], rr);
+          best[1] = std::max(best[1], rw);
+        }
+      }
+    }
+    walls_json.push_back({{"name", S.name}, {"group", S.group}, {"static_normal", S.normal}, {"peak_normal", raw},
+                          {"peak_normal_windowed", wnd},
+                          {"ratio", S.normal > 0 ? json(raw / S.normal) : json(nullptr)},
+                          {"ratio_windowed", S.normal > 0 ? json(wnd / S.normal) : json(nullptr)}, {"bins", bins}});
+  }
+
+  // Flow pattern (documented in docs/outputs.md).
+  const double t_walls = std::isnan(sink_time[0]) ? sink_time[2]
+                         : std::isnan(sink_time[2]) ? sink_time[0] : std::min(sink_time[0], sink_time[2]);
+  std::string pattern = "undetermined";
+  if (!std::isnan(t_walls) && (std::isnan(sink_time[1]) || t_walls < sink_time[1])) pattern = "funnel";
+  else if (!std::isnan(sink_time[1]) && (std::isnan(t_walls) || sink_time[1] <= t_walls)) pattern = "piping";
+  int out_1s = 0;
+  for (const Removal& r : res.removals)
+    if (!r.keystone && r.t <= 1.0 + 1e-12) ++out_1s;
+  const double q = flow_rate(res.removals);
+  const double m_disc = w.discs.size() ? w.discs.mass(0) : (res.removals.empty() ? 1.0 : res.removals[0].mass);
+  res.metrics = {
+      {"status", res.status},
+      {"t_open", res.t_open},
+      {"duration", res.duration},
+      {"n_initial", res.n_initial},
+      {"removed", res.removals.size()},
+      {"removed_by_hand", std::count_if(res.removals.begin(), res.removals.end(), [](const Removal& r) { return r.keystone; })},
+      {"discs_out_at_1s", out_1s},
+      {"flow_rate_mass", num_or_null(q)},
+      {"flow_rate_discs", num_or_null(q / m_disc)},
+      {"flow_rate_note", "slope of cumulative removed mass [g/s per cm] from the 5th removal on (least squares)"},
+      {"jammed", res.status == "jammed"},
+      {"jam_at", res.jam_at >= 0 ? json(res.jam_at) : json(nullptr)},
+      {"jams", res.jams},
+      {"peak_ratio_bottom", best_bottom[0]},
+      {"peak_ratio_bottom_windowed", best_bottom[1]},
+      {"peak_ratio_side", best_side[0]},
+      {"peak_ratio_side_windowed", best_side[1]},
+      {"ratio_note", "max over the bins (static >= 1/4 of the wall's largest) of peak / static normal force; "
+                     "windowed: moving average over peak_window"},
+      {"pattern", pattern},
+      {"surface_sink_time", {{"left_wall", num_or_null(sink_time[0])}, {"centre", num_or_null(sink_time[1])},
+                             {"right_wall", num_or_null(sink_time[2])}}},
+      {"pattern_note", "funnel: the top surface first sinks (by one mean radius) at a wall column; piping: first at "
+                       "the centre column"},
+      {"moved_fraction_end", moved_fraction},
+      {"dead_fraction_end", 1.0 - moved_fraction},
+      {"gate", ds.gate},
+      {"slit", {slit.left, slit.right}},
+      {"outlet_y", y_out},
+      {"walls", walls_json},
+      {"fill_top", fill_top},
+      {"width", width},
+      {"gravity", g}};
+  return res;
+}
+
+}  // namespace dem

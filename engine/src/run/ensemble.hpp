@@ -1,0 +1,22 @@
+// Ensembles: discharge is chaotic, so a result is a mean over members whose initial positions
+// differ by a tiny seeded amount. Members run in parallel threads (each a separate World).
+#pragma once
+
+#include <string>
+
+#include "scene/scene.hpp"
+
+namespace dem {
+
+struct EnsembleOptions {
+  int members = 8;
+  unsigned long seed = 1;
+  double perturb = 1e-4;  // [cm] each disc centre moves by a uniform amount in [-perturb, perturb]
+  int jobs = 0;           // 0: all cores
+};
+
+// Runs the members into out_dir/member_KK and writes out_dir/ensemble.json; returns the
+// process exit code (0, or 3 if every member was unstable). Throws SceneError for bad input.
+int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::string& out_dir, bool quiet);
+
+}  // namespace dem
