@@ -2,9 +2,9 @@
 // (any block under its mmap threshold, which rises to 32 MB once a large block has been freed):
 // they stay resident, and a later block that does not fit in the gap takes new pages beside them.
 // At a million discs the setup's temporaries (the scene's parse, the fill's file, the first list
-// build's scratch) left 23 MB of such gaps resident through the run. malloc_trim hands their
+// build's scratch) leave 23 MB of such gaps resident through the run. malloc_trim hands their
 // pages back; they are taken again, zeroed, only when needed. Once, after the setup: after every
-// list build (its cell sort, 7 MB at a million discs) it made the settled 1M loop 9 % slower.
+// list build (its cell sort, 7 MB at a million discs) it costs the settled 1M loop 9 %.
 #pragma once
 
 #if defined(__GLIBC__)

@@ -48,7 +48,7 @@ void resize_exact(std::vector<T>& v, std::size_t n) {  // contents not kept
 }
 
 // Function objects, not functions: merge_history is instantiated for each and inlines the key
-// (through a function pointer it called it twice a step of its merge: 5 % of a build).
+// (through a function pointer it is called twice a step of its merge: 5 % of a build).
 constexpr auto pair_key = [](const PairContact& p) {
   return (static_cast<long long>(p.i) << 32) | static_cast<unsigned>(p.j);
 };
@@ -166,7 +166,7 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
     // row of the block's first disc on: the discs are mostly in order of height (lattices and
     // fills are made row by row, and a settled column keeps it), so each thread writes cells no
     // other thread writes. The few others ("strays") are counted and placed after, serially, in
-    // thread order, behind each cell's own discs. Serial, the sort was a fifth of a 1M-disc
+    // thread order, behind each cell's own discs. Serial, the sort is a fifth of a 1M-disc
     // build, most of what two threads could not share.
     const long nx = grid_.nx;
     std::vector<long> first_cell(nt + 1, 0);

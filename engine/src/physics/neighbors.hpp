@@ -99,7 +99,7 @@ class Neighbors {
     long nx = 0, ny = 0;
     // The row-major cell of a disc at (x, y), -1 for a non-finite position (in no cell). In
     // double (x87 long double here costs a control-word switch per conversion: 4x the build),
-    // by the inverse (a division made the build 12 % slower: this runs three times a disc);
+    // by the inverse (a division costs the build 12 %: this runs three times a disc);
     // x >= xmin, and a quotient past the grid (or inf / NaN from extreme extents) is clamped
     // before it is converted. Rounding can put a disc in the next cell only within ~1e-16 of a
     // cell edge, far inside the skin (the moved-far limit is also 2^-23 of the extent short).
@@ -118,7 +118,7 @@ class Neighbors {
   // Candidate pairs of discs [i0, i1) from the sorted cells, sorted by (i, j).
   void search_pairs(const Discs& d, int i0, int i1, std::vector<PairContact>& out) const;
   // Candidate obstacles of every disc, sorted by (i, k): the discs of the cells under each
-  // obstacle's box (one serial search of a few cells: a disc-by-disc test of every box was 8 % of
+  // obstacle's box (one serial search of a few cells: a disc-by-disc test of every box is 8 % of
   // a build).
   void search_walls(const Discs& d, const Geometry& g, std::vector<WallContact>& out) const;
   template <class F>

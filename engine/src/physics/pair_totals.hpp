@@ -20,7 +20,7 @@ struct PairForce {
 // The totals of the pairs that touched in one recorded force pass, in the pair list's order
 // (sorted by (i, j)). While the list is the one that pass ran over ("bound"), a total's pair is
 // a bit over the list: 16 bytes a touching pair and one bit a listed pair, where (i, j) with each
-// took 24 (7 MB less at a million discs, where an output step's totals set the run's peak).
+// takes 24 (7 MB less at a million discs, where an output step's totals set the run's peak).
 // Before that list is built again (a build right after the recorded pass) the (i, j) of each
 // total are written beside it ("detached", 24 bytes a pair); totals read from a state file are
 // detached too. Removals keep either form (the totals of the removed discs' pairs go with them).

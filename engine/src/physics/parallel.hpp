@@ -11,7 +11,7 @@ namespace dem {
 
 // A thread's own object on cache lines of its own. Threads appending to vectors that sit side
 // by side in one array would write the same line at every push_back (the vectors' end
-// pointers): false sharing, which made the 2-thread pair search slower than the serial one.
+// pointers): false sharing, which makes the 2-thread pair search slower than the serial one.
 template <class T>
 struct alignas(64) Padded {
   T value;

@@ -17,7 +17,7 @@ namespace dem {
 
 // A block of touching pairs on its way through the law (World::pair_pass): the gathered geometry
 // and history in, the forces out. 128 pairs: some 20 kB, on the stack of the thread that runs the
-// pass (hot in its own cache; one vector of blocks for all threads, on the heap, made the second
+// pass (hot in its own cache; one vector of blocks for all threads, on the heap, makes the second
 // thread's pass 1.8x slower than the first's).
 struct alignas(64) PairBlock {
   static constexpr int kSize = 128;
@@ -82,10 +82,10 @@ class World {
   // The threads' blocks of discs in the force pass (thread t owns discs [force_blocks[t],
   // force_blocks[t + 1]); empty with one thread). Set every kRebalanceEvery steps so that each
   // block has about the same work: a disc 1 unit, a pair that touched in the last pass (non-zero
-  // history) 1 more, on its i. Equal numbers of discs left a settled silo's lower half (its pairs
+  // history) 1 more, on its i. Equal numbers of discs leave a settled silo's lower half (its pairs
   // in contact) to one thread and the looser top to the other: 12.8 against 4.5 ms a step at 1M
   // discs. The law runs eight pairs a vector, so a touching pair costs about what a disc does:
-  // weighed at 3 units a pair against 1 a disc, the thread of the upper, looser discs had 1.6
+  // weighed at 3 units a pair against 1 a disc, the thread of the upper, looser discs has 1.6
   // times the other's work at 1M discs (perf). Candidate pairs are
   // not counted: a state file's restart builds its lists at another time than the run in one
   // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's

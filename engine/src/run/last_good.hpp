@@ -1,6 +1,6 @@
 // The last state a run checked and found sound: what an unstable run writes
 // in place of its final state. Kept in a file beside the outputs (set_file), not in memory: as
-// a copy in memory it was, after the pair list, the largest array of a million-disc run (48
+// a copy in memory it would be, after the pair list, the largest array of a million-disc run (48
 // bytes a disc). Without a file (library use, tests) it is kept in memory, as the same bytes.
 #pragma once
 

@@ -1,6 +1,6 @@
 // The positions of a discharge's discs at the opening of the slit, by disc id: what the moved
 // fraction (flow_series.csv) and the snapshots' displacements are measured from. Kept in a file
-// beside the outputs (set_file), not in memory, where at a million discs they were 16 bytes a
+// beside the outputs (set_file), not in memory, where at a million discs they would be 16 bytes a
 // disc of the peak; read back in blocks. Without a file (library use, tests) kept in memory.
 #pragma once
 
