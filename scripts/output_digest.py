@@ -20,7 +20,7 @@ SKIP_NAMES = {"log.txt"}
 def scrub(v):
     if isinstance(v, dict):
         return {k: scrub(x) for k, x in v.items()
-                if not ("seconds" in k or "wall_time" in k or k in ("threads", "version", "build", "command",
+                if not ("seconds" in k or "wall_time" in k or k.endswith("_per_s") or k in ("threads", "version", "build", "command",
                                                                      "engine_version", "build_id", "resume_command"))}
     if isinstance(v, list):
         return [scrub(x) for x in v]

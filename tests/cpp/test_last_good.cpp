@@ -11,7 +11,7 @@
 
 #include "run/discharge.hpp"
 #include "run/last_good.hpp"
-#include "run/run.hpp"
+#include "run/scene_run.hpp"
 #include "scene/scene.hpp"
 #include "io/state.hpp"
 #include "physics/world.hpp"
@@ -84,17 +84,16 @@ TEST(LastGood, DischargeKeepsItsOwnEveryThousandSteps) {
   spec.discharge.snapshots = {};
   World w;
   build_world(spec, w);
-  RunResult fill = run_scene(spec, w, false);
-  ASSERT_EQ(fill.status, RunStatus::end_time);
-  const double t_open = w.time;
   const std::string out = (std::filesystem::temp_directory_path() / "dem_test_last_good_discharge").string();
   std::filesystem::create_directories(out);
-  const DischargeResult dr = run_discharge(spec, w, out, false, &fill.last_good);
-  ASSERT_EQ(dr.status, "discharged");
-  ASSERT_GT(dr.removals.size(), 0u) << "discs must leave during the kept interval";
+  SceneRun run(spec, w, out);
+  ASSERT_EQ(run.run(false, false), Status::discharged);
+  const double t_open = run.discharge->st.t_open;
+  ASSERT_NEAR(t_open, 0.3, 1e-9) << "the fill ends at its end time";
+  ASSERT_GT(run.discharge->removals().size(), 0u) << "discs must leave during the kept interval";
   // Kept at the check of step 2000 after opening: its time, and the discs present then.
-  EXPECT_NEAR(fill.last_good.time(), t_open + 2000 * w.dt, 0.5 * w.dt);
-  const Discs good = fill.last_good.load();
+  EXPECT_NEAR(run.runner.last_good.time(), t_open + 2000 * w.dt, 0.5 * w.dt);
+  const Discs good = run.runner.last_good.load();
   EXPECT_GE(good.size(), w.discs.size());
   EXPECT_LE(good.size(), 350u);
   for (std::size_t i = 0; i < good.size(); ++i) {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "io/outputs.hpp"
-#include "run/run.hpp"
+#include "run/scene_run.hpp"
 #include "scene/scene.hpp"
 #include "physics/world.hpp"
 
@@ -29,8 +29,7 @@ TEST_P(StaticSilo, WeightEqualsFloorForcePlusWallFrictionAndIsSymmetric) {
   spec.progress = false;
   World w;
   build_world(spec, w);
-  const RunResult res = run_scene(spec, w, false);
-  ASSERT_EQ(res.status, RunStatus::rest) << GetParam();
+  ASSERT_EQ(run_fill(spec, w), Status::rest) << GetParam();
 
   std::vector<WallLoad> walls;
   std::vector<PointLoad> points;
@@ -79,8 +78,8 @@ TEST(Neighbors, HistorySurvivesRebuildsBitForBit) {
   build_world(spec, a);
   spec.skin = 1.5;
   build_world(spec, b);
-  run_scene(spec, a, false);
-  run_scene(spec, b, false);
+  run_fill(spec, a);
+  run_fill(spec, b);
   EXPECT_GT(a.neighbors.rebuilds, 5 * b.neighbors.rebuilds);
   for (std::size_t i = 0; i < a.discs.size(); ++i) {
     ASSERT_EQ(a.discs.x[i], b.discs.x[i]) << "disc " << i;

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "run/run.hpp"
+#include "run/scene_run.hpp"
 #include "scene/scene.hpp"
 #include "io/state.hpp"
 #include "physics/world.hpp"
@@ -32,7 +32,7 @@ TEST(State, SplitRunThroughSavedStateIsBitIdentical) {
     SceneSpec spec = load_scene(scene_path(), ov);
     World a;
     build_world(spec, a);
-    run_scene(spec, a, false);  // fill to rest
+    run_fill(spec, a);  // fill to rest
     ASSERT_TRUE(a.deactivate_wall("gate"));
     const std::string path = ::testing::TempDir() + "/split.state";
     for (long split : {1L, 1234L}) {

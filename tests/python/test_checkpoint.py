@@ -1,6 +1,6 @@
 """Checkpoints and resume (docs/outputs.md, "Checkpoints"): a run killed with SIGKILL at random
-points and resumed with --resume ends bit-identical to the run never stopped, for a fill to rest
-and for a discharge; SIGINT / SIGTERM stop after the current step with a checkpoint, all outputs
+points and resumed with --resume ends bit-identical to the run never stopped, for a fill to rest,
+a discharge and a shear (paper 2's box with bonded clusters); SIGINT / SIGTERM stop after the current step with a checkpoint, all outputs
 and status "interrupted" (exit 130 / 143); a checkpoint of another scene, engine version or
 option set is refused with exit 2."""
 import json
@@ -17,10 +17,12 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
 DISCHARGE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
+SHEAR = REPO / "reference_inputs" / "scenes" / "shear_a50_clusters.toml"
 # Files a run writes that must be equal bit for bit (summary.json: all but the wall-clock timing).
 FILL_FILES = ["discs.csv", "contacts.csv", "wall_profiles.csv", "discs.vtu", "contacts.vtu"]
 DISCHARGE_FILES = FILL_FILES + ["removals.csv", "flow_series.csv", "wall_series.csv", "wall_totals_series.csv",
                                 "discharge_discs.pvd", "discharge_contacts.pvd"]
+SHEAR_FILES = FILL_FILES + ["shear_series.csv", "shear_planes.csv", "snapshots/index.json"]
 TIMING = ("wall_time_s", "particle_steps_per_s")
 
 
@@ -71,7 +73,7 @@ def full_runs(tmp_path_factory, dem_binary):
     """The uninterrupted runs (no checkpoints), their final states and wall times."""
     tmp = tmp_path_factory.mktemp("full")
     wall = {}
-    for name, scene in (("silo", SILO), ("discharge", DISCHARGE)):
+    for name, scene in (("silo", SILO), ("discharge", DISCHARGE), ("shear", SHEAR)):
         t0 = time.monotonic()
         p = dem(dem_binary, "run", scene, "--out", tmp / name, "--no-plots", "--quiet", "--save-state", tmp / f"{name}.state")
         wall[name] = time.monotonic() - t0
@@ -82,6 +84,7 @@ def full_runs(tmp_path_factory, dem_binary):
 @pytest.mark.parametrize("case,scene,files,every", [
     ("silo", SILO, FILL_FILES, 0.002),
     ("discharge", DISCHARGE, DISCHARGE_FILES, 0.005),
+    ("shear", SHEAR, SHEAR_FILES, 0.02),
 ])
 def test_killed_and_resumed_run_is_bit_identical(tmp_path, dem_binary, full_runs, case, scene, files, every):
     """SIGKILL at random times (a fraction of the uninterrupted run's wall time), resume, compare."""
@@ -136,6 +139,39 @@ def test_signal_stops_gracefully(tmp_path, dem_binary, full_runs, sig, code, pha
     p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
     assert p.returncode == 0, p.stderr
     assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)
+
+
+@pytest.mark.parametrize("sig,code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_signal_stops_a_shear_gracefully(tmp_path, dem_binary, full_runs, sig, code):
+    """A stop request during the shear: exit 130 / 143, status "interrupted" with the shear's
+    series so far, and the resumed run ends as the run never stopped."""
+    out = tmp_path / "run"
+    proc = start(dem_binary, SHEAR, out, 0.05)
+    assert wait_for(proc, out / "snapshots")  # made when the shear begins
+    assert stop(proc, sig) == code, proc.stderr.read()
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "interrupted" and "shear" in s
+    assert s["shear"]["strain_final"] < s["shear"]["max_strain"]
+    for name in SHEAR_FILES:
+        assert (out / name).stat().st_size > 0, name
+    p = dem(dem_binary, "run", SHEAR, "--out", out, "--no-plots", "--quiet", "--resume")
+    assert p.returncode == 0, p.stderr
+    assert_same_run(full_runs[0] / "shear", out, SHEAR_FILES)
+
+
+def test_the_printed_resume_command_goes_on(tmp_path, dem_binary, full_runs):
+    """The command an interrupted run prints carries every option of the run (--end-time too)."""
+    out = tmp_path / "run"
+    proc = subprocess.Popen([str(dem_binary), "run", str(DISCHARGE), "--out", str(out), "--no-plots", "--quiet",
+                             "--end-time", "4.0"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    assert wait_for(proc, out / "snapshots")
+    assert stop(proc, signal.SIGINT) == 130
+    err = proc.stderr.read()
+    cmd = err.split("written (", 1)[1].rsplit(" goes on)", 1)[0]
+    assert "'--end-time' '4.0'" in cmd and cmd.endswith(" --resume"), err
+    p = subprocess.run(cmd, shell=True, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    assert json.loads((out / "summary.json").read_text())["status"] == "discharged"
 
 
 def test_checkpoint_every_from_the_scene(tmp_path, dem_binary, full_runs):

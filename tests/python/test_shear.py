@@ -175,8 +175,6 @@ def test_a_state_fits_only_its_own_box_and_clusters(small_runs, dem_binary, tmp_
         assert proc.returncode == 2, proc.stderr
         assert "free.bin" in proc.stderr and fragment in proc.stderr, proc.stderr
         assert not (tmp_path / f"o{k}").exists()
-    proc = dem(dem_binary, "run", clusters, "--out", tmp_path / "ck", "--checkpoint-every", 0.1)
-    assert proc.returncode == 2 and "checkpoints / --resume: not for shear-box and cluster scenes" in proc.stderr
     import subprocess
     proc = subprocess.run([str(dem_binary), "ensemble", str(clusters), "--out", str(tmp_path / "ens"), "--members", "2",
                            "--quiet"], capture_output=True, text=True, timeout=120)

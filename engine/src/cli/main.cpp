@@ -11,19 +11,18 @@
 
 #include <unistd.h>
 
-#include "run/checkpoint.hpp"
-#include "run/control.hpp"
-#include "run/discharge.hpp"
-#include "physics/elastic_params.hpp"
-#include "run/ensemble.hpp"
-#include "physics/free_heap.hpp"
-#include "io/state.hpp"
 #include "io/outputs.hpp"
-#include "scene/resolve.hpp"
-#include "run/run.hpp"
-#include "scene/scene.hpp"
+#include "io/state.hpp"
+#include "physics/elastic_params.hpp"
+#include "physics/free_heap.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
+#include "run/checkpoint.hpp"
+#include "run/control.hpp"
+#include "run/ensemble.hpp"
+#include "run/scene_run.hpp"
+#include "scene/resolve.hpp"
+#include "scene/scene.hpp"
 
 using namespace dem;
 
@@ -152,6 +151,35 @@ void make_plots(const std::string& out, bool quiet) {
   if (a != 0 || b != 0) std::fprintf(stderr, "dem: warning: the PNGs could not be drawn (%s -m compare.figures)\n", DEM_PYTHON_EXE);
 }
 
+// The discharge's or shear's result line.
+void print_phase_result(const SceneRun& run, const World& w) {
+  if (run.discharge && run.discharge->metrics().is_object()) {
+    const nlohmann::ordered_json m = run.discharge->metrics();
+    std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
+                m["status"].get<std::string>().c_str(), run.discharge->duration(w), run.discharge->removals().size(),
+                m["discs_out_at_1s"].get<int>(), m["flow_rate_discs"].is_null() ? NAN : m["flow_rate_discs"].get<double>(),
+                m["pattern"].get<std::string>().c_str(), m["peak_ratio_bottom"].get<double>(),
+                m["peak_ratio_side"].get<double>());
+  }
+  if (run.shear && run.shear->metrics().contains("peak_ratio")) {
+    const nlohmann::ordered_json m = run.shear->metrics();
+    std::printf("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
+                to_string(run.status), m["strain_final"].get<double>(), m["peak_ratio"].get<double>(),
+                m["strain_at_peak"].get<double>(), m["peak_ratio_windowed"].get<double>(),
+                m["sigma_initial"].get<double>());
+  }
+}
+
+const char* g_program = "dem";  // argv[0], for the commands the engine prints
+
+// The command that continues an interrupted run: this one's own arguments with --resume.
+std::string resume_command(int argc, char** argv) {
+  std::string cmd = shell_quote(g_program) + " run";
+  for (int a = 0; a < argc; ++a)
+    if (std::string(argv[a]) != "--resume") cmd += " " + shell_quote(argv[a]);
+  return cmd + " --resume";
+}
+
 int cmd_run(int argc, char** argv) {
   std::string scene, out;
   SceneOverrides ov;
@@ -219,9 +247,6 @@ int cmd_run(int argc, char** argv) {
   World world;
   StabilityReport stab;
   CheckpointKey key;
-  RunResult res;
-  DischargeState dstate;
-  bool resumed_in_discharge = false;
   try {
     spec = load_scene(scene, ov);
     stab = build_world_releasing_discs(spec, world);  // the world has the discs: 56 B a disc less at the peak
@@ -237,133 +262,59 @@ int cmd_run(int argc, char** argv) {
   }
   if (checkpoint_every < 0) checkpoint_every = spec.checkpoint_every;
   if (!(checkpoint_every / world.dt <= kMaxSteps)) return bad("--checkpoint-every: more than 1e12 steps of dt");
-  // State files hold bonds and moving walls; a checkpoint would also need the shear's series so far.
-  if ((resume || checkpoint_every > 0) && (!world.bonds.empty() || !world.moving.empty()))
-    return bad("checkpoints / --resume: not for shear-box and cluster scenes yet (their state files are: "
-               "compress with --save-state, then shear with start.from or --from)");
-  // The last good state and a discharge's positions at opening are kept in the output directory,
-  // not in memory; they are removed when the run ends.
-  res.last_good.set_file(out + "/last_good.bin");
-  dstate.at_open.set_file(out + "/opening_positions.bin");  // likewise (opening_positions.hpp)
+  const std::string ckpt = checkpoint_path(out);
+  SceneRun run(spec, world, out);
+  // Checkpoints every checkpoint_every simulated seconds (at step counts that are multiples);
+  // SIGINT / SIGTERM stop after the current step with a final checkpoint.
+  run.set_checkpoints(checkpoint_every > 0 ? std::max(1L, static_cast<long>(std::llround(checkpoint_every / world.dt))) : 0,
+                      ckpt, key);
   if (resume) {
     // The checkpoint replaces the fill (or start.from): the run goes on from where it was.
-    const std::string path = checkpoint_path(out);
-    if (!std::filesystem::exists(path))
-      return bad("--resume: no checkpoint " + path + " (the run wrote none: run it without --resume)");
+    if (!std::filesystem::exists(ckpt))
+      return bad("--resume: no checkpoint " + ckpt + " (the run wrote none: run it without --resume)");
     try {
-      read_checkpoint(path, key, world, res, dstate, resumed_in_discharge);
+      run.resume(ckpt, key);
     } catch (const std::runtime_error& e) {
       return bad(std::string("--resume: ") + e.what());
     }
-    if (resumed_in_discharge)
-      if (const std::string why = series_file_problem(out, dstate); !why.empty()) return bad("--resume: " + why);
   }
   // Only a valid scene creates its output directory.
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) return bad("--out " + out + ": cannot create the directory: " + ec.message());
   if (!quiet) print_header(spec, world, stab);
-  // Checkpoints every checkpoint_every simulated seconds (at step counts that are multiples);
-  // SIGINT / SIGTERM stop after the current step with a final checkpoint.
   install_stop_handlers();
-  const std::string ckpt = checkpoint_path(out);
-  RunControl ctl;
-  if (checkpoint_every > 0) ctl.checkpoint_every = std::max(1L, static_cast<long>(std::llround(checkpoint_every / world.dt)));
-  ctl.fill_checkpoint = [&](const RunResult& r) { write_checkpoint(ckpt, key, world, r, nullptr); };
-  ctl.discharge_checkpoint = [&](const DischargeState& d) { write_checkpoint(ckpt, key, world, res, &d); };
   if (resume && !quiet)
     std::printf("  resumed from %s at t = %.4f s (step %ld, %s)\n", ckpt.c_str(), world.time, world.steps,
-                resumed_in_discharge ? "discharge" : "fill");
-  if (resumed_in_discharge) {
-    res.status = RunStatus::end_time;  // the fill is over; the discharge goes on below
-  } else if (spec.start_from.empty() || resume) {
-    if (!resume) res.last_good.keep(world.discs, world.time);
-    continue_scene(spec, world, spec.progress && !quiet, res, &ctl);  // the fill, to rest
-    if (res.status == RunStatus::interrupted) write_checkpoint(ckpt, key, world, res, nullptr);
-  } else {
-    res.status = RunStatus::end_time;
-    res.last_good.keep(world.discs, world.time);
-    if (!quiet) std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
-  }
-  // A state file does not say whether its run reached rest: not reported as "NOT at rest".
-  const char* settled = !resume && !spec.start_from.empty() ? "from the state file"
-                        : res.rest_reached                   ? "at rest"
-                                                             : "NOT at rest";
+                run.phase_name());
+  if (!resume && !spec.start_from.empty() && !quiet)
+    std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
+  const Status status = run.run(spec.progress && !quiet, !quiet);
+
   nlohmann::ordered_json extra;
-  if (spec.discharge.enabled && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {
-    std::string why;
-    if (!resumed_in_discharge) {
-      if (!quiet) std::printf("  opening the slit at t = %.4f s (fill %s)\n", world.time, settled);
-      why = open_discharge(spec, world, dstate);
-    }
-    DischargeResult dr;
-    if (why.empty()) {
-      dr = continue_discharge(spec, world, dstate, out, spec.progress && !quiet, &ctl, &res.last_good);
-      if (dr.status == "interrupted") write_checkpoint(ckpt, key, world, res, &dstate);
-      dstate.at_open.discard();  // the checkpoint carries its own copy
-    } else {
-      dr.status = "unstable";
-      dr.reason = why;
-    }
-    res.wall_seconds += dr.wall_seconds;
-    extra["status"] = dr.status;
-    if (dr.status == "unstable") {
-      res.status = RunStatus::unstable;
-      res.reason = dr.reason;
-      extra["reason"] = dr.reason;
-    }
-    if (!quiet)
-      std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
-                  dr.status.c_str(), dr.duration, dr.removals.size(), dr.metrics["discs_out_at_1s"].get<int>(),
-                  dr.metrics["flow_rate_discs"].is_null() ? NAN : dr.metrics["flow_rate_discs"].get<double>(),
-                  dr.metrics["pattern"].get<std::string>().c_str(), dr.metrics["peak_ratio_bottom"].get<double>(),
-                  dr.metrics["peak_ratio_side"].get<double>());
-    extra["discharge"] = std::move(dr.metrics);  // moved, not copied: its series are some MB at a million discs
-  }
-  if (spec.shear_box.shear && res.status != RunStatus::unstable && res.status != RunStatus::interrupted) {  // paper 2
-    if (!quiet) std::printf("  shearing from t = %.4f s (compression %s)\n", world.time, settled);
-    const ShearResult sr = run_shear(spec, world, out, spec.progress && !quiet, &res.last_good);
-    res.wall_seconds += sr.wall_seconds;
-    extra["status"] = sr.status;
-    if (sr.status == "unstable") {
-      res.status = RunStatus::unstable;
-      res.reason = sr.reason;
-      extra["reason"] = sr.reason;
-    }
-    extra["shear"] = sr.metrics;
-    if (!quiet && sr.metrics.contains("peak_ratio"))
-      std::printf("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
-                  sr.status.c_str(), sr.metrics["strain_final"].get<double>(), sr.metrics["peak_ratio"].get<double>(),
-                  sr.metrics["strain_at_peak"].get<double>(), sr.metrics["peak_ratio_windowed"].get<double>(),
-                  sr.metrics["sigma_initial"].get<double>());
-  }
-  // The discharge's or shear's status, read before write_outputs moves `extra` into the summary.
-  const std::string phase_status = extra.contains("status") ? extra["status"].get<std::string>() : "";
-  write_outputs(out, spec, world, res, stab, &extra);
-  res.last_good.discard();  // the outputs hold it when it was needed; a checkpoint carries its own copy
-  if (!save_to.empty() && res.status != RunStatus::unstable) save_state(world, save_to);
-  if (plots && res.status != RunStatus::unstable) make_plots(out, quiet);
-  if (res.status == RunStatus::unstable) {
-    std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", res.reason.c_str(),
-                 res.last_good.time(), out.c_str());
+  const RunSummary summary = run.summary(extra);
+  if (!quiet) print_phase_result(run, world);
+  write_outputs(out, spec, world, summary, stab, &extra);
+  run.discard_kept();  // the outputs hold it when it was needed; a checkpoint carries its own copy
+  if (!save_to.empty() && status != Status::unstable) save_state(world, save_to);
+  if (plots && status != Status::unstable) make_plots(out, quiet);
+  if (status == Status::unstable) {
+    std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", summary.reason.c_str(),
+                 run.runner.last_good.time(), out.c_str());
     return 3;
   }
-  if (res.status == RunStatus::interrupted || phase_status == "interrupted") {
-    std::fprintf(stderr, "dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (dem run %s --out %s --resume goes on)\n",
-                 stop_signal(), world.time, world.steps, ckpt.c_str(), scene.c_str(), out.c_str());
+  if (status == Status::interrupted) {
+    std::fprintf(stderr, "dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (%s goes on)\n",
+                 stop_signal(), world.time, world.steps, ckpt.c_str(), resume_command(argc, argv).c_str());
     return 128 + stop_signal();
   }
   if (!quiet) {
-    if (spec.discharge.enabled || spec.shear_box.shear)
-      std::printf("  %s at t = %.4f s after %ld steps", phase_status.c_str(), world.time, world.steps);
-    else
-      std::printf("  %s at t = %.4f s after %ld steps", to_string(res.status), world.time, world.steps);
-    std::printf("; fill rest %s", res.rest_reached ? "reached" : "not reached");
-    if (res.rest_reached) std::printf(" at t = %.4f s", res.rest_time);
-    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s\n", res.wall_seconds,
-                res.wall_seconds > 0 ? world.particle_steps / res.wall_seconds : 0.0, out.c_str());
+    std::printf("  %s at t = %.4f s after %ld steps", to_string(status), world.time, world.steps);
+    std::printf("; fill rest %s", summary.rest_reached ? "reached" : "not reached");
+    if (summary.rest_reached) std::printf(" at t = %.4f s", summary.rest_time);
+    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s\n", summary.wall_seconds,
+                summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0, out.c_str());
   }
-
   return 0;
 }
 
@@ -515,6 +466,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
+  g_program = argv[0];
   // What the commands do not turn into an exit code of their own (a file that cannot be written
   // in the middle of a run, say) ends the run with a message naming it, not with an abort.
   try {

@@ -19,21 +19,6 @@ namespace dem {
 
 using json = nlohmann::ordered_json;
 
-void write_stream_atomic(const std::string& path, const std::function<void(std::ostream&)>& write) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    write(out);
-    out.flush();
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::filesystem::rename(tmp, path);
-}
-
-void write_file_atomic(const std::string& path, const std::string& text) {
-  write_stream_atomic(path, [&](std::ostream& out) { out << text; });
-}
-
 void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points) {
   const Geometry& g = w.geometry;
   const int nw = static_cast<int>(g.walls.size());
@@ -78,14 +63,6 @@ void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std
     }
   }
 }
-
-std::string fmt17(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 namespace {
 
@@ -342,14 +319,12 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   });
 }
 
-void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
+void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
                    const StabilityReport& stab, json* extra) {
-  const bool unstable = res.status == RunStatus::unstable;
+  const bool unstable = res.unstable;
   // An unstable run writes its discs as they were in the last good state (a discharge may have
   // removed some since); wall loads and the summary's counters are those of the stop.
-  const bool rewind = unstable && res.last_good.has();
-  const Discs good = rewind ? res.last_good.load() : Discs{};
-  const Discs& d = rewind ? good : w.discs;
+  const Discs& d = unstable && res.good ? *res.good : w.discs;
   std::vector<WallLoad> walls;
   std::vector<PointLoad> points;
   measure_loads(w, spec.profile_bin, walls, points);
@@ -362,7 +337,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   json js;
   js["engine"] = std::string("dem ") + DEM_VERSION;
   js["scene"] = {{"name", spec.name}, {"file", spec.file}, {"description", spec.description}, {"fill", spec.fill_summary}};
-  js["status"] = to_string(res.status);
+  js["status"] = res.status;
   if (unstable) js["reason"] = res.reason;
   js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt},
                    {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "run/run.hpp"
+#include "io/files.hpp"
 #include "scene/scene.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
@@ -37,9 +37,20 @@ struct PointLoad {
 
 void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points);
 
+// What summary.json says about the run beside the world (run/scene_run.hpp fills it).
+struct RunSummary {
+  std::string status;          // run/status.hpp's word
+  std::string reason;          // why an unstable run stopped
+  bool unstable = false;
+  bool rest_reached = false;   // the fill's rest measure (run/fill_phase.hpp)
+  double rest_time = 0, rest_threshold = 0, mean_abs_du = 0, mean_abs_dv = 0;
+  double wall_seconds = 0;     // [s] of stepping
+  const Discs* good = nullptr; // an unstable run writes these (its last good state) in place of the world's discs
+};
+
 // Writes all files of one run into dir (which must exist). `extra` is moved into summary.json
 // (left empty): its series are some MB at a million discs, not copied at the run's last peak.
-void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunResult& res,
+void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
                    const StabilityReport& stab, nlohmann::ordered_json* extra = nullptr);
 
 // STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
@@ -49,13 +60,5 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
                       const OpeningPositions* at_open);
 
-// A double at full precision (%.17g), and a JSON number or null when not finite.
-std::string fmt17(double v);
-nlohmann::ordered_json finite_or_null(double v);
-
-// Atomic text file write: path.tmp then rename.
-void write_file_atomic(const std::string& path, const std::string& text);
-// The same, streaming: `write` fills PATH.tmp, renamed to PATH when complete.
-void write_stream_atomic(const std::string& path, const std::function<void(std::ostream&)>& write);
 
 }  // namespace dem

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "io/outputs.hpp"
+#include "io/files.hpp"
 
 namespace dem {
 

@@ -7,13 +7,14 @@
 #include <sstream>
 #include <utility>
 
-#include "io/outputs.hpp"
+#include "io/files.hpp"
 #include "io/state.hpp"
+#include "physics/world.hpp"
 
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '8'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: float reference positions; 5: the threads' blocks; 6: the wall series' length, not its text; 7: the peaks so far, not the series; 8: bonds and moving walls (state files)
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '9'};  // the format's version: a checkpoint resumes only in its own
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -100,8 +101,8 @@ CheckpointKey checkpoint_key(const std::string& scene_file, const SceneOverrides
 
 std::string checkpoint_path(const std::string& out_dir) { return out_dir + "/checkpoint.dem"; }
 
-void write_checkpoint(const std::string& path, const CheckpointKey& key, const World& w, const RunResult& fill,
-                      const DischargeState* discharge) {
+void write_checkpoint(const std::string& path, const CheckpointKey& key, const World& w, const Runner& runner,
+                      const Rest& rest, const std::string& phase, const Phase* state) {
   write_stream_atomic(path, [&](std::ostream& file) {
     // Streamed into the file through the hash: no copy of the checkpoint in memory.
     HashingBuf hashing(file.rdbuf());
@@ -111,14 +112,15 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
     o.str(key.engine);
     o.put(key.scene_hash);
     o.str(key.overrides);
-    o.put<std::int32_t>(discharge ? 1 : 0);
-    // The fill's progress (run.hpp).
-    o.put<std::int32_t>(static_cast<std::int32_t>(fill.status));
-    o.put(fill.rest_reached); o.put(fill.rest_time); o.put(fill.rest_threshold);
-    o.put(fill.mean_abs_du); o.put(fill.mean_abs_dv); o.put(fill.wall_seconds);
-    fill.last_good.write_to(o);
-    o.put(fill.energy_started); o.put(fill.energy.active);
-    o.put(fill.energy.budget); o.put(fill.energy.scale); o.put(fill.energy.gain);
+    o.str(phase);
+    // The runner (runner.hpp): clock, guard, last good state.
+    o.put(runner.wall_now());
+    o.put(runner.guard.overlap_limit);
+    const EnergyWatch& e = runner.guard.energy;
+    o.put(e.active); o.put(e.budget); o.put(e.scale); o.put(e.gain);
+    runner.last_good.write_to(o);
+    // The fill's rest measure (fill_phase.hpp).
+    o.put(rest.reached); o.put(rest.time); o.put(rest.threshold); o.put(rest.mean_abs_du); o.put(rest.mean_abs_dv);
     // The world, its counters and its lists exactly as they are (no rebuild on resume).
     write_world(o, w);
     o.put(w.particle_steps);
@@ -127,7 +129,7 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
     o.put(ref.cell); o.put(ref.ox); o.put(ref.oy); o.put(ref.limit2);
     o.vec(w.neighbors.reference_x());
     o.vec(w.neighbors.reference_y());
-    if (discharge) discharge->save(o);
+    if (state) state->save(o);
     buf.flush();
     if (!buf) throw std::runtime_error("cannot write " + path + ".tmp");
     const std::uint64_t sum = hashing.finish();
@@ -135,8 +137,8 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
   });
 }
 
-void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w, RunResult& fill,
-                     DischargeState& discharge, bool& in_discharge) {
+void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w, Runner& runner, Rest& rest,
+                     std::string& phase, const std::function<void(const std::string&, BinaryIn&)>& load_phase) {
   // Two passes over the file, neither holding it in memory: the checksum over every byte before
   // the last 8 (which hold it), then the reading.
   std::uint64_t size = 0;
@@ -171,17 +173,14 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   if (overrides != key.overrides)
     r.fail("written with the options \"" + overrides + "\", now \"" + key.overrides +
            "\": --dt, --scheme, --end-time, --force-dt and --from must be as in the checkpointed run");
-  const auto phase = r.get<std::int32_t>();
-  if (phase != 0 && phase != 1) r.fail("corrupt checkpoint (phase)");
-  in_discharge = phase == 1;
-  const auto status = r.get<std::int32_t>();
-  if (status < 0 || status > static_cast<std::int32_t>(RunStatus::interrupted)) r.fail("corrupt checkpoint (status)");
-  fill.status = static_cast<RunStatus>(status);
-  fill.rest_reached = r.get<bool>(); fill.rest_time = r.get<double>(); fill.rest_threshold = r.get<double>();
-  fill.mean_abs_du = r.get<double>(); fill.mean_abs_dv = r.get<double>(); fill.wall_seconds = r.get<double>();
-  fill.last_good.read_from(r);
-  fill.energy_started = r.get<bool>(); fill.energy.active = r.get<bool>();
-  fill.energy.budget = r.get<double>(); fill.energy.scale = r.get<double>(); fill.energy.gain = r.get<double>();
+  phase = r.str(64);
+  runner.wall_seconds = r.get<double>();
+  runner.guard.overlap_limit = r.get<double>();
+  EnergyWatch& e = runner.guard.energy;
+  e.active = r.get<bool>(); e.budget = r.get<double>(); e.scale = r.get<double>(); e.gain = r.get<double>();
+  runner.last_good.read_from(r);
+  rest.reached = r.get<bool>(); rest.time = r.get<double>(); rest.threshold = r.get<double>();
+  rest.mean_abs_du = r.get<double>(); rest.mean_abs_dv = r.get<double>();
   read_world(r, w);
   w.particle_steps = r.get<double>();
   const long rebuilds = r.get<long>();
@@ -195,11 +194,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   r.vec(y0);
   if (x0.size() != y0.size() || (!x0.empty() && x0.size() != w.discs.size()))
     r.fail("corrupt checkpoint (reference positions)");
-  if (in_discharge) {
-    discharge.load(r);
-    for (std::size_t i = 0; i < w.discs.size(); ++i)
-      if (const int id = w.discs.id_at(i); id < 0 || static_cast<std::uint64_t>(id) >= discharge.at_open.size()) r.fail("corrupt checkpoint (disc ids)");
-  }
+  load_phase(phase, r);  // the phase's own state (the fill's is its rest measure, read above)
   if (static_cast<std::uint64_t>(in.tellg()) != size - sizeof(std::uint64_t)) r.fail("corrupt checkpoint (trailing bytes)");
   // Kernel, point links and scratch as for any start, with the lists exactly as saved (no build
   // beside them: the pair list is the largest array).

@@ -1,7 +1,6 @@
 #include "run/discharge.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -11,8 +10,8 @@
 #include <stdexcept>
 
 #include "io/outputs.hpp"
-#include "physics/parallel.hpp"
 #include "io/state.hpp"
+#include "physics/parallel.hpp"
 
 namespace dem {
 
@@ -22,23 +21,6 @@ namespace {
 
 std::string fmt(double v) { return fmt17(v); }
 json num_or_null(double v) { return finite_or_null(v); }
-
-// Where the slit is: the gate's ends (or the points L and R).
-struct Slit {
-  double left = 0, right = 0, floor = 0;
-};
-
-Slit find_slit(const World& w, const std::string& gate) {
-  Slit s;
-  s.floor = w.geometry.min_y();
-  for (const Wall& wl : w.geometry.walls)
-    if (wl.name == gate) {
-      s.left = std::min(wl.ax, wl.bx);
-      s.right = std::max(wl.ax, wl.bx);
-      s.floor = std::min(wl.ay, wl.by);
-    }
-  return s;
-}
 
 // Top of the fill in a column [x0, x1]: the highest disc top among discs inside the silo.
 double surface(const Discs& d, double x0, double x1, double floor) {
@@ -230,30 +212,30 @@ double flow_rate(const std::vector<Removal>& removals) {
 
 namespace {
 
-// Geometry of the opening, derived from the scene and the walls (the same at every resume).
-struct Frame {
-  Slit slit;
-  double width, x_left, x_right, xc, top, y_out, g;
-};
-
-Frame frame(const SceneSpec& spec, const World& w) {
-  Frame f;
-  f.slit = find_slit(w, spec.discharge.gate);
+DischargeFrame make_frame(const SceneSpec& spec, const World& w) {
+  DischargeFrame f;
+  f.floor = w.geometry.min_y();
+  for (const Wall& wl : w.geometry.walls)
+    if (wl.name == spec.discharge.gate) {
+      f.slit_left = std::min(wl.ax, wl.bx);
+      f.slit_right = std::max(wl.ax, wl.bx);
+      f.floor = std::min(wl.ay, wl.by);
+    }
   f.width = w.geometry.max_x() - w.geometry.min_x();
   f.x_left = w.geometry.min_x();
   f.x_right = w.geometry.max_x();
-  f.xc = 0.5 * (f.slit.left + f.slit.right);
+  f.xc = 0.5 * (f.slit_left + f.slit_right);
   f.top = w.geometry.max_y();
-  f.y_out = f.slit.floor - spec.discharge.outlet_depth;
+  f.y_out = f.floor - spec.discharge.outlet_depth;
   f.g = std::hypot(w.gx, w.gy);
   return f;
 }
 
 // Top of the fill in the left wall, centre and right wall columns.
-void surfaces(const World& w, const Frame& f, double col, double s[3]) {
-  s[0] = surface(w.discs, f.x_left, f.x_left + col, f.slit.floor);
-  s[1] = surface(w.discs, f.xc - 0.5 * col, f.xc + 0.5 * col, f.slit.floor);
-  s[2] = surface(w.discs, f.x_right - col, f.x_right + 1e-12, f.slit.floor);
+void surfaces(const World& w, const DischargeFrame& f, double col, double s[3]) {
+  s[0] = surface(w.discs, f.x_left, f.x_left + col, f.floor);
+  s[1] = surface(w.discs, f.xc - 0.5 * col, f.xc + 0.5 * col, f.floor);
+  s[2] = surface(w.discs, f.x_right - col, f.x_right + 1e-12, f.floor);
 }
 
 void save_load(BinaryOut& o, const WallLoad& L) {
@@ -274,13 +256,13 @@ void load_load(BinaryIn& r, WallLoad& L) {
 }  // namespace
 
 void DischargeState::save(BinaryOut& o) const {
-  o.put(t_open); o.put(n_initial); o.put(overlap_limit); o.put(rmean); o.put(fill_top);
+  o.put(t_open); o.put(n_initial); o.put(rmean); o.put(fill_top);
   for (double v : surf0) o.put(v);
   at_open.write_to(o);
   o.put<std::uint64_t>(static_walls.size());
   for (const WallLoad& L : static_walls) save_load(o, L);
   o.put(next_s);
-  o.str(status);
+  o.put(static_cast<std::int32_t>(status));
   o.vec(removals);
   o.put(jam_at); o.put(jams);
   for (double v : sink_time) o.put(v);
@@ -300,20 +282,20 @@ void DischargeState::save(BinaryOut& o) const {
   o.vec(sample_t);
   o.put<std::uint64_t>(next_snap);
   o.put(last_removal); o.put(removed_mass); o.put(moved_fraction);
-  o.put(wall_seconds);
-  o.put(energy.active); o.put(energy.budget); o.put(energy.scale); o.put(energy.gain);
 }
 
 void DischargeState::load(BinaryIn& r) {
-  t_open = r.get<double>(); n_initial = r.get<int>(); overlap_limit = r.get<double>(); rmean = r.get<double>();
+  t_open = r.get<double>(); n_initial = r.get<int>(); rmean = r.get<double>();
   fill_top = r.get<double>();
   for (double& v : surf0) v = r.get<double>();
   at_open.read_from(r);
   static_walls.resize(r.count(1 << 20));
   for (WallLoad& L : static_walls) load_load(r, L);
   next_s = r.get<long>();
-  status = r.str(64);
-  if (status == "interrupted") status = "discharged";  // it goes on
+  const auto s = r.get<std::int32_t>();
+  if (s < 0 || s > static_cast<std::int32_t>(Status::interrupted)) r.fail("corrupt discharge state (status)");
+  status = static_cast<Status>(s);
+  if (status == Status::interrupted) status = Status::running;  // it goes on
   r.vec(removals);
   jam_at = r.get<double>(); jams = r.get<int>();
   for (double& v : sink_time) v = r.get<double>();
@@ -337,325 +319,274 @@ void DischargeState::load(BinaryIn& r) {
   r.vec(sample_t);
   next_snap = r.get<std::uint64_t>();
   last_removal = r.get<double>(); removed_mass = r.get<double>(); moved_fraction = r.get<double>();
-  wall_seconds = r.get<double>();
-  energy.active = r.get<bool>(); energy.budget = r.get<double>(); energy.scale = r.get<double>();
-  energy.gain = r.get<double>();
   if (static_walls.size() != bin_peaks.size() || static_walls.size() != total_peaks.size())
     r.fail("corrupt discharge state (walls)");
   for (std::size_t k = 0; k < static_walls.size(); ++k)
     if (bin_peaks[k].size() != static_walls[k].bin_normal.size()) r.fail("corrupt discharge state (bins)");
 }
 
-std::string series_file_problem(const std::string& out, const DischargeState& st) {
+
+DischargePhase::DischargePhase(const SceneSpec& spec, std::string out_dir) : spec_(spec), out_(std::move(out_dir)) {
+  series_path_ = out_ + "/wall_series.csv";
+  series_tmp_ = series_path_ + ".tmp";
+  st.at_open.set_file(out_ + "/opening_positions.bin");  // kept beside the outputs, not in memory
+}
+
+std::string DischargePhase::series_file_problem() const {
   if (st.next_s == 0) return "";  // made at the opening
   namespace fs = std::filesystem;
-  const std::string path = out + "/wall_series.csv", tmp = path + ".tmp";
   std::error_code ec;
-  const std::string& f = fs::exists(tmp, ec) ? tmp : path;
+  const std::string& f = fs::exists(series_tmp_, ec) ? series_tmp_ : series_path_;
   const auto size = fs::file_size(f, ec);
-  if (ec) return "the wall series so far (" + tmp + ", or " + path + " after a stop on a signal) is missing";
+  if (ec) return "the wall series so far (" + series_tmp_ + ", or " + series_path_ + " after a stop on a signal) is missing";
   if (size < st.series_bytes)
     return f + " (the wall series so far) has " + std::to_string(size) + " bytes, fewer than the checkpoint's " +
            std::to_string(st.series_bytes);
   return "";
 }
 
-std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st) {
-  const Frame f = frame(spec, w);
-  double rmin = std::numeric_limits<double>::infinity(), rmean = 0;
-  for (std::size_t i = 0; i < w.discs.size(); ++i) {
-    const double r = w.discs.r(i);
-    rmin = std::min(rmin, r);
-    rmean += r;
+void DischargePhase::attach(World& w) {
+  const DischargeSpec& ds = spec_.discharge;
+  f_ = make_frame(spec_, w);
+  steps_total_ = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
+  sample_every_ = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
+  // The moving average of the peak ratios: peak_window in samples.
+  win_ = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every_ * w.dt))));
+  namespace fs = std::filesystem;
+  fs::create_directories(out_ + "/snapshots");
+  // The wall series file: new at the opening; a resumed run cut back to the checkpoint's length
+  // (a run killed after it wrote on), from its temporary name or, after a stop on a signal, from
+  // the complete file that stop wrote.
+  if (const std::string why = series_file_problem(); !why.empty()) throw std::runtime_error(why);
+  if (st.next_s == 0) {
+    static const char header[] = "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
+    st.series_out.open(series_tmp_, std::ios::binary | std::ios::trunc);
+    st.series_out << header;
+    st.series_bytes = sizeof header - 1;
+  } else {
+    std::error_code ec;
+    if (!fs::exists(series_tmp_, ec)) fs::rename(series_path_, series_tmp_);
+    fs::resize_file(series_tmp_, st.series_bytes);
+    st.series_out.open(series_tmp_, std::ios::binary | std::ios::app);
   }
-  rmean /= std::max<std::size_t>(1, w.discs.size());
-  st.overlap_limit = spec.max_overlap_fraction * rmin;
-  st.rmean = rmean;
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp_);
+}
 
+Status DischargePhase::begin(World& w, std::string& reason) {
+  double rmean = 0;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) rmean += w.discs.r(i);
+  st.rmean = rmean / std::max<std::size_t>(1, w.discs.size());
   // The static state: loads and positions at opening.
   std::vector<PointLoad> static_points;
-  measure_loads(w, spec.profile_bin, st.static_walls, static_points);
+  measure_loads(w, spec_.profile_bin, st.static_walls, static_points);
   st.t_open = w.time;
   st.n_initial = static_cast<int>(w.discs.size());
   st.at_open.keep(w.discs);
   st.fill_top = -1e300;
   for (std::size_t i = 0; i < w.discs.size(); ++i) st.fill_top = std::max(st.fill_top, w.discs.y[i]);
-  surfaces(w, f, spec.discharge.surface_column, st.surf0);
+  surfaces(w, f_, spec_.discharge.surface_column, st.surf0);
   for (double& v : st.sink_time) v = NAN;
-
-  if (!w.deactivate_wall(spec.discharge.gate)) return "no gate wall \"" + spec.discharge.gate + "\" to open";
-  st.energy.start(w, spec.max_energy_gain);
-
   st.totals << "t,name,normal,shear,fx,fy\n";
   st.flow << "t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,surface_centre,"
              "surface_right,arch_discs,arch_crown_y\n";
-  // Per wall and bin: series of normal force (for the ratios).
+  // Per wall and bin: peaks of the normal force (for the ratios).
   st.bin_peaks.assign(st.static_walls.size(), {});
   for (std::size_t k = 0; k < st.static_walls.size(); ++k) st.bin_peaks[k].resize(st.static_walls[k].bin_normal.size());
   st.total_peaks.assign(st.static_walls.size(), {});
   st.next_s = 0;
-  st.status = "discharged";
-  return "";
-}
-
-DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out, bool progress, LastGood* good) {
-  DischargeState st;
-  st.at_open.set_file(out + "/opening_positions.bin");
-  const std::string why = open_discharge(spec, w, st);
-  if (!why.empty()) {
-    DischargeResult res;
-    res.status = "unstable";
-    res.reason = why;
-    return res;
+  st.status = Status::running;
+  if (!w.deactivate_wall(spec_.discharge.gate)) {
+    reason = "no gate wall \"" + spec_.discharge.gate + "\" to open";
+    return Status::unstable;
   }
-  DischargeResult res = continue_discharge(spec, w, st, out, progress, nullptr, good);
-  st.at_open.discard();
-  return res;
+  // t = 0: the first sample and the snapshots due at the opening.
+  sample(w, 0.0);
+  snapshots(w, 0.0);
+  if (steps_total_ == 0) return st.status = Status::discharged;
+  st.next_s = 1;
+  return Status::running;
 }
 
-DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out,
-                                   bool progress, const RunControl* ctl, LastGood* good) {
-  const DischargeSpec& ds = spec.discharge;
-  DischargeResult res;
-  const Frame f = frame(spec, w);
-  const Slit& slit = f.slit;
-  const double xc = f.xc, top = f.top, y_out = f.y_out;
+void DischargePhase::before_step(World& w, bool stopping) {
+  // Record the pair forces of the steps that read them: a sample's (the arch), the last, a
+  // snapshot's, and a jam check's (the arch). A step that ends the run early (jam, empty) is a
+  // jam check's or has no pairs.
+  const DischargeSpec& ds = spec_.discharge;
+  const long s = st.next_s;
+  const double t_next = w.time + w.dt - st.t_open;
+  w.record_pair_forces = s % sample_every_ == 0 || s == steps_total_ || stopping ||
+                         t_next - st.last_removal > ds.jam_time ||
+                         (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t_next + 0.5 * w.dt);
+}
 
+Status DischargePhase::after_step(World& w) {
+  const DischargeSpec& ds = spec_.discharge;
+  const long s = st.next_s;
+  const double t = w.time - st.t_open;
+  // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
+  // One read of y per step; the removal list is built only on the steps that remove.
+  const long n_now = static_cast<long>(w.discs.size());
+  const bool some_out = parallel_any(n_now, w.threads_for(static_cast<int>(n_now)),
+                                     [&](long i) { return w.discs.y[i] < f_.y_out; });
+  bool any = false;
+  dead_.sorted.clear();
+  for (std::size_t i = 0; some_out && i < w.discs.size(); ++i)
+    if (w.discs.y[i] < f_.y_out) {
+      dead_.sorted.push_back(static_cast<int>(i));
+      any = true;
+      st.removals.push_back({t, w.discs.id_at(i), w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
+      st.removed_mass += w.discs.mass(i);
+    }
+  if (any) {
+    w.remove_discs(dead_);
+    st.last_removal = t;
+  }
+  if (w.discs.size() == 0) st.status = Status::emptied;
+  // Jam: nothing left through the outlet for jam_time while discs remain in the silo.
+  if (st.status != Status::emptied && t - st.last_removal > ds.jam_time) {
+    bool inside = false;
+    for (double y : w.discs.y) inside |= y > f_.floor;
+    if (inside) {
+      ++st.jams;
+      if (st.jam_at < 0) st.jam_at = t;
+      const std::vector<int> arch = find_arch(w, f_.slit_left, f_.slit_right, f_.floor);
+      if (!ds.remove_keystone) {
+        st.status = Status::jammed;
+      } else {
+        // Note 4: remove the arch's top (crown) disc; without a found arch, the lowest disc over the slit.
+        int pick = -1;
+        for (int i : arch)
+          if (pick < 0 || w.discs.y[i] > w.discs.y[pick]) pick = i;
+        if (pick < 0)
+          for (std::size_t i = 0; i < w.discs.size(); ++i)
+            if (std::abs(w.discs.x[i] - f_.xc) <= 0.5 * (f_.slit_right - f_.slit_left) + w.discs.r(i) &&
+                w.discs.y[i] > f_.floor - w.discs.r(i) && (pick < 0 || w.discs.y[i] < w.discs.y[pick]))
+              pick = static_cast<int>(i);
+        if (pick < 0) {
+          st.status = Status::jammed;
+        } else {
+          st.removals.push_back({t, w.discs.id_at(pick), w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
+          dead_.sorted.assign(1, pick);
+          w.remove_discs(dead_);
+          st.last_removal = t;
+        }
+      }
+    }
+  }
+  const bool last = s == steps_total_ || st.status != Status::running;
+  if (s % sample_every_ == 0 || last) sample(w, t);
+  snapshots(w, t);
+  if (st.status != Status::running) return st.status;
+  if (last) return st.status = Status::discharged;
+  st.next_s = s + 1;
+  return Status::running;
+}
+
+// A sample: wall forces, flow, surface, arch.
+void DischargePhase::sample(World& w, double t) {
+  const DischargeSpec& ds = spec_.discharge;
+  std::vector<WallLoad> walls;
+  std::vector<PointLoad> points;
+  measure_loads(w, spec_.profile_bin, walls, points);
+  st.sample_t.push_back(t);
+  std::ostringstream series;  // this sample's rows of the wall series
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    const WallLoad& L = walls[k];
+    const Wall& wl = w.geometry.walls[k];
+    st.totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
+              << fmt(L.fy) << '\n';
+    st.total_peaks[k].add(L.normal, win_);
+    for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
+      const double mid = std::min(L.length, (b + 0.5) * L.bin);
+      const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
+      st.bin_peaks[k][b].add(L.bin_normal[b], win_);
+      series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym) << ','
+             << fmt(f_.top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
+    }
+  }
+  const std::string rows = series.str();
+  st.series_out.write(rows.data(), static_cast<std::streamsize>(rows.size()));
+  st.series_bytes += rows.size();
+  for (const PointLoad& P : points)
+    st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
+              << fmt(P.fy) << '\n';
+  int inside = 0, below = 0, moved = 0;
+  OpeningPositions::Reader open_at(st.at_open);  // in id order, the discs' order: block by block
+  for (std::size_t i = 0; i < w.discs.size(); ++i) {
+    (w.discs.y[i] > f_.floor ? inside : below)++;
+    double x0, y0;
+    open_at.at(w.discs.id_at(i), x0, y0);
+    if (std::hypot(w.discs.x[i] - x0, w.discs.y[i] - y0) >= w.discs.r(i)) ++moved;
+  }
+  const int removed = static_cast<int>(st.removals.size());
+  st.moved_fraction = st.n_initial ? double(moved + removed) / st.n_initial : 0.0;
+  double sf[3];
+  surfaces(w, f_, ds.surface_column, sf);
+  for (int c = 0; c < 3; ++c)
+    if (std::isnan(st.sink_time[c]) && !(sf[c] > st.surf0[c] - st.rmean)) st.sink_time[c] = t;
+  const std::vector<int> arch = find_arch(w, f_.slit_left, f_.slit_right, f_.floor);
+  double crown = NAN;
+  for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
+  st.flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
+          << fmt(st.moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
+          << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
+}
+
+// Snapshots at the requested times (and at the end).
+void DischargePhase::snapshots(World& w, double t) {
+  const DischargeSpec& ds = spec_.discharge;
+  const std::string snapdir = out_ + "/snapshots";
+  while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
+    char stem[32];
+    std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
+    write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open);
+    write_contact_files(snapdir, std::string("contacts_") + stem, w);
+    st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
+    st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+    ++st.next_snap;
+  }
+}
+
+void DischargePhase::flush() {
+  st.series_out.flush();  // the file holds at least what the checkpoint says
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp_);
+}
+
+std::string DischargePhase::progress(const World& w) const {
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "discharge t = %.3f / %.3f s, %zu removed", w.time - st.t_open, spec_.discharge.time,
+                st.removals.size());
+  return buf;
+}
+
+double DischargePhase::fraction(const World&) const {
+  return steps_total_ > 0 ? double(st.next_s) / steps_total_ : 1.0;
+}
+
+void DischargePhase::finish(World& w, Status status) {
   namespace fs = std::filesystem;
-  const std::string snapdir = out + "/snapshots";
-  fs::create_directories(snapdir);
-
-  // The wall series file: new at the opening; a resumed run cut back to the checkpoint's length
-  // (a run killed after it wrote on), from its temporary name or, after a stop on a signal, from
-  // the complete file that stop wrote.
-  const std::string series_path = out + "/wall_series.csv", series_tmp = series_path + ".tmp";
-  if (const std::string why = series_file_problem(out, st); !why.empty()) throw std::runtime_error(why);
-  if (st.next_s == 0) {
-    static const char header[] = "t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear\n";
-    st.series_out.open(series_tmp, std::ios::binary | std::ios::trunc);
-    st.series_out << header;
-    st.series_bytes = sizeof header - 1;
-  } else {
-    std::error_code ec;
-    if (!fs::exists(series_tmp, ec)) fs::rename(series_path, series_tmp);
-    fs::resize_file(series_tmp, st.series_bytes);
-    st.series_out.open(series_tmp, std::ios::binary | std::ios::app);
-  }
-  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
-
-  RemovedDiscs dead;  // the discs leaving at a step: a few indices, not a mask of all discs
-  const long steps_total = static_cast<long>(std::ceil(ds.time / w.dt - 1e-9));
-  const long sample_every = std::max(1L, static_cast<long>(std::llround(ds.series_interval / w.dt)));
-  // The moving average of the peak ratios: peak_window in samples.
-  const std::size_t win = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(ds.peak_window / (sample_every * w.dt))));
-  const auto t0 = std::chrono::steady_clock::now();
-  auto last_print = t0;
-  if (st.status == "interrupted") st.status = "discharged";
-  std::string reason;
-
-  for (long s = st.next_s; s <= steps_total; ++s) {
-    if (s > 0) {
-      // Record the pair forces of the steps that read them: a sample's (the arch), the last, a
-      // snapshot's, and a jam check's (the arch). A step that ends the run early (jam, empty) is a
-      // jam check's or has no pairs.
-      const double t_next = w.time + w.dt - st.t_open;
-      w.record_pair_forces = s % sample_every == 0 || s == steps_total || stop_signal() ||
-                             t_next - st.last_removal > ds.jam_time ||
-                             (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t_next + 0.5 * w.dt);
-      w.step();
-    }
-    const double t = w.time - st.t_open;
-    if (s > 0) {
-      // The finiteness scan (five arrays) every 10 steps, with the energy check: a NaN stops the
-      // run a few steps later at most, and the overlap check runs every step.
-      if (!(w.max_overlap <= st.overlap_limit) || (s % 10 == 0 && !w.all_finite())) {
-        st.status = "unstable";
-        std::ostringstream os;
-        os << "overlap " << w.max_overlap << " cm (limit " << st.overlap_limit << ") or non-finite state at t = "
-           << t << " s after opening";
-        reason = os.str();
-        break;
-      }
-      if (s % 10 == 0) {  // energy created: a blow-up on its way (discs leaving only lower it)
-        reason = st.energy.check(w);
-        if (!reason.empty()) {
-          st.status = "unstable";
-          break;
-        }
-        if (good && s % kKeepEvery == 0) good->keep(w.discs, w.time);  // checked: finite, within budget
-      }
-      // Outlet: discs below y_out leave the computation (the paper's k = -102 region).
-      // One read of y per step; the removal mask is built only on the steps that remove.
-      const long n_now = static_cast<long>(w.discs.size());
-      const bool some_out = parallel_any(n_now, w.threads_for(static_cast<int>(n_now)),
-                                         [&](long i) { return w.discs.y[i] < y_out; });
-      bool any = false;
-      dead.sorted.clear();
-      for (std::size_t i = 0; some_out && i < w.discs.size(); ++i)
-        if (w.discs.y[i] < y_out) {
-          dead.sorted.push_back(static_cast<int>(i));
-          any = true;
-          st.removals.push_back({t, w.discs.id_at(i), w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
-          st.removed_mass += w.discs.mass(i);
-        }
-      if (any) {
-        w.remove_discs(dead);
-        st.last_removal = t;
-      }
-      if (w.discs.size() == 0) {
-        st.status = "emptied";
-      }
-      // Jam: nothing left through the outlet for jam_time while discs remain in the silo.
-      if (st.status != "emptied" && t - st.last_removal > ds.jam_time) {
-        bool inside = false;
-        for (double y : w.discs.y) inside |= y > slit.floor;
-        if (inside) {
-          ++st.jams;
-          if (st.jam_at < 0) st.jam_at = t;
-          const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
-          if (!ds.remove_keystone) {
-            st.status = "jammed";
-          } else {
-            // Note 4: remove the arch's top (crown) disc; without a found arch, the lowest disc over the slit.
-            int pick = -1;
-            for (int i : arch)
-              if (pick < 0 || w.discs.y[i] > w.discs.y[pick]) pick = i;
-            if (pick < 0)
-              for (std::size_t i = 0; i < w.discs.size(); ++i)
-                if (std::abs(w.discs.x[i] - xc) <= 0.5 * (slit.right - slit.left) + w.discs.r(i) &&
-                    w.discs.y[i] > slit.floor - w.discs.r(i) &&
-                    (pick < 0 || w.discs.y[i] < w.discs.y[pick]))
-                  pick = static_cast<int>(i);
-            if (pick < 0) {
-              st.status = "jammed";
-            } else {
-              st.removals.push_back({t, w.discs.id_at(pick), w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
-              dead.sorted.assign(1, pick);
-              w.remove_discs(dead);
-              st.last_removal = t;
-            }
-          }
-        }
-      }
-    }
-    const bool last = s == steps_total || st.status == "jammed" || st.status == "emptied";
-    // Samples: wall forces, flow, surface, arch.
-    if (s % sample_every == 0 || last) {
-      std::vector<WallLoad> walls;
-      std::vector<PointLoad> points;
-      measure_loads(w, spec.profile_bin, walls, points);
-      st.sample_t.push_back(t);
-      std::ostringstream series;  // this sample's rows of the wall series
-      for (std::size_t k = 0; k < walls.size(); ++k) {
-        const WallLoad& L = walls[k];
-        const Wall& wl = w.geometry.walls[k];
-        st.totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
-                  << fmt(L.fy) << '\n';
-        st.total_peaks[k].add(L.normal, win);
-        for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
-          const double mid = std::min(L.length, (b + 0.5) * L.bin);
-          const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
-          st.bin_peaks[k][b].add(L.bin_normal[b], win);
-          series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym)
-                 << ',' << fmt(top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
-        }
-      }
-      const std::string rows = series.str();
-      st.series_out.write(rows.data(), static_cast<std::streamsize>(rows.size()));
-      st.series_bytes += rows.size();
-      for (const PointLoad& P : points)
-        st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
-                  << fmt(P.fy) << '\n';
-      int inside = 0, below = 0, moved = 0;
-      OpeningPositions::Reader open_at(st.at_open);  // in id order, the discs' order: block by block
-      for (std::size_t i = 0; i < w.discs.size(); ++i) {
-        (w.discs.y[i] > slit.floor ? inside : below)++;
-        double x0, y0;
-        open_at.at(w.discs.id_at(i), x0, y0);
-        if (std::hypot(w.discs.x[i] - x0, w.discs.y[i] - y0) >= w.discs.r(i)) ++moved;
-      }
-      const int removed = static_cast<int>(st.removals.size());
-      st.moved_fraction = st.n_initial ? double(moved + removed) / st.n_initial : 0.0;
-      double sf[3];
-      surfaces(w, f, ds.surface_column, sf);
-      for (int c = 0; c < 3; ++c)
-        if (std::isnan(st.sink_time[c]) && !(sf[c] > st.surf0[c] - st.rmean)) st.sink_time[c] = t;
-      const std::vector<int> arch = find_arch(w, slit.left, slit.right, slit.floor);
-      double crown = NAN;
-      for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
-      st.flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
-              << fmt(st.moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
-              << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
-    }
-    // Snapshots at the requested times (and at the end).
-    while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
-      char stem[32];
-      std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
-      write_disc_files(snapdir, std::string("discs_") + stem, spec, w.discs, &st.at_open);
-      write_contact_files(snapdir, std::string("contacts_") + stem, w);
-      st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
-      st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
-      ++st.next_snap;
-    }
-    if (progress && (s & 1023) == 0) {
-      const auto now = std::chrono::steady_clock::now();
-      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
-        last_print = now;
-        std::fprintf(stderr, "\r  discharge t = %.3f / %.3f s, %zu removed   ", t, ds.time, st.removals.size());
-        std::fflush(stderr);
-      }
-    }
-    if (st.status != "discharged" || last) break;
-    st.next_s = s + 1;
-    // A stop request ends the run here (the caller writes the final checkpoint), on a step that
-    // recorded its pair forces (the next one if the request came during this one); checkpoints
-    // follow the world's step count, so a resumed run writes them at the same steps.
-    if (stop_signal() && w.pair_forces_current()) {
-      st.status = "interrupted";
-      break;
-    }
-    if (ctl && ctl->checkpoint_every > 0 && w.steps % ctl->checkpoint_every == 0 && ctl->discharge_checkpoint) {
-      const double before = st.wall_seconds;
-      st.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      st.series_out.flush();  // the file holds at least what the checkpoint says
-      if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
-      ctl->discharge_checkpoint(st);
-      st.wall_seconds = before;
-    }
-  }
-  if (progress && last_print != t0) std::fprintf(stderr, "\n");
-  res.status = st.status;
-  res.reason = reason;
-  res.t_open = st.t_open;
-  res.n_initial = st.n_initial;
-  res.removals = st.removals;
-  res.jam_at = st.jam_at;
-  res.jams = st.jams;
-  res.duration = w.time - st.t_open;
-  res.wall_seconds = st.wall_seconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  st.wall_seconds = res.wall_seconds;  // a final checkpoint (interrupted) counts this session
-
+  const DischargeSpec& ds = spec_.discharge;
+  st.status = status;
   st.series_out.close();
-  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp);
-  fs::rename(series_tmp, series_path);
-  write_file_atomic(out + "/wall_totals_series.csv", st.totals.str());
-  write_file_atomic(out + "/flow_series.csv", st.flow.str());
+  if (!st.series_out) throw std::runtime_error("cannot write " + series_tmp_);
+  fs::rename(series_tmp_, series_path_);
+  write_file_atomic(out_ + "/wall_totals_series.csv", st.totals.str());
+  write_file_atomic(out_ + "/flow_series.csv", st.flow.str());
   {
     std::ostringstream o;
     o << "t,id,mass,vx,vy,how\n";
-    for (const Removal& r : res.removals)
+    for (const Removal& r : st.removals)
       o << fmt(r.t) << ',' << r.id << ',' << fmt(r.mass) << ',' << fmt(r.vx) << ',' << fmt(r.vy) << ','
         << (r.keystone ? "keystone" : "outlet") << '\n';
-    write_file_atomic(out + "/removals.csv", o.str());
+    write_file_atomic(out_ + "/removals.csv", o.str());
   }
   for (auto [name, body] : {std::pair{"discharge_discs.pvd", st.pvd_d.str()}, std::pair{"discharge_contacts.pvd", st.pvd_c.str()}})
-    write_file_atomic(out + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
-                                            body + "  </Collection>\n</VTKFile>\n");
+    write_file_atomic(out_ + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
+                                             body + "  </Collection>\n</VTKFile>\n");
 
   // Ratios of peak to static: raw maximum and the maximum of a moving average.
   const std::vector<WallLoad>& static_walls = st.static_walls;
   const double* sink_time = st.sink_time;
-  const double moved_fraction = st.moved_fraction, fill_top = st.fill_top, width = f.width, g = f.g;
   json walls_json = json::array();
   double best_bottom[2] = {0, 0}, best_side[2] = {0, 0};
   for (std::size_t k = 0; k < static_walls.size(); ++k) {
@@ -691,25 +622,26 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
   std::string pattern = "undetermined";
   if (!std::isnan(t_walls) && (std::isnan(sink_time[1]) || t_walls < sink_time[1])) pattern = "funnel";
   else if (!std::isnan(sink_time[1]) && (std::isnan(t_walls) || sink_time[1] <= t_walls)) pattern = "piping";
+  const std::vector<Removal>& removals = st.removals;
   int out_1s = 0;
-  for (const Removal& r : res.removals)
+  for (const Removal& r : removals)
     if (!r.keystone && r.t <= 1.0 + 1e-12) ++out_1s;
-  const double q = flow_rate(res.removals);
-  const double m_disc = w.discs.size() ? w.discs.mass(0) : (res.removals.empty() ? 1.0 : res.removals[0].mass);
-  res.metrics = {
-      {"status", res.status},
-      {"t_open", res.t_open},
-      {"duration", res.duration},
-      {"n_initial", res.n_initial},
-      {"removed", res.removals.size()},
-      {"removed_by_hand", std::count_if(res.removals.begin(), res.removals.end(), [](const Removal& r) { return r.keystone; })},
+  const double q = flow_rate(removals);
+  const double m_disc = w.discs.size() ? w.discs.mass(0) : (removals.empty() ? 1.0 : removals[0].mass);
+  metrics_ = {
+      {"status", to_string(status)},
+      {"t_open", st.t_open},
+      {"duration", w.time - st.t_open},
+      {"n_initial", st.n_initial},
+      {"removed", removals.size()},
+      {"removed_by_hand", std::count_if(removals.begin(), removals.end(), [](const Removal& r) { return r.keystone; })},
       {"discs_out_at_1s", out_1s},
       {"flow_rate_mass", num_or_null(q)},
       {"flow_rate_discs", num_or_null(q / m_disc)},
       {"flow_rate_note", "slope of cumulative removed mass [g/s per cm] from the 5th removal on (least squares)"},
-      {"jammed", res.status == "jammed"},
-      {"jam_at", res.jam_at >= 0 ? json(res.jam_at) : json(nullptr)},
-      {"jams", res.jams},
+      {"jammed", status == Status::jammed},
+      {"jam_at", st.jam_at >= 0 ? json(st.jam_at) : json(nullptr)},
+      {"jams", st.jams},
       {"peak_ratio_bottom", best_bottom[0]},
       {"peak_ratio_bottom_windowed", best_bottom[1]},
       {"peak_ratio_side", best_side[0]},
@@ -721,16 +653,15 @@ DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeSta
                              {"right_wall", num_or_null(sink_time[2])}}},
       {"pattern_note", "funnel: the top surface first sinks (by one mean radius) at a wall column; piping: first at "
                        "the centre column"},
-      {"moved_fraction_end", moved_fraction},
-      {"dead_fraction_end", 1.0 - moved_fraction},
+      {"moved_fraction_end", st.moved_fraction},
+      {"dead_fraction_end", 1.0 - st.moved_fraction},
       {"gate", ds.gate},
-      {"slit", {slit.left, slit.right}},
-      {"outlet_y", y_out},
+      {"slit", {f_.slit_left, f_.slit_right}},
+      {"outlet_y", f_.y_out},
       {"walls", walls_json},
-      {"fill_top", fill_top},
-      {"width", width},
-      {"gravity", g}};
-  return res;
+      {"fill_top", st.fill_top},
+      {"width", f_.width},
+      {"gravity", f_.g}};
 }
 
 }  // namespace dem

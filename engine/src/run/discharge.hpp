@@ -11,12 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "run/control.hpp"
-#include "run/last_good.hpp"
-#include "run/opening_positions.hpp"
 #include "io/outputs.hpp"
-#include "scene/scene.hpp"
 #include "physics/world.hpp"
+#include "run/opening_positions.hpp"
+#include "run/phase.hpp"
+#include "scene/scene.hpp"
 
 namespace dem {
 
@@ -26,25 +25,6 @@ struct Removal {
   double mass, vx, vy;
   bool keystone;     // removed by hand (note 4), not through the outlet
 };
-
-struct DischargeResult {
-  std::string status;      // "discharged" (end time), "jammed", "emptied", "unstable", "interrupted"
-  std::string reason;      // unstable: what grew where
-  double t_open = 0;       // [s] world time at opening
-  double duration = 0;     // [s] simulated since opening
-  double wall_seconds = 0; // [s] of computing
-  int n_initial = 0;
-  std::vector<Removal> removals;
-  double jam_at = -1;      // [s] since opening when a jam was declared (first one), -1 none
-  int jams = 0;            // jams met (each resolved by a keystone removal, or the last one stopped the run)
-  nlohmann::ordered_json metrics;  // flow rate, ratios, pattern (docs/outputs.md)
-};
-
-// Opens the gate and runs the discharge phase, writing series and snapshots into out_dir
-// (which exists). The world must be at the state to open from. The last good state is kept in
-// `good` every kKeepEvery steps (last_good.hpp) when given.
-DischargeResult run_discharge(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress,
-                              LastGood* good = nullptr);
 
 struct BinaryOut;
 struct BinaryIn;
@@ -75,7 +55,6 @@ struct DischargeState {
   // At opening.
   double t_open = 0;         // [s] world time
   int n_initial = 0;
-  double overlap_limit = 0;  // [cm] end.max_overlap x r_min at opening
   double rmean = 0;          // [cm] mean radius at opening (surface sinking)
   double fill_top = -1e300;
   double surf0[3] = {0, 0, 0};  // surface of the wall, centre and wall columns
@@ -83,7 +62,7 @@ struct DischargeState {
   std::vector<WallLoad> static_walls;
   // Running.
   long next_s = 0;           // next loop step (steps since opening)
-  std::string status = "discharged";
+  Status status = Status::running;
   std::vector<Removal> removals;
   double jam_at = -1;
   int jams = 0;
@@ -100,21 +79,61 @@ struct DischargeState {
   std::vector<double> sample_t;
   std::size_t next_snap = 0;
   double last_removal = 0, removed_mass = 0, moved_fraction = 0;
-  double wall_seconds = 0;   // [s] of computing in earlier sessions (before the last checkpoint)
-  EnergyWatch energy;        // budget from the opening (blowup.hpp)
 
   void save(BinaryOut& o) const;
-  void load(BinaryIn& r);  // an "interrupted" status is read as going on
+  void load(BinaryIn& r);
 };
 
-// Records the state at opening and removes the gate; returns "" or why it cannot open.
-std::string open_discharge(const SceneSpec& spec, World& w, DischargeState& st);
-// Why a discharge resumed from a checkpoint cannot go on with its wall series file ("" : it can).
-std::string series_file_problem(const std::string& out_dir, const DischargeState& st);
-// Runs the discharge from st (just opened, or restored from a checkpoint with the world) to its
-// end, a jam, or a stop request (status "interrupted"), then writes its files and metrics.
-DischargeResult continue_discharge(const SceneSpec& spec, World& w, DischargeState& st, const std::string& out_dir,
-                                   bool progress, const RunControl* ctl, LastGood* good = nullptr);
+// Section 5(2) as a phase of the run (phase.hpp): begin records the state at opening, removes
+// the gate and samples t = 0; each step then removes the discs below the outlet, watches for
+// jams (note 4's keystone removal when asked), samples the series and writes the snapshots;
+// finish writes the series files and the metrics (docs/outputs.md).
+// Where the slit is and where discs leave (from the scene and the walls, the same at every resume).
+struct DischargeFrame {
+  double slit_left = 0, slit_right = 0, floor = 0;  // the gate's ends (or the points L and R)
+  double width = 0, x_left = 0, x_right = 0, xc = 0, top = 0;
+  double y_out = 0;  // discs below it leave (discharge.outlet_depth under the slit)
+  double g = 0;
+};
+
+class DischargePhase : public Phase {
+ public:
+  DischargePhase(const SceneSpec& spec, std::string out_dir);
+  const char* name() const override { return "discharge"; }
+  void attach(World& w) override;
+  Status begin(World& w, std::string& reason) override;
+  void before_step(World& w, bool stopping) override;
+  Status after_step(World& w) override;
+  void finish(World& w, Status status) override;
+  std::string progress(const World& w) const override;
+  double fraction(const World& w) const override;
+  void flush() override;
+  void save(BinaryOut& o) const override { st.save(o); }
+  void load(BinaryIn& r) override { st.load(r); }
+  nlohmann::ordered_json metrics() const override { return metrics_; }
+
+  // Why a discharge resumed from a checkpoint cannot go on with its wall series file ("" : it can).
+  std::string series_file_problem() const;
+  // The positions at opening (kept in a file of the output directory, removed at the end).
+  OpeningPositions& at_open() { return st.at_open; }
+  const std::vector<Removal>& removals() const { return st.removals; }
+  double duration(const World& w) const { return w.time - st.t_open; }
+
+  DischargeState st;
+
+ private:
+  void sample(World& w, double t);
+  void snapshots(World& w, double t);
+  const SceneSpec& spec_;
+  std::string out_;
+  std::string series_path_, series_tmp_;
+  // Derived at attach (the same at every resume).
+  DischargeFrame f_;
+  long steps_total_ = 0, sample_every_ = 1;
+  std::size_t win_ = 1;
+  RemovedDiscs dead_;  // the discs leaving at a step: a few indices, not a mask of all discs
+  nlohmann::ordered_json metrics_;
+};
 
 // What one find_arch call searched: the searches run (each in a wider disc around the slit than
 // the last, the last over all records) and the records they read, summed.

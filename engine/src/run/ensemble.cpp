@@ -10,9 +10,8 @@
 #include <thread>
 #include <vector>
 
-#include "run/discharge.hpp"
 #include "io/outputs.hpp"
-#include "run/run.hpp"
+#include "run/scene_run.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
 
@@ -87,26 +86,17 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
       try {
       World w;
       const StabilityReport stab = build_world_releasing_discs(specs[k], w);
-      RunResult res = run_scene(specs[k], w, false, dir + "/last_good.bin");
+      SceneRun run(specs[k], w, dir);
+      const Status status = run.run(false, false);
       json extra;
+      const RunSummary summary = run.summary(extra);
       Member& m = members[k];
       m.index = k;
-      m.fill_rest = res.rest_reached;
-      m.status = to_string(res.status);
-      if (specs[k].discharge.enabled && res.status != RunStatus::unstable) {
-        const DischargeResult dr = run_discharge(specs[k], w, dir, false, &res.last_good);
-        res.wall_seconds += dr.wall_seconds;
-        extra["status"] = dr.status;
-        extra["discharge"] = dr.metrics;
-        m.status = dr.status;
-        m.metrics = dr.metrics;
-        if (dr.status == "unstable") {
-          res.status = RunStatus::unstable;
-          res.reason = dr.reason;
-        }
-      }
-      write_outputs(dir, specs[k], w, res, stab, &extra);
-      res.last_good.discard();
+      m.fill_rest = summary.rest_reached;
+      m.status = to_string(status);
+      if (run.discharge && run.discharge->metrics().is_object()) m.metrics = run.discharge->metrics();
+      write_outputs(dir, specs[k], w, summary, stab, &extra);
+      run.discard_kept();
       } catch (const std::exception& e) {  // one failed member must not take the others down
         members[k].index = k;
         members[k].status = std::string("error: ") + e.what();
@@ -127,7 +117,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
   for (auto& t : pool) t.join();
 
   std::vector<double> flow, flow_mass, out1, pb, pbw, ps, psw, jam_at;
-  int jammed = 0, unstable = 0, funnel = 0, piping = 0;
+  int jammed = 0, unstable = 0, failed = 0, funnel = 0, piping = 0;
   json list = json::array();
   for (const Member& m : members) {
     flow.push_back(get(m.metrics, "flow_rate_discs"));
@@ -140,6 +130,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
     jam_at.push_back(get(m.metrics, "jam_at"));
     jammed += m.status == "jammed" || m.metrics.value("jams", 0) > 0;
     unstable += m.status == "unstable";
+    failed += m.status == "unstable" || m.status.rfind("error", 0) == 0;
     const std::string p = m.metrics.value("pattern", std::string());
     funnel += p == "funnel";
     piping += p == "piping";
@@ -185,7 +176,13 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
                 opt.members - funnel - piping);
     std::printf("  written to %s/ensemble.json\n", out_dir.c_str());
   }
-  return unstable == opt.members ? 3 : 0;
+  // A study with no member to read fails: 3 when every member was unstable, 4 when some could not run.
+  if (failed == opt.members) {
+    std::fprintf(stderr, "dem ensemble: every member failed (%d unstable, %d could not run); see %s/ensemble.json\n",
+                 unstable, failed - unstable, out_dir.c_str());
+    return unstable == opt.members ? 3 : 4;
+  }
+  return 0;
 }
 
 }  // namespace dem

@@ -16,7 +16,8 @@ struct EnsembleOptions {
 };
 
 // Runs the members into out_dir/member_KK and writes out_dir/ensemble.json; returns the
-// process exit code (0, or 3 if every member was unstable). Throws SceneError for bad input.
+// process exit code: 0, or, when every member failed, 3 (all unstable) or 4 (some could not
+// run). Throws SceneError for bad input.
 int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::string& out_dir, bool quiet);
 
 }  // namespace dem

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "io/outputs.hpp"
+#include "io/files.hpp"
 #include "io/state.hpp"
 
 namespace dem {

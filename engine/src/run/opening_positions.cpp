@@ -6,7 +6,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "io/outputs.hpp"
+#include "io/files.hpp"
 #include "io/state.hpp"
 
 namespace dem {

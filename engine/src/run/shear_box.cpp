@@ -1,7 +1,6 @@
 #include "run/shear_box.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +8,7 @@
 #include <stdexcept>
 
 #include "io/outputs.hpp"
+#include "io/state.hpp"
 #include "scene/scene.hpp"
 #include "physics/stress_planes.hpp"
 #include "physics/world.hpp"
@@ -19,55 +19,7 @@ using json = nlohmann::ordered_json;
 
 namespace {
 
-int wall_index(const World& w, const std::string& name) {
-  for (std::size_t k = 0; k < w.geometry.walls.size(); ++k)
-    if (w.geometry.walls[k].name == name) return static_cast<int>(k);
-  throw SceneError("shear box: no wall named \"" + name + "\"");
-}
-
-}  // namespace
-
-void build_shear_world(const SceneSpec& s, World& w) {
-  if (s.clusters.enabled) {
-    try {
-      w.bonds = make_bonds(w.discs, s.clusters);
-    } catch (const std::invalid_argument& e) {
-      throw SceneError(s.file + ": clusters: " + e.what());
-    }
-  }
-  const ShearBoxSpec& b = s.shear_box;
-  if (!b.enabled) return;
-  w.moving = MovingWalls{};
-  w.moving.motion.assign(w.geometry.obstacle_count(), ObstacleMotion{});
-  for (const char* name : {"left", "right"}) {  // turning about their lower ends
-    RotatingWall r;
-    r.wall = wall_index(w, name);
-    const Wall& wl = w.geometry.walls[r.wall];
-    r.ax0 = wl.ax; r.ay0 = wl.ay; r.bx0 = wl.bx; r.by0 = wl.by;
-    r.pivot_x = wl.bx;  // the walls run top -> bottom
-    r.pivot_y = wl.by;
-    r.reach = std::hypot(wl.ax - wl.bx, wl.ay - wl.by);
-    w.moving.motion[r.wall].pivot_x = r.pivot_x;
-    w.moving.motion[r.wall].pivot_y = r.pivot_y;
-    w.moving.rotating.push_back(r);
-  }
-  RigidPlate p;
-  p.wall = wall_index(w, "plate");
-  const Wall& pl = w.geometry.walls[p.wall];
-  p.ax0 = pl.ax; p.ay0 = pl.ay; p.bx0 = pl.bx; p.by0 = pl.by;
-  p.mass = b.plate_mass;
-  p.follow = b.plate_follows_walls ? 0 : -1;
-  w.moving.plates.push_back(p);
-}
-
-namespace {
-
-struct Sample {
-  double t, strain, sigma, tau, ratio;
-  double sigma_check, tau_check, sigma_inertia, tau_inertia;
-};
-
-double moving_max(const std::vector<Sample>& s, int half, double& at) {
+double moving_max(const std::vector<ShearSample>& s, int half, double& at) {
   double best = -1e300;
   at = 0;
   for (std::size_t k = 0; k < s.size(); ++k) {
@@ -81,152 +33,176 @@ double moving_max(const std::vector<Sample>& s, int half, double& at) {
   return best;
 }
 
+double strain_of(const World& w) { return std::tan(-w.moving.rotating[0].theta); }
+
 }  // namespace
 
-ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, bool progress, LastGood* good) {
-  const ShearBoxSpec& b = spec.shear_box;
-  ShearResult res;
-  const Discs& d = w.discs;
-  double rmean = 0, rmin = 1e300;
-  for (std::size_t i = 0; i < d.size(); ++i) {
-    rmean += d.r(i);
-    rmin = std::min(rmin, d.r(i));
-  }
-  rmean /= std::max<std::size_t>(1, d.size());
-  int n_rows = 0;
-  const std::vector<int> row = assign_rows(d, 0.5 * rmean, n_rows);
-  const double overlap_limit = spec.max_overlap_fraction * rmin;
-  const int plate = w.moving.plates.at(0).wall;
-  const int left = w.moving.rotating.at(0).wall, right = w.moving.rotating.at(1).wall;
-  const int floor_wall = [&] {
-    for (std::size_t k = 0; k < w.geometry.walls.size(); ++k)
-      if (w.geometry.walls[k].name == "floor") return static_cast<int>(k);
-    return -1;
-  }();
-  const double weight = [&] {
-    double s = 0;
-    for (std::size_t i = 0; i < d.size(); ++i) s += d.mass(i) * std::hypot(w.gx, w.gy);
-    return s;
-  }();
-  const double plate_weight = w.moving.plates[0].mass * std::hypot(w.gx, w.gy);
-  const double t0 = w.time;
-  const double theta_end = -std::atan(b.max_strain);
-  for (RotatingWall& r : w.moving.rotating) r.omega = -b.rate;  // clockwise: the tops move to +X
+void ShearPhase::attach(World& w) {
+  plate_ = w.moving.plates.at(0).wall;
+  left_ = w.moving.rotating.at(0).wall;
+  right_ = w.moving.rotating.at(1).wall;
+  floor_ = -1;
+  for (std::size_t k = 0; k < w.geometry.walls.size(); ++k)
+    if (w.geometry.walls[k].name == "floor") floor_ = static_cast<int>(k);
+  const double g = std::hypot(w.gx, w.gy);
+  weight_ = 0;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) weight_ += w.discs.mass(i) * g;
+  plate_weight_ = w.moving.plates[0].mass * g;
+}
 
-  std::ostringstream series, planes;
-  series << "t,strain,angle,sigma,tau,ratio,sigma_check,tau_check,sigma_inertia,tau_inertia,sigma_plate,tau_plate,"
+Status ShearPhase::begin(World& w, std::string&) {
+  const ShearBoxSpec& b = spec_.shear_box;
+  const Discs& d = w.discs;
+  double rmean = 0;
+  for (std::size_t i = 0; i < d.size(); ++i) rmean += d.r(i);
+  rmean /= std::max<std::size_t>(1, d.size());
+  row_ = assign_rows(d, 0.5 * rmean, n_rows_);
+  t0_ = w.time;
+  for (RotatingWall& r : w.moving.rotating) r.omega = -b.rate;  // clockwise: the tops move to +X
+  const double theta_end = -std::atan(b.max_strain);
+  max_steps_ = static_cast<long>(std::ceil(std::abs(theta_end - w.moving.rotating[0].theta) / (b.rate * w.dt))) + 2;
+  series_ = "t,strain,angle,sigma,tau,ratio,sigma_check,tau_check,sigma_inertia,tau_inertia,sigma_plate,tau_plate,"
             "plate_x,plate_y,plate_vx,plate_vy,left_fx,left_fy,left_moment,right_fx,right_fy,right_moment,floor_fx,"
             "floor_fy,contacts,sliding,bond_strain,kinetic_energy\n";
-  planes << "t,strain,plane,y,contacts,sigma,tau,sigma_check,tau_check,sigma_inertia,tau_inertia\n";
-  std::vector<Sample> samples;
-  json snaps = json::array();
-  std::filesystem::create_directories(out + "/snapshots");
-  const double b_w = b.width;
+  planes_ = "t,strain,plane,y,contacts,sigma,tau,sigma_check,tau_check,sigma_inertia,tau_inertia\n";
   // From the start, or on from a state file's turned walls: the run that saved the state ended
   // with the sample and snapshots due at its strain, so the next ones are those past it.
-  std::size_t next_snap = 0;
-  long next_sample = 0;
+  step_ = 0;
+  next_snap_ = 0;
+  next_sample_ = 0;
   if (w.moving.rotating[0].theta != 0) {
-    const double done = std::tan(-w.moving.rotating[0].theta);
-    while (next_snap < b.snapshots.size() && done >= b.snapshots[next_snap] - 1e-12) ++next_snap;
-    while (done >= static_cast<double>(next_sample) * b.sample_strain - 1e-12) ++next_sample;  // the loop's test
+    const double done = strain_of(w);
+    while (next_snap_ < b.snapshots.size() && done >= b.snapshots[next_snap_] - 1e-12) ++next_snap_;
+    while (done >= static_cast<double>(next_sample_) * b.sample_strain - 1e-12) ++next_sample_;  // at_strain's test
   }
+  std::filesystem::create_directories(out_ + "/snapshots");
+  return at_strain(w);
+}
 
-  auto sample = [&](double strain) {
-    const std::vector<double> ys = planes_between_rows(d, row, n_rows);
-    const std::vector<PlaneStress> ps = plane_stresses(w, ys, b_w);
-    Sample s{w.time - t0, strain, 0, 0, 0, 0, 0, 0, 0};
-    for (std::size_t k = 0; k < ps.size(); ++k) {
-      const PlaneStress& p = ps[k];
-      s.sigma += p.sigma; s.tau += p.tau;
-      s.sigma_check += p.sigma_check; s.tau_check += p.tau_check;
-      s.sigma_inertia += p.sigma_inertia; s.tau_inertia += p.tau_inertia;
-      planes << fmt17(s.t) << ',' << fmt17(strain) << ',' << k << ',' << fmt17(p.y) << ',' << p.contacts << ','
-             << fmt17(p.sigma) << ',' << fmt17(p.tau) << ',' << fmt17(p.sigma_check) << ',' << fmt17(p.tau_check)
-             << ',' << fmt17(p.sigma_inertia) << ',' << fmt17(p.tau_inertia) << '\n';
-    }
-    const double np = std::max<std::size_t>(1, ps.size());
-    s.sigma /= np; s.tau /= np; s.sigma_check /= np; s.tau_check /= np; s.sigma_inertia /= np; s.tau_inertia /= np;
-    s.ratio = s.sigma != 0 ? s.tau / s.sigma : 0;
-    samples.push_back(s);
-    int contacts = 0, sliding = 0;
-    w.each_pair_with_forces([&](std::size_t p, const PairTotals::Force* rec) {
-      const PairContact& c = w.neighbors.pairs[p];
-      if ((!rec || rec->fn == 0) && c.en == 0) return;
-      ++contacts;
-      const PairProps& pp = w.pair(d.material(c.i), d.material(c.j));
-      if (c.es != 0 && std::abs(c.es) >= pp.mu * std::max(c.en, 0.0) * (1 - 1e-12)) ++sliding;
-    });
-    const ObstacleMotion& mp = w.moving.motion[plate];
-    const ObstacleMotion& ml = w.moving.motion[left];
-    const ObstacleMotion& mr = w.moving.motion[right];
-    const ObstacleMotion fl = floor_wall >= 0 ? w.moving.motion[floor_wall] : ObstacleMotion{};
-    const RigidPlate& P = w.moving.plates[0];
-    series << fmt17(s.t) << ',' << fmt17(strain) << ',' << fmt17(-w.moving.rotating[0].theta) << ','
-           << fmt17(s.sigma) << ',' << fmt17(s.tau) << ',' << fmt17(s.ratio) << ',' << fmt17(s.sigma_check) << ','
-           << fmt17(s.tau_check) << ',' << fmt17(s.sigma_inertia) << ',' << fmt17(s.tau_inertia) << ','
-           << fmt17(mp.fy / b_w) << ',' << fmt17(-mp.fx / b_w) << ',' << fmt17(P.x) << ',' << fmt17(P.y) << ','
-           << fmt17(P.vx) << ',' << fmt17(P.vy) << ',' << fmt17(ml.fx) << ',' << fmt17(ml.fy) << ','
-           << fmt17(ml.moment) << ',' << fmt17(mr.fx) << ',' << fmt17(mr.fy) << ',' << fmt17(mr.moment) << ','
-           << fmt17(fl.fx) << ',' << fmt17(fl.fy) << ',' << contacts << ',' << sliding << ','
-           << fmt17(max_bond_strain(d, w.bonds)) << ',' << fmt17(w.kinetic_energy()) << '\n';
-  };
-  auto snapshot = [&](double strain) {
-    char stem[64];
-    std::snprintf(stem, sizeof stem, "%02zu", next_snap);
-    write_contact_files(out + "/snapshots", std::string("contacts_") + stem, w);
-    write_disc_files(out + "/snapshots", std::string("discs_") + stem, spec, d, nullptr);
-    json walls = json::array();
-    for (const Wall& wl : w.geometry.walls)
-      walls.push_back({{"name", wl.name}, {"from", {wl.ax, wl.ay}}, {"to", {wl.bx, wl.by}}});
-    snaps.push_back({{"strain", strain}, {"strain_wanted", b.snapshots[next_snap]}, {"t", w.time - t0},
-                     {"contacts", std::string("contacts_") + stem + ".csv"},
-                     {"discs", std::string("discs_") + stem + ".csv"}, {"walls", walls}});
-    ++next_snap;
-  };
+void ShearPhase::before_step(World& w, bool) {
+  w.record_pair_forces = true;  // samples and snapshots read the pair forces: this small scene records every step
+}
 
-  const auto c0 = std::chrono::steady_clock::now();
-  auto last_print = c0;
-  res.status = "sheared";
-  const long max_steps =
-      static_cast<long>(std::ceil(std::abs(theta_end - w.moving.rotating[0].theta) / (b.rate * w.dt))) + 2;
-  // Samples and snapshots read the pair forces: every step of this small scene records them.
-  w.record_pair_forces = true;
-  for (long step = 0;; ++step) {
-    const double strain = std::tan(-w.moving.rotating[0].theta);
-    if (strain >= next_sample * b.sample_strain - 1e-12) {
-      sample(strain);
-      ++next_sample;
-    }
-    while (next_snap < b.snapshots.size() && strain >= b.snapshots[next_snap] - 1e-12) snapshot(strain);
-    if (strain >= b.max_strain - 1e-12 || step > max_steps) break;
-    w.step();
-    if (!(w.max_overlap <= overlap_limit) || !w.all_finite()) {
-      std::ostringstream os;
-      os << "overlap " << w.max_overlap << " cm (limit " << overlap_limit << ") or non-finite state at shear strain "
-         << strain << ", t = " << w.time << " s";
-      res.status = "unstable";
-      res.reason = os.str();
-      break;
-    }
-    if (good && (step + 1) % kKeepEvery == 0) good->keep(w.discs, w.time);  // checked just above
-    if (progress && (step & 1023) == 0) {
-      const auto now = std::chrono::steady_clock::now();
-      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
-        last_print = now;
-        const Sample& s = samples.back();
-        std::fprintf(stderr, "\r  shear strain %.4f / %.4f  tau/sigma %.3f  %.1fs elapsed   ", strain, b.max_strain,
-                     s.ratio, std::chrono::duration<double>(now - c0).count());
-        std::fflush(stderr);
-      }
-    }
+Status ShearPhase::after_step(World& w) {
+  ++step_;
+  return at_strain(w);
+}
+
+Status ShearPhase::at_strain(World& w) {
+  const ShearBoxSpec& b = spec_.shear_box;
+  const double strain = strain_of(w);
+  if (strain >= next_sample_ * b.sample_strain - 1e-12) {
+    sample(w, strain);
+    ++next_sample_;
   }
-  if (progress && std::chrono::duration<double>(last_print - c0).count() > 0) std::fprintf(stderr, "\n");
-  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+  while (next_snap_ < b.snapshots.size() && strain >= b.snapshots[next_snap_] - 1e-12) snapshot(w, strain);
+  return strain >= b.max_strain - 1e-12 || step_ > max_steps_ ? Status::sheared : Status::running;
+}
 
-  write_file_atomic(out + "/shear_series.csv", series.str());
-  write_file_atomic(out + "/shear_planes.csv", planes.str());
-  write_file_atomic(out + "/snapshots/index.json", json{{"snapshots", snaps}}.dump(1) + "\n");
+void ShearPhase::sample(World& w, double strain) {
+  const Discs& d = w.discs;
+  const double b_w = spec_.shear_box.width;
+  const std::vector<double> ys = planes_between_rows(d, row_, n_rows_);
+  const std::vector<PlaneStress> ps = plane_stresses(w, ys, b_w);
+  ShearSample s{w.time - t0_, strain, 0, 0, 0, 0, 0, 0, 0};
+  std::ostringstream planes;
+  for (std::size_t k = 0; k < ps.size(); ++k) {
+    const PlaneStress& p = ps[k];
+    s.sigma += p.sigma; s.tau += p.tau;
+    s.sigma_check += p.sigma_check; s.tau_check += p.tau_check;
+    s.sigma_inertia += p.sigma_inertia; s.tau_inertia += p.tau_inertia;
+    planes << fmt17(s.t) << ',' << fmt17(strain) << ',' << k << ',' << fmt17(p.y) << ',' << p.contacts << ','
+           << fmt17(p.sigma) << ',' << fmt17(p.tau) << ',' << fmt17(p.sigma_check) << ',' << fmt17(p.tau_check)
+           << ',' << fmt17(p.sigma_inertia) << ',' << fmt17(p.tau_inertia) << '\n';
+  }
+  planes_ += planes.str();
+  const double np = std::max<std::size_t>(1, ps.size());
+  s.sigma /= np; s.tau /= np; s.sigma_check /= np; s.tau_check /= np; s.sigma_inertia /= np; s.tau_inertia /= np;
+  s.ratio = s.sigma != 0 ? s.tau / s.sigma : 0;
+  samples_.push_back(s);
+  int contacts = 0, sliding = 0;
+  w.each_pair_with_forces([&](std::size_t p, const PairTotals::Force* rec) {
+    const PairContact& c = w.neighbors.pairs[p];
+    if ((!rec || rec->fn == 0) && c.en == 0) return;
+    ++contacts;
+    const PairProps& pp = w.pair(d.material(c.i), d.material(c.j));
+    if (c.es != 0 && std::abs(c.es) >= pp.mu * std::max(c.en, 0.0) * (1 - 1e-12)) ++sliding;
+  });
+  const ObstacleMotion& mp = w.moving.motion[plate_];
+  const ObstacleMotion& ml = w.moving.motion[left_];
+  const ObstacleMotion& mr = w.moving.motion[right_];
+  const ObstacleMotion fl = floor_ >= 0 ? w.moving.motion[floor_] : ObstacleMotion{};
+  const RigidPlate& P = w.moving.plates[0];
+  std::ostringstream series;
+  series << fmt17(s.t) << ',' << fmt17(strain) << ',' << fmt17(-w.moving.rotating[0].theta) << ','
+         << fmt17(s.sigma) << ',' << fmt17(s.tau) << ',' << fmt17(s.ratio) << ',' << fmt17(s.sigma_check) << ','
+         << fmt17(s.tau_check) << ',' << fmt17(s.sigma_inertia) << ',' << fmt17(s.tau_inertia) << ','
+         << fmt17(mp.fy / b_w) << ',' << fmt17(-mp.fx / b_w) << ',' << fmt17(P.x) << ',' << fmt17(P.y) << ','
+         << fmt17(P.vx) << ',' << fmt17(P.vy) << ',' << fmt17(ml.fx) << ',' << fmt17(ml.fy) << ','
+         << fmt17(ml.moment) << ',' << fmt17(mr.fx) << ',' << fmt17(mr.fy) << ',' << fmt17(mr.moment) << ','
+         << fmt17(fl.fx) << ',' << fmt17(fl.fy) << ',' << contacts << ',' << sliding << ','
+         << fmt17(max_bond_strain(d, w.bonds)) << ',' << fmt17(w.kinetic_energy()) << '\n';
+  series_ += series.str();
+}
+
+void ShearPhase::snapshot(World& w, double strain) {
+  char stem[64];
+  std::snprintf(stem, sizeof stem, "%02zu", next_snap_);
+  write_contact_files(out_ + "/snapshots", std::string("contacts_") + stem, w);
+  write_disc_files(out_ + "/snapshots", std::string("discs_") + stem, spec_, w.discs, nullptr);
+  json walls = json::array();
+  for (const Wall& wl : w.geometry.walls)
+    walls.push_back({{"name", wl.name}, {"from", {wl.ax, wl.ay}}, {"to", {wl.bx, wl.by}}});
+  snaps_.push_back({{"strain", strain}, {"strain_wanted", spec_.shear_box.snapshots[next_snap_]}, {"t", w.time - t0_},
+                    {"contacts", std::string("contacts_") + stem + ".csv"},
+                    {"discs", std::string("discs_") + stem + ".csv"}, {"walls", walls}});
+  ++next_snap_;
+}
+
+std::string ShearPhase::progress(const World&) const {
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "shear strain %.4f / %.4f  tau/sigma %.3f",
+                samples_.empty() ? 0.0 : samples_.back().strain, spec_.shear_box.max_strain,
+                samples_.empty() ? 0.0 : samples_.back().ratio);
+  return buf;
+}
+
+double ShearPhase::fraction(const World& w) const {
+  return spec_.shear_box.max_strain > 0 ? std::min(1.0, strain_of(w) / spec_.shear_box.max_strain) : 1.0;
+}
+
+void ShearPhase::save(BinaryOut& o) const {
+  o.put(step_); o.put(max_steps_); o.put(next_sample_); o.put<std::uint64_t>(next_snap_);
+  o.put(t0_); o.put(n_rows_);
+  o.vec(row_);
+  o.vec(samples_);
+  o.str(series_);
+  o.str(planes_);
+  o.str(snaps_.dump());
+}
+
+void ShearPhase::load(BinaryIn& r) {
+  step_ = r.get<long>(); max_steps_ = r.get<long>(); next_sample_ = r.get<long>();
+  next_snap_ = r.get<std::uint64_t>();
+  t0_ = r.get<double>(); n_rows_ = r.get<int>();
+  r.vec(row_);
+  r.vec(samples_);
+  series_ = r.str();
+  planes_ = r.str();
+  try {
+    snaps_ = json::parse(r.str());
+  } catch (const json::exception&) {
+    r.fail("corrupt shear state (snapshots)");
+  }
+  if (next_snap_ > spec_.shear_box.snapshots.size()) r.fail("corrupt shear state (snapshots)");
+}
+
+void ShearPhase::finish(World& w, Status) {
+  const ShearBoxSpec& b = spec_.shear_box;
+  const Discs& d = w.discs;
+  write_file_atomic(out_ + "/shear_series.csv", series_);
+  write_file_atomic(out_ + "/shear_planes.csv", planes_);
+  write_file_atomic(out_ + "/snapshots/index.json", json{{"snapshots", snaps_}}.dump(1) + "\n");
 
   json m;
   m["width"] = b.width;
@@ -234,30 +210,30 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   m["max_strain"] = b.max_strain;
   m["plate_horizontal"] = b.plate_follows_walls ? "with_walls" : "free";
   m["plate_mass"] = w.moving.plates[0].mass;
-  m["plate_weight"] = plate_weight;
-  m["discs_weight"] = weight;
-  m["rows"] = n_rows;
-  m["planes"] = std::max(0, n_rows - 1);
+  m["plate_weight"] = plate_weight_;
+  m["discs_weight"] = weight_;
+  m["rows"] = n_rows_;
+  m["planes"] = std::max(0, n_rows_ - 1);
   m["bonds"] = w.bonds.size();
-  m["samples"] = samples.size();
-  if (!samples.empty()) {
-    const Sample& s0 = samples.front();
+  m["samples"] = samples_.size();
+  if (!samples_.empty()) {
+    const ShearSample& s0 = samples_.front();
     m["sigma_initial"] = s0.sigma;
-    m["sigma_plate_load"] = plate_weight / b.width;  // the plate's weight over b
+    m["sigma_plate_load"] = plate_weight_ / b.width;  // the plate's weight over b
     std::size_t kmax = 0;
-    for (std::size_t k = 0; k < samples.size(); ++k)
-      if (samples[k].ratio > samples[kmax].ratio) kmax = k;
-    m["peak_ratio"] = samples[kmax].ratio;
-    m["strain_at_peak"] = samples[kmax].strain;
+    for (std::size_t k = 0; k < samples_.size(); ++k)
+      if (samples_[k].ratio > samples_[kmax].ratio) kmax = k;
+    m["peak_ratio"] = samples_[kmax].ratio;
+    m["strain_at_peak"] = samples_[kmax].strain;
     const int half = std::max(1, static_cast<int>(std::lround(0.005 / b.sample_strain)));
     double at = 0;
-    m["peak_ratio_windowed"] = moving_max(samples, half, at);
+    m["peak_ratio_windowed"] = moving_max(samples_, half, at);
     m["strain_at_peak_windowed"] = at;
     m["window_strain"] = (2 * half + 1) * b.sample_strain;
-    m["ratio_final"] = samples.back().ratio;
-    m["strain_final"] = samples.back().strain;
+    m["ratio_final"] = samples_.back().ratio;
+    m["strain_final"] = samples_.back().strain;
     double worst_static = 0, worst_identity = 0;
-    for (const Sample& s : samples) {
+    for (const ShearSample& s : samples_) {
       const double scale = std::max(std::abs(s.sigma), 1e-300);
       worst_static = std::max(worst_static, std::max(std::abs(s.sigma - s.sigma_check), std::abs(s.tau - s.tau_check)) / scale);
       worst_identity = std::max(worst_identity, std::max(std::abs(s.sigma - s.sigma_check - s.sigma_inertia),
@@ -268,10 +244,9 @@ ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out, b
   }
   m["plate_final"] = {w.moving.plates[0].x, w.moving.plates[0].y};
   m["bond_strain_final"] = max_bond_strain(d, w.bonds);
-  m["snapshots"] = snaps.size();
-  m["duration"] = w.time - t0;
-  res.metrics = m;
-  return res;
+  m["snapshots"] = snaps_.size();
+  m["duration"] = w.time - t0_;
+  metrics_ = m;
 }
 
 }  // namespace dem

@@ -9,49 +9,58 @@
 #include <string>
 #include <vector>
 
-#include "run/last_good.hpp"
+#include "run/phase.hpp"
+#include "scene/shear_spec.hpp"
 
 namespace dem {
-
-struct ShearBoxSpec {
-  bool enabled = false;
-  double width = 40.0;          // b [cm]
-  double height = 20.0;         // h [cm], nominal height of the sample
-  double wall_length = 0;       // side walls from their lower ends [cm]; 0: 1.5 h
-  int wall_material = -1;       // side walls and floor
-  int plate_material = -1;
-  double plate_volume = 1500.0; // F/(rho g) [cm^3 per cm of thickness]
-  double plate_density = 0;     // [g/cm^3]; 0: the fill material's
-  double plate_gap = 0.004;     // [cm] initial gap above the highest disc
-  double plate_overhang = 4.0;  // [cm] the plate reaches this far beyond each side wall
-  bool plate_follows_walls = false;  // true: horizontal motion with the walls; false: free
-  double plate_y = 0;           // [cm] plate height (set after the fill)
-  double plate_mass = 0;        // [g per cm] (set after the fill)
-  // [shear]
-  bool shear = false;
-  double rate = 0.05;           // [rad/s] the side walls' rotation rate (tops move to +X)
-  double max_strain = 0.15;     // gamma = tan(angle of the walls)
-  double sample_strain = 0.001;
-  std::vector<double> snapshots = {0.0, 0.05};  // strains
-};
 
 class World;
 struct SceneSpec;
 
-struct ShearResult {
-  std::string status;       // "sheared" or "unstable"
-  std::string reason;
-  double wall_seconds = 0;
-  nlohmann::ordered_json metrics;  // docs/outputs.md, "Shear outputs"
+// One sample of the shear: the mean over the virtual planes (stress_planes.hpp).
+struct ShearSample {
+  double t, strain, sigma, tau, ratio;
+  double sigma_check, tau_check, sigma_inertia, tau_inertia;
 };
 
-// The box's walls, plate and bonds in a world built from the scene (called by build_world).
-void build_shear_world(const SceneSpec& s, World& w);
+// The shear as a phase of the run (phase.hpp): the side walls turn at shear.rate until
+// shear.max_strain; every shear.sample_strain the plane stresses are sampled, at the
+// shear.snapshots strains the discs and contacts are written; finish writes shear_series.csv,
+// shear_planes.csv, snapshots/index.json and the metrics (docs/outputs.md, "Shear outputs").
+class ShearPhase : public Phase {
+ public:
+  ShearPhase(const SceneSpec& spec, std::string out_dir) : spec_(spec), out_(std::move(out_dir)) {}
+  const char* name() const override { return "shear"; }
+  void attach(World& w) override;
+  Status begin(World& w, std::string& reason) override;
+  void before_step(World& w, bool stopping) override;
+  Status after_step(World& w) override;
+  void finish(World& w, Status status) override;
+  std::string progress(const World& w) const override;
+  double fraction(const World& w) const override;
+  void save(BinaryOut& o) const override;
+  void load(BinaryIn& r) override;
+  nlohmann::ordered_json metrics() const override { return metrics_; }
 
-// Shears the compressed sample to max_strain, writing shear_series.csv, shear_planes.csv and
-// snapshots into out_dir (which exists). The last good state is kept in `good` every kKeepEvery
-// steps (last_good.hpp) when given.
-ShearResult run_shear(const SceneSpec& spec, World& w, const std::string& out_dir, bool progress,
-                      LastGood* good = nullptr);
+ private:
+  Status at_strain(World& w);  // the sample and snapshots due at the current strain; the end test
+  void sample(World& w, double strain);
+  void snapshot(World& w, double strain);
+  const SceneSpec& spec_;
+  std::string out_;
+  // Derived at attach (the same at every resume).
+  int plate_ = -1, left_ = -1, right_ = -1, floor_ = -1;
+  double weight_ = 0, plate_weight_ = 0;
+  // The shear's own state (checkpoints carry it).
+  long step_ = 0, max_steps_ = 0, next_sample_ = 0;
+  std::size_t next_snap_ = 0;
+  double t0_ = 0;                 // [s] world time at the shear's start
+  int n_rows_ = 0;
+  std::vector<int> row_;          // each disc's row at the start (the planes lie between rows)
+  std::vector<ShearSample> samples_;
+  std::string series_, planes_;   // the text of shear_series.csv and shear_planes.csv so far
+  nlohmann::ordered_json snaps_ = nlohmann::ordered_json::array();
+  nlohmann::ordered_json metrics_;
+};
 
 }  // namespace dem

@@ -9,7 +9,7 @@
 #include "physics/clusters.hpp"
 #include "physics/geometry.hpp"
 #include "physics/model.hpp"
-#include "run/shear_box.hpp"
+#include "scene/shear_spec.hpp"
 #include "physics/stability.hpp"
 
 namespace dem {

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <stdexcept>
+
+#include "physics/world.hpp"
 
 namespace dem {
 
@@ -226,6 +229,49 @@ void finish_shear_tables(SceneSpec& s) {
     throw SceneError(s.file + ": shear_box.plate_volume = " + show(b.plate_volume) + ": the plate needs a mass > 0");
   s.geometry.walls.push_back({"plate", "plate", -b.plate_overhang, b.plate_y, b.width + b.plate_overhang, b.plate_y,
                               b.plate_material});
+}
+
+namespace {
+
+int wall_index(const World& w, const std::string& name) {
+  for (std::size_t k = 0; k < w.geometry.walls.size(); ++k)
+    if (w.geometry.walls[k].name == name) return static_cast<int>(k);
+  throw SceneError("shear box: no wall named \"" + name + "\"");
+}
+
+}  // namespace
+
+void build_shear_world(const SceneSpec& s, World& w) {
+  if (s.clusters.enabled) {
+    try {
+      w.bonds = make_bonds(w.discs, s.clusters);
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(s.file + ": clusters: " + e.what());
+    }
+  }
+  const ShearBoxSpec& b = s.shear_box;
+  if (!b.enabled) return;
+  w.moving = MovingWalls{};
+  w.moving.motion.assign(w.geometry.obstacle_count(), ObstacleMotion{});
+  for (const char* name : {"left", "right"}) {  // turning about their lower ends
+    RotatingWall r;
+    r.wall = wall_index(w, name);
+    const Wall& wl = w.geometry.walls[r.wall];
+    r.ax0 = wl.ax; r.ay0 = wl.ay; r.bx0 = wl.bx; r.by0 = wl.by;
+    r.pivot_x = wl.bx;  // the walls run top -> bottom
+    r.pivot_y = wl.by;
+    r.reach = std::hypot(wl.ax - wl.bx, wl.ay - wl.by);
+    w.moving.motion[r.wall].pivot_x = r.pivot_x;
+    w.moving.motion[r.wall].pivot_y = r.pivot_y;
+    w.moving.rotating.push_back(r);
+  }
+  RigidPlate p;
+  p.wall = wall_index(w, "plate");
+  const Wall& pl = w.geometry.walls[p.wall];
+  p.ax0 = pl.ax; p.ay0 = pl.ay; p.bx0 = pl.bx; p.by0 = pl.by;
+  p.mass = b.plate_mass;
+  p.follow = b.plate_follows_walls ? 0 : -1;
+  w.moving.plates.push_back(p);
 }
 
 }  // namespace dem

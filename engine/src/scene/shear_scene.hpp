@@ -16,4 +16,8 @@ void read_shear_tables(SceneSpec& s, const toml::table& root);
 // After the fill: the plate goes above the highest disc; the clusters' disc indices are checked.
 void finish_shear_tables(SceneSpec& s);
 
+class World;
+// The box's walls, plate and bonds in a world built from the scene (called by build_world).
+void build_shear_world(const SceneSpec& s, World& w);
+
 }  // namespace dem

@@ -1,0 +1,124 @@
+#include "run/runner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "physics/world.hpp"
+#include "run/control.hpp"
+#include "scene/scene.hpp"
+
+namespace dem {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double min_radius(const World& w) {
+  double rmin = 1e300;
+  for (std::size_t i = 0; i < w.discs.size(); ++i) rmin = std::min(rmin, w.discs.r(i));
+  return rmin;
+}
+
+// What went wrong, for the message of an unstable run.
+std::string diagnose(const World& w, double overlap_limit, const char* phase) {
+  const Discs& d = w.discs;
+  std::ostringstream os;
+  os.precision(6);
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (!std::isfinite(d.x[i]) || !std::isfinite(d.y[i]) || !std::isfinite(d.vx[i]) || !std::isfinite(d.vy[i]) ||
+        !std::isfinite(d.omega[i])) {
+      os << "non-finite state of disc " << d.id_at(i) << " at t = " << w.time << " s (step " << w.steps << ", "
+         << phase << ")";
+      return os.str();
+    }
+  os << "overlap " << w.max_overlap << " cm exceeds the limit " << overlap_limit << " cm (end.max_overlap x r_min) at t = "
+     << w.time << " s (step " << w.steps << ", " << phase << "); kinetic energy " << w.kinetic_energy();
+  return os.str();
+}
+
+std::string duration_text(double s) {
+  char buf[32];
+  if (!(s >= 0) || !std::isfinite(s)) return "?";
+  if (s < 120) std::snprintf(buf, sizeof buf, "%.0fs", s);
+  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.0fmin", s / 60);
+  else std::snprintf(buf, sizeof buf, "%.1fh", s / 3600);
+  return buf;
+}
+
+}  // namespace
+
+double Runner::wall_now() const { return running_ ? run_start_ + seconds_since(phase_start_) : wall_seconds; }
+
+std::string Runner::check(const World& w, const Phase& phase) {
+  if (!(w.max_overlap <= guard.overlap_limit)) return diagnose(w, guard.overlap_limit, phase.name());
+  if (w.steps % kCheckEvery == 0) {
+    if (!w.all_finite()) return diagnose(w, guard.overlap_limit, phase.name());
+    if (std::string grew = guard.energy.check(w); !grew.empty()) return grew + " (" + phase.name() + ")";
+    if (w.steps % kKeepEvery == 0) last_good.keep(w.discs, w.time);  // checked: finite, within budget
+  }
+  return "";
+}
+
+Status Runner::run(Phase& phase, World& w, bool fresh) {
+  phase.attach(w);
+  Status status = Status::running;
+  if (fresh) {
+    guard.overlap_limit = spec_.max_overlap_fraction * min_radius(w);
+    status = phase.begin(w, reason);
+    guard.energy.start(w, spec_.max_energy_gain);  // after begin: a discharge's budget starts with the gate open
+  }
+  phase_start_ = Clock::now();
+  run_start_ = wall_seconds;
+  running_ = true;
+  auto last_print = phase_start_;
+  const double fraction0 = phase.fraction(w);
+  const long steps0 = w.steps;
+  bool printed = false, stopping = false;
+  while (status == Status::running) {
+    phase.before_step(w, stopping);
+    w.step();
+    if (std::string why = check(w, phase); !why.empty()) {
+      reason = why;
+      status = Status::unstable;
+      break;
+    }
+    status = phase.after_step(w);
+    if (status != Status::running) break;
+    // A stop request ends the run on a step that recorded its pair forces (the contacts
+    // output): this one, or the next, which before_step then asks to record.
+    if (stop_signal()) stopping = true;
+    if (stopping && w.pair_forces_current()) {
+      status = Status::interrupted;
+      break;
+    }
+    // Checkpoints follow the world's step count: a resumed run writes them at the same steps.
+    if (checkpoint_every > 0 && w.steps % checkpoint_every == 0 && write_checkpoint) {
+      phase.flush();
+      write_checkpoint(phase);
+    }
+    if (progress && (w.steps & 1023) == 0) {
+      const auto now = Clock::now();
+      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
+        last_print = now;
+        const double el = seconds_since(phase_start_), f = phase.fraction(w);
+        const double eta = f > fraction0 ? el * (1 - f) / (f - fraction0) : NAN;
+        std::fprintf(stderr, "\r  %s  %.3g steps/s  %s elapsed, ETA %s   ", phase.progress(w).c_str(),
+                     (w.steps - steps0) / std::max(el, 1e-9), duration_text(el).c_str(),
+                     duration_text(eta).c_str());
+        std::fflush(stderr);
+        printed = true;
+      }
+    }
+  }
+  if (printed) std::fprintf(stderr, "\n");
+  wall_seconds = run_start_ + seconds_since(phase_start_);
+  running_ = false;
+  phase.finish(w, status);
+  return status;
+}
+
+}  // namespace dem
