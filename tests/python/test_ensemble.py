@@ -44,3 +44,21 @@ def test_ensemble_refuses_a_perturbation_that_overlaps(tmp_path, run_dem):
     assert proc.returncode == 2
     assert "perturb" in proc.stderr and "overlap" in proc.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_ensemble_fails_when_every_member_failed(tmp_path, run_dem):
+    """No member to read: exit 4 when members could not run (here: their folders cannot be
+    made), 3 when every member was unstable (a step far above the stability bound, forced)."""
+    out = tmp_path / "blocked"
+    out.mkdir()
+    for k in range(2):
+        (out / f"member_{k:02d}").write_text("a file where the member's folder goes")
+    proc = run_dem("ensemble", short_scene(tmp_path), "--out", out, "--members", 2, "--quiet")
+    assert proc.returncode == 4, proc.stderr
+    assert "every member failed" in proc.stderr
+    runs = json.loads((out / "ensemble.json").read_text())["runs"]
+    assert all(r["status"].startswith("error") for r in runs)
+    proc = run_dem("ensemble", short_scene(tmp_path), "--out", tmp_path / "unstable", "--members", 2, "--quiet",
+                   "--dt", 2e-3, "--force-dt")
+    assert proc.returncode == 3, proc.stderr
+    assert json.loads((tmp_path / "unstable" / "ensemble.json").read_text())["unstable"] == 2

@@ -82,8 +82,8 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
       char name[32];
       std::snprintf(name, sizeof name, "member_%02d", k);
       const std::string dir = out_dir + "/" + name;
-      std::filesystem::create_directories(dir);
       try {
+      std::filesystem::create_directories(dir);
       World w;
       const StabilityReport stab = build_world_releasing_discs(specs[k], w);
       SceneRun run(specs[k], w, dir);
