@@ -41,6 +41,18 @@ def test_summary(run_dir):
     assert dd["dt_bound_eq26"] == pytest.approx(15.3 / 3.64e4)
 
 
+def test_summary_derived_is_as_documented(run_dir):
+    """docs/outputs.md's "derived" entry names exactly the keys each material pair's entry has."""
+    import re
+    doc = (REPO / "docs" / "outputs.md").read_text()
+    block = doc[doc.index('"derived": ['):doc.index('"stability": {')]
+    documented = set(re.findall(r'"(\w+)":', block)) - {"derived"}
+    s = json.loads((run_dir / "summary.json").read_text())
+    assert isinstance(s["derived"], list) and s["derived"]
+    for entry in s["derived"]:
+        assert set(entry) == documented, set(entry) ^ documented
+
+
 def read_csv(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
@@ -113,3 +125,30 @@ def test_figures_from_a_real_run(run_dir, tmp_path):
     figures.plot_side_profiles([run_dir], prof)
     for png in (net, prof):
         assert png.stat().st_size > 10000
+
+
+@pytest.mark.parametrize("scheme", ["paper_eq18", "paper_eq19", "velocity_verlet"])
+def test_contacts_are_written_where_their_forces_were_computed(tmp_path, dem_binary, scheme):
+    """Mid-collision, every scheme: the disc-disc row's contact point and e_n are those of the
+    positions its forces came from. Eqs. (18) and (19) compute the forces of a step and then move
+    the discs: the positions at the end of the step before (a run one step shorter). Verlet
+    computes them after its move: the positions of the run's own discs.csv."""
+    import subprocess
+    scene = REPO / "reference_inputs" / "agreement" / "calibration" / "head_on_disc_disc.toml"
+    kn, dt, end = 94530800.0, 1e-5, 3e-4  # the scene's overlap spring and step; mid-contact
+
+    def run(tag, t_end):
+        out = tmp_path / tag
+        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", "--no-plots",
+                               "--scheme", scheme, "--end-time", repr(t_end)], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+        return out
+
+    out = run("full", end)
+    at = out if scheme == "velocity_verlet" else run("before", end - dt)
+    x = [float(d["x"]) for d in read_csv(at / "discs.csv")]
+    rows = [r for r in read_csv(out / "contacts.csv") if r["kind"] == "dd"]
+    assert len(rows) == 1, "mid-collision: one touching pair"
+    overlap = 2.0 - abs(x[1] - x[0])
+    assert float(rows[0]["e_n"]) == pytest.approx(kn * overlap, rel=1e-9)
+    assert float(rows[0]["x"]) == pytest.approx(0.5 * (x[0] + x[1]), abs=1e-12)

@@ -173,9 +173,16 @@ class NthKept {
 
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
   const Discs& d = w.discs;
+  // Every contact is written where its forces were computed. Eqs. (18) and (19) compute the
+  // forces and then move the discs in the same pass, so their discs are taken back by the
+  // step's increment (World::increments); Verlet computes the forces after its move.
+  const bool moved_after_forces = w.scheme != Scheme::velocity_verlet && w.steps > 0;
+  const World::Increments inc = w.increments();
+  const auto px = [&](int i) { return moved_after_forces ? d.x[i] - inc.x[i] * inc.factor : d.x[i]; };
+  const auto py = [&](int i) { return moved_after_forces ? d.y[i] - inc.y[i] * inc.factor : d.y[i]; };
   // The contacts written, in this order: the touching disc-disc pairs (list order), the bonds
   // between distinct places, the touching obstacle contacts. Counted first, then read in order.
-  const auto dist = [&](int i, int j) { return std::hypot(d.x[j] - d.x[i], d.y[j] - d.y[i]); };
+  const auto dist = [&](int i, int j) { return std::hypot(px(j) - px(i), py(j) - py(i)); };
   const auto touching = [&](std::size_t p) {
     const PairContact& c = w.neighbors.pairs[p];
     const double R = dist(c.i, c.j);
@@ -225,8 +232,8 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const auto point = [&](std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
     const Entry e = entry(k / 2);
     const int i = k % 2 ? e.j : e.i;
-    x = i >= 0 ? d.x[i] : e.px;
-    y = i >= 0 ? d.y[i] : e.py;
+    x = i >= 0 ? px(i) : e.px;
+    y = i >= 0 ? py(i) : e.py;
   };
 
   std::ofstream o;  // NAME.csv.tmp, renamed when complete
@@ -239,20 +246,20 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     const PairContact& c = w.neighbors.pairs[p];
     double fn, fs;
     totals(p, r, fn, fs);
-    const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+    const double dx = px(c.j) - px(c.i), dy = py(c.j) - py(c.i);
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;
-    const double cx = d.x[c.i] + nx * (d.r(c.i) - 0.5 * ov), cy = d.y[c.i] + ny * (d.r(c.i) - 0.5 * ov);
+    const double cx = px(c.i) + nx * (d.r(c.i) - 0.5 * ov), cy = py(c.i) + ny * (d.r(c.i) - 0.5 * ov);
     o << "dd," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
       << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
   }
   for (std::size_t p = 0; p < w.bonds.size(); ++p) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
     if (!bonded(p)) continue;
     const Bond& c = w.bonds[p];
-    const double dx = d.x[c.j] - d.x[c.i], dy = d.y[c.j] - d.y[c.i];
+    const double dx = px(c.j) - px(c.i), dy = py(c.j) - py(c.i);
     const double R = std::hypot(dx, dy);
     const double nx = dx / R, ny = dy / R, at = c.ai / (c.ai + c.aj) * R;
-    o << "db," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(d.x[c.i] + nx * at) << ',' << fmt(d.y[c.i] + ny * at)
+    o << "db," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(px(c.i) + nx * at) << ',' << fmt(py(c.i) + ny * at)
       << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
   }
