@@ -75,13 +75,13 @@ def kinetic_energy_run(out_dir: Path, summary: dict) -> float:
 
 def run_dem(scene: Path, out: Path, scheme: str, dt: float, end_time: float | None = None,
             timeout: float = 900, extra: list | None = None) -> dict:
-    """``dem run SCENE --out OUT --scheme S --dt DT --force-dt --quiet --no-plots``.
+    """``dem run SCENE --out OUT --scheme S --dt DT --force-dt --quiet``.
 
     Returns rc, status, loop time (summary wall_time_s), process time, steps, the summary
     (or None) and the message of a failed run. --force-dt is always given: these studies go
     past the engine's enforced bound on purpose."""
     cmd = [dem(), "run", str(scene), "--out", str(out), "--scheme", scheme, "--dt", repr(float(dt)),
-           "--force-dt", "--quiet", "--no-plots"]
+           "--force-dt", "--quiet"]
     if end_time is not None:
         cmd += ["--end-time", repr(float(end_time))]
     cmd += list(extra or [])

@@ -78,8 +78,7 @@ def settled_scene(base: Path, dem: str, out: Path) -> Path:
     settle = out / f"{base.stem}_settle.toml"
     settle.write_text(text + f"\n[end]\ntime = {SETTLE_TIME!r}\nstop_at_rest = false\n")
     t0 = time.monotonic()
-    p = subprocess.run([dem, "run", str(settle), "--out", str(packing.parent), "--quiet", "--no-plots",
-                        "--threads", str(os.cpu_count() or 1)], capture_output=True, text=True)
+    p = subprocess.run([dem, "run", str(settle), "--out", str(packing.parent), "--quiet", "--threads", str(os.cpu_count() or 1)], capture_output=True, text=True)
     if p.returncode != 0:
         raise RuntimeError(f"settling {base.name} failed (dem exit {p.returncode}): {p.stderr.strip()[-300:]}")
     s = json.loads((packing.parent / "summary.json").read_text())
@@ -118,8 +117,7 @@ def _native(args) -> dict:
         from compare import native_backend
         scene = str(native_backend.write_inputs(_case(args), Path(args.dir) / "case"))
         extra = []
-    cmd = [args.dem, "run", scene, "--out", str(Path(args.dir) / "run"), "--quiet", "--no-plots",
-           "--threads", str(args.threads)] + extra
+    cmd = [args.dem, "run", scene, "--out", str(Path(args.dir) / "run"), "--quiet", "--threads", str(args.threads)] + extra
     p = subprocess.run(measured(args) + cmd, capture_output=True, text=True)
     if p.returncode != 0:
         return {"error": f"dem exit {p.returncode}: {p.stderr.strip()[-300:]}"}

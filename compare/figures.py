@@ -16,7 +16,9 @@ The file formats read here are those of docs/outputs.md:
   as heat maps, and the wall totals (the paper's Fig. 10);
 - ``flow``:     removed discs, discs in the silo, moved fraction, surface heights and the arch
   against time during discharge;
-- ``discharge``: the three discharge figures of one run into one folder.
+- ``discharge``: the three discharge figures of one run into one folder;
+- ``run``:      the pictures of one run directory, into it: network.png and side_walls.png, and
+  for a discharge frames.png, wall_ratios.png and flow.png (the engine writes data only).
 
 Usage, from the repository root::
 
@@ -28,6 +30,7 @@ Usage, from the repository root::
     /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
     /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
     /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
+    /usr/bin/python3 -m compare.figures run RUN_DIR
 """
 
 import argparse
@@ -1159,6 +1162,16 @@ def plot_discharge(run_dir, outdir):
             plot_flow(run_dir, os.path.join(outdir, "flow.png"))]
 
 
+def plot_run(run_dir):
+    """The pictures of one `dem run` directory, written into it (one process: matplotlib is
+    imported once): network.png and side_walls.png; a discharge run adds its three figures."""
+    out = [plot_network(run_dir, os.path.join(run_dir, "network.png")),
+           plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"))]
+    if os.path.exists(os.path.join(run_dir, "flow_series.csv")):
+        out += plot_discharge(run_dir, run_dir)
+    return out
+
+
 # --------------------------------------------------------------------------- command line
 
 
@@ -1201,6 +1214,8 @@ def main(argv=None):
     p = sub.add_parser("discharge", help="frames.png, wall_ratios.png and flow.png of one run")
     p.add_argument("run_dir")
     p.add_argument("--outdir", required=True, help="folder to write the three PNGs to")
+    p = sub.add_parser("run", help="the pictures of one run directory, into it")
+    p.add_argument("run_dir")
     args = parser.parse_args(argv)
 
     if args.command == "network":
@@ -1217,8 +1232,10 @@ def main(argv=None):
         out = plot_wall_ratios(args.run_dir, args.out)
     elif args.command == "flow":
         out = plot_flow(args.run_dir, args.out)
-    else:
+    elif args.command == "discharge":
         out = "\n".join(plot_discharge(args.run_dir, args.outdir))
+    else:
+        out = "\n".join(plot_run(args.run_dir))
     print(out)
     return 0
 

@@ -128,7 +128,7 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
         scene = write_inputs(case, out_dir)
     except CaseError as e:
         return failed(NAME, case.name, f"translation: {e}")
-    cmd = [str(dem_binary()), "run", str(scene), "--out", str(out_dir / "run"), "--no-plots", "--quiet"]
+    cmd = [str(dem_binary()), "run", str(scene), "--out", str(out_dir / "run"), "--quiet"]
     t0 = time.monotonic()
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)

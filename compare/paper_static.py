@@ -36,7 +36,7 @@ def run_one(dem, s, scheme, dt, out_root):
     scene = SCENES / f"silo_{s - 1}_{s}.toml"
     out = out_root / "runs" / f"{scheme}_dt{dt:g}" / f"silo_{s - 1}_{s}"
     cmd = [str(dem), "run", str(scene), "--out", str(out), "--scheme", scheme, "--dt", repr(dt),
-           "--force-dt", "--quiet", "--no-plots"]
+           "--force-dt", "--quiet"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     rec = {"s": s, "arrangement": label(s), "scheme": scheme, "dt": dt, "exit": proc.returncode,
            "dir": str(out.relative_to(out_root))}

@@ -73,7 +73,7 @@ def run_native(dem, kind, alpha, variant, out_root):
     path = work / src.name
     path.write_text(variant_text(src.read_text(), kind))
     t0 = time.time()
-    proc = subprocess.run([str(dem), "run", str(path), "--out", str(out), "--no-plots", "--quiet"],
+    proc = subprocess.run([str(dem), "run", str(path), "--out", str(out), "--quiet"],
                           capture_output=True, text=True)
     if proc.returncode != 0:
         return {"kind": kind, "alpha": alpha, "variant": variant, "dir": str(out), "error": proc.stderr.strip()[-500:]}

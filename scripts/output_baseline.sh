@@ -6,8 +6,8 @@ mkdir -p $out
 for s in reference_inputs/scenes/*.toml reference_inputs/agreement/user/hopper.toml; do
   n=$(basename $s .toml)
   case $n in bench_silo_100k|bench_silo_1m) continue;; esac
-  /usr/bin/time -f "$n %e s" build/dem run $s --out $out/$n --quiet --no-plots > $out/$n.stdout 2>> $out/times.txt || echo "$n rc=$?" >> $out/times.txt
+  /usr/bin/time -f "$n %e s" build/dem run $s --out $out/$n --quiet > $out/$n.stdout 2>> $out/times.txt || echo "$n rc=$?" >> $out/times.txt
 done
 # resume / checkpoint runs of a discharge
-build/dem run reference_inputs/scenes/discharge_17_18.toml --out $out/ck_discharge --quiet --no-plots --checkpoint-every 0.5 > /dev/null 2>&1
+build/dem run reference_inputs/scenes/discharge_17_18.toml --out $out/ck_discharge --quiet --checkpoint-every 0.5 > /dev/null 2>&1
 /usr/bin/python3 scripts/output_digest.py $out/*/ > $dig

@@ -8,6 +8,7 @@ import os
 import random
 import shutil
 import signal
+import sys
 import subprocess
 import time
 import xml.etree.ElementTree as ET
@@ -99,40 +100,42 @@ def scene(tmp_path_factory):
 
 
 def test_killed_runs_leave_only_complete_files(tmp_path, dem_binary, scene):
-    def run(out, *extra):
+    """dem run killed while it steps and writes, and the drawing of its pictures
+    (compare.figures run) killed while it draws: every file left is complete or a .tmp."""
+    def timed(cmd):
         t0 = time.monotonic()
-        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", *extra],
-                              capture_output=True, text=True, timeout=600)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=REPO)
         assert proc.returncode == 0, proc.stderr
         return time.monotonic() - t0
 
-    engine = run(tmp_path / "engine_only", "--no-plots")
     full = tmp_path / "full"
-    drawing = max(0.1, run(full) - engine)
+    engine = timed([str(dem_binary), "run", str(scene), "--out", str(full), "--quiet"])
+    drawing = max(0.1, timed([sys.executable, "-m", "compare.figures", "run", str(full)]))
     assert (full / "network.png").exists() and len(list((full / "snapshots").glob("*.vtu"))) == 52
     assert check_dir(full) > 100
     rng = random.Random(11)
     seen_tmp = 0
     for k in range(6):
         out = tmp_path / f"killed{k}"
-        p = subprocess.Popen([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         if k % 2 == 0:  # while the engine steps and writes snapshots
+            p = subprocess.Popen([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
             time.sleep(rng.uniform(0.05, 1.0) * engine)
-        else:  # while the PNGs are drawn (summary.json is the engine's last file)
-            while not (out / "summary.json").exists() and p.poll() is None:
-                time.sleep(0.001)
+        else:  # while the PNGs are drawn
+            shutil.copytree(full, out, ignore=shutil.ignore_patterns("*.png"))
+            p = subprocess.Popen([sys.executable, "-m", "compare.figures", "run", str(out)], cwd=REPO,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
             time.sleep(rng.uniform(0.0, 1.0) * drawing)
-        os.killpg(p.pid, signal.SIGKILL)  # dem and the python drawing its PNGs
+        os.killpg(p.pid, signal.SIGKILL)
         p.wait(timeout=60)
         if not out.exists():
             continue
         seen_tmp += any(path.name.endswith(".tmp") for path in out.rglob("*"))
         check_dir(out)
-        if (out / "checkpoint.dem").exists():  # the checkpoint loads: resume it to the end
+        if k % 2 == 0 and (out / "checkpoint.dem").exists():  # the checkpoint loads: resume it to the end
             resumed = tmp_path / f"resumed{k}"
             shutil.copytree(out, resumed)
-            r = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(resumed), "--quiet", "--no-plots",
+            r = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(resumed), "--quiet",
                                 "--resume"], capture_output=True, text=True, timeout=600)
             assert r.returncode == 0, r.stderr
             assert (resumed / "discs.csv").read_bytes() == (full / "discs.csv").read_bytes()

@@ -48,7 +48,7 @@ def assert_same_run(a, b, files):
 
 
 def start(dem_binary, scene, out, every, extra=()):
-    return subprocess.Popen([str(dem_binary), "run", str(scene), "--out", str(out), "--no-plots", "--quiet",
+    return subprocess.Popen([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet",
                              "--checkpoint-every", str(every), *extra],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
@@ -75,7 +75,7 @@ def full_runs(tmp_path_factory, dem_binary):
     wall = {}
     for name, scene in (("silo", SILO), ("discharge", DISCHARGE), ("shear", SHEAR)):
         t0 = time.monotonic()
-        p = dem(dem_binary, "run", scene, "--out", tmp / name, "--no-plots", "--quiet", "--save-state", tmp / f"{name}.state")
+        p = dem(dem_binary, "run", scene, "--out", tmp / name, "--quiet", "--save-state", tmp / f"{name}.state")
         wall[name] = time.monotonic() - t0
         assert p.returncode == 0, p.stderr
     return tmp, wall
@@ -99,7 +99,7 @@ def test_killed_and_resumed_run_is_bit_identical(tmp_path, dem_binary, full_runs
         assert wait_for(proc, out / "checkpoint.dem")
         killed += stop(proc, signal.SIGKILL) == -signal.SIGKILL
         state = tmp_path / f"run{attempts}.state"
-        p = dem(dem_binary, "run", scene, "--out", out, "--no-plots", "--quiet", "--resume", "--save-state", state)
+        p = dem(dem_binary, "run", scene, "--out", out, "--quiet", "--resume", "--save-state", state)
         assert p.returncode == 0, p.stderr
         assert_same_run(full / case, out, files)
         assert state.read_bytes() == (full / f"{case}.state").read_bytes()
@@ -115,7 +115,7 @@ def test_kill_resume_kill_resume(tmp_path, dem_binary, full_runs):
     proc = start(dem_binary, DISCHARGE, out, 0.005, extra=("--resume",))
     assert wait_for(proc, out / "snapshots" / "discs_0001.csv")
     assert stop(proc, signal.SIGKILL) == -signal.SIGKILL
-    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume", "--checkpoint-every", "0.005")
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--quiet", "--resume", "--checkpoint-every", "0.005")
     assert p.returncode == 0, p.stderr
     assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)
 
@@ -136,7 +136,7 @@ def test_signal_stops_gracefully(tmp_path, dem_binary, full_runs, sig, code, pha
         assert (out / name).stat().st_size > 0, name
     if phase_discharge:
         assert s["discharge"]["status"] == "interrupted"
-    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--quiet", "--resume")
     assert p.returncode == 0, p.stderr
     assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)
 
@@ -154,7 +154,7 @@ def test_signal_stops_a_shear_gracefully(tmp_path, dem_binary, full_runs, sig, c
     assert s["shear"]["strain_final"] < s["shear"]["max_strain"]
     for name in SHEAR_FILES:
         assert (out / name).stat().st_size > 0, name
-    p = dem(dem_binary, "run", SHEAR, "--out", out, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", SHEAR, "--out", out, "--quiet", "--resume")
     assert p.returncode == 0, p.stderr
     assert_same_run(full_runs[0] / "shear", out, SHEAR_FILES)
 
@@ -162,7 +162,7 @@ def test_signal_stops_a_shear_gracefully(tmp_path, dem_binary, full_runs, sig, c
 def test_the_printed_resume_command_goes_on(tmp_path, dem_binary, full_runs):
     """The command an interrupted run prints carries every option of the run (--end-time too)."""
     out = tmp_path / "run"
-    proc = subprocess.Popen([str(dem_binary), "run", str(DISCHARGE), "--out", str(out), "--no-plots", "--quiet",
+    proc = subprocess.Popen([str(dem_binary), "run", str(DISCHARGE), "--out", str(out), "--quiet",
                              "--end-time", "4.0"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     assert wait_for(proc, out / "snapshots")
     assert stop(proc, signal.SIGINT) == 130
@@ -178,10 +178,10 @@ def test_checkpoint_every_from_the_scene(tmp_path, dem_binary, full_runs):
     scene = tmp_path / "silo.toml"
     scene.write_text(SILO.read_text().replace("[output]\n", "[output]\ncheckpoint_every = 0.1   # s\n", 1))
     out = tmp_path / "run"
-    p = dem(dem_binary, "run", scene, "--out", out, "--no-plots", "--quiet")
+    p = dem(dem_binary, "run", scene, "--out", out, "--quiet")
     assert p.returncode == 0, p.stderr
     assert (out / "checkpoint.dem").exists()
-    p = dem(dem_binary, "run", scene, "--out", out, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", scene, "--out", out, "--quiet", "--resume")
     assert p.returncode == 0, p.stderr
     a, b = summary(full_runs[0] / "silo"), summary(out)
     for s in (a, b):
@@ -194,7 +194,7 @@ def test_checkpoint_every_from_the_scene(tmp_path, dem_binary, full_runs):
 @pytest.fixture
 def checkpointed(tmp_path, dem_binary):
     out = tmp_path / "run"
-    p = dem(dem_binary, "run", SILO, "--out", out, "--no-plots", "--quiet", "--checkpoint-every", "0.1")
+    p = dem(dem_binary, "run", SILO, "--out", out, "--quiet", "--checkpoint-every", "0.1")
     assert p.returncode == 0, p.stderr
     return out
 
@@ -214,7 +214,7 @@ def test_resume_refuses_another_engine_version(checkpointed, dem_binary):
     other = b"dem 9.9.9"[:len(version)].ljust(len(version), b"9")
     body = body.replace(version, other, 1)
     ckpt.write_bytes(body + struct.pack("<Q", fnv1a(body)))
-    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--quiet", "--resume")
     assert p.returncode == 2
     assert "--resume" in p.stderr and other.decode() in p.stderr and "same engine" in p.stderr
 
@@ -222,12 +222,12 @@ def test_resume_refuses_another_engine_version(checkpointed, dem_binary):
 def test_resume_refuses_a_changed_scene(checkpointed, dem_binary, tmp_path):
     scene = tmp_path / "changed.toml"
     scene.write_text(SILO.read_text().replace("mu = 0.577", "mu = 0.5"))
-    p = dem(dem_binary, "run", scene, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", scene, "--out", checkpointed, "--quiet", "--resume")
     assert p.returncode == 2 and "the scene changed since the checkpoint" in p.stderr, p.stderr
 
 
 def test_resume_refuses_other_options(checkpointed, dem_binary):
-    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume", "--end-time", "3")
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--quiet", "--resume", "--end-time", "3")
     assert p.returncode == 2 and "--end-time" in p.stderr and "must be as in the checkpointed run" in p.stderr, p.stderr
 
 
@@ -236,15 +236,15 @@ def test_resume_refuses_a_damaged_checkpoint(checkpointed, dem_binary):
     data = bytearray(ckpt.read_bytes())
     data[len(data) // 2] ^= 0xFF
     ckpt.write_bytes(bytes(data))
-    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--quiet", "--resume")
     assert p.returncode == 2 and "damaged checkpoint" in p.stderr, p.stderr
     ckpt.write_bytes(b"DEMCKPT1")
-    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", SILO, "--out", checkpointed, "--quiet", "--resume")
     assert p.returncode == 2 and "checkpoint" in p.stderr, p.stderr
 
 
 def test_resume_without_checkpoint(tmp_path, dem_binary):
-    p = dem(dem_binary, "run", SILO, "--out", tmp_path / "none", "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", SILO, "--out", tmp_path / "none", "--quiet", "--resume")
     assert p.returncode == 2 and "no checkpoint" in p.stderr
     assert not (tmp_path / "none").exists()
     p = dem(dem_binary, "run", SILO, "--out", tmp_path / "x", "--checkpoint-every", "-1")
@@ -264,12 +264,12 @@ def test_resume_needs_the_wall_series_so_far(tmp_path, dem_binary, full_runs):
     assert text.startswith(b"t,wall,bin,") and text.endswith(b"\n")
     assert not (out / "wall_series.csv.tmp").exists()
     series.write_bytes(text[:-1])
-    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--quiet", "--resume")
     assert p.returncode == 2 and "wall_series.csv" in p.stderr and "fewer than the checkpoint" in p.stderr, p.stderr
     series.unlink()
-    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--quiet", "--resume")
     assert p.returncode == 2 and "wall_series.csv" in p.stderr and "missing" in p.stderr, p.stderr
     series.write_bytes(text + b"rows a killed run wrote after its checkpoint\n")  # cut off again
-    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--no-plots", "--quiet", "--resume")
+    p = dem(dem_binary, "run", DISCHARGE, "--out", out, "--quiet", "--resume")
     assert p.returncode == 0, p.stderr
     assert_same_run(full_runs[0] / "discharge", out, DISCHARGE_FILES)

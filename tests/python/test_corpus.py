@@ -32,7 +32,7 @@ def test_malformed_scene_is_refused(tmp_path, dem_binary, path):
     sanitized = "asan" in str(dem_binary)
     limit = None if sanitized else (lambda: __import__("resource").setrlimit(
         __import__("resource").RLIMIT_AS, (4 << 30, 4 << 30)))
-    proc = subprocess.run([str(dem_binary), "run", str(path), "--out", str(out), "--quiet", "--no-plots"],
+    proc = subprocess.run([str(dem_binary), "run", str(path), "--out", str(out), "--quiet"],
                           capture_output=True, text=True, errors="replace", timeout=60, stdin=subprocess.DEVNULL,
                           preexec_fn=limit)
     assert proc.returncode == 2, f"exit {proc.returncode}\n{proc.stdout}\n{proc.stderr}"
@@ -50,7 +50,7 @@ def test_tiny_discs_in_a_huge_box_run(tmp_path, run_dem):
     text = text.replace("[1.0000015, 1.0, 1e-6]", "[1.0000025, 1.0, 1e-6]").replace("time = 5.0", "time = 0.001")
     scene = tmp_path / "sparse.toml"
     scene.write_text(text)
-    proc = run_dem("run", scene, "--out", tmp_path / "out", "--quiet", "--no-plots", "--force-dt", timeout=60)
+    proc = run_dem("run", scene, "--out", tmp_path / "out", "--quiet", "--force-dt", timeout=60)
     assert proc.returncode == 0, proc.stderr
     import json
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())

@@ -36,7 +36,7 @@ def read_csv(path):
 
 
 def run(run_dem, scene_path, out, *extra):
-    proc = run_dem("run", scene_path, "--out", out, "--no-plots", "--quiet", *extra)
+    proc = run_dem("run", scene_path, "--out", out, "--quiet", *extra)
     assert proc.returncode == 0, proc.stderr
     return json.loads((Path(out) / "summary.json").read_text())
 
@@ -48,7 +48,7 @@ def every_step(tmp_path_factory, dem_binary):
     tmp = tmp_path_factory.mktemp("every")
     path = scene(tmp, "every", d_series_interval="1e-4", d_time="0.4")
     out = tmp / "out"
-    proc = subprocess.run([str(dem_binary), "run", str(path), "--out", str(out), "--no-plots", "--quiet"],
+    proc = subprocess.run([str(dem_binary), "run", str(path), "--out", str(out), "--quiet"],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     return out
@@ -151,7 +151,7 @@ def test_a_series_file_that_cannot_be_written_stops_the_run_with_exit_4(tmp_path
     and a message naming the file (not an abort)."""
     out = tmp_path / "out"
     (out / "wall_series.csv.tmp").mkdir(parents=True)  # a directory where the file must go
-    proc = run_dem("run", scene(tmp_path, "short", d_time="0.05"), "--out", out, "--no-plots", "--quiet")
+    proc = run_dem("run", scene(tmp_path, "short", d_time="0.05"), "--out", out, "--quiet")
     assert proc.returncode == 4, proc.stderr
     assert "cannot write" in proc.stderr and "wall_series.csv.tmp" in proc.stderr, proc.stderr
     assert "terminate" not in proc.stderr

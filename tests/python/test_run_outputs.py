@@ -96,7 +96,7 @@ def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
     scene.write_text(text.replace("[output]\n", "[output]\nrotation_angle = true\n", 1) if "[output]\n" in text
                      else text + "\n[output]\nrotation_angle = true\n")
     out = tmp_path / "run"
-    proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", "--no-plots"],
+    proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     plain, angle = read_csv(run_dir / "discs.csv"), read_csv(out / "discs.csv")
@@ -108,7 +108,14 @@ def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
     assert np.allclose(meshio.read(out / "discs.vtu").point_data["phi"], phi)
 
 
-def test_run_draws_its_pictures(run_dir):
+def test_run_writes_data_and_python_draws_its_pictures(run_dir):
+    """The engine draws nothing; compare.figures run draws a run's pictures into its folder."""
+    import subprocess
+    import sys
+    assert not list(run_dir.glob("*.png"))
+    proc = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(run_dir)], cwd=REPO,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
     for name in ("network.png", "side_walls.png"):
         assert (run_dir / name).stat().st_size > 10000
 
@@ -139,8 +146,7 @@ def test_contacts_are_written_where_their_forces_were_computed(tmp_path, dem_bin
 
     def run(tag, t_end):
         out = tmp_path / tag
-        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", "--no-plots",
-                               "--scheme", scheme, "--end-time", repr(t_end)], capture_output=True, text=True)
+        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet", "--scheme", scheme, "--end-time", repr(t_end)], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
         return out
 

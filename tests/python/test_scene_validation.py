@@ -69,7 +69,7 @@ def test_bad_scene_is_refused(tmp_path, run_dem, case, text, expect):
 def test_dt_above_bound_runs_when_forced(tmp_path, run_dem):
     scene = tmp_path / "forced.toml"
     scene.write_text(edit(edit(BASE, "dt = 1e-4", "dt = 4e-4"), "time = 5.0 ", "time = 0.004 "))
-    proc = run_dem("run", scene, "--out", tmp_path / "out", "--force-dt", "--no-plots")
+    proc = run_dem("run", scene, "--out", tmp_path / "out", "--force-dt")
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "out" / "summary.json").exists()
 

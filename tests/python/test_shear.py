@@ -60,7 +60,7 @@ def small_runs(tmp_path_factory, dem_binary):
         scene = base / f"{variant}.toml"
         scene.write_text(small_scene(variant))
         out = base / variant
-        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--no-plots", "--quiet"],
+        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
                               capture_output=True, text=True, timeout=120)
         assert proc.returncode == 0, proc.stderr
         runs[variant] = out
@@ -116,7 +116,7 @@ def without_shear(text):
 
 def dem(binary, *args):
     import subprocess
-    proc = subprocess.run([str(binary), *map(str, args), "--no-plots", "--quiet"], capture_output=True, text=True,
+    proc = subprocess.run([str(binary), *map(str, args), "--quiet"], capture_output=True, text=True,
                           timeout=120)
     return proc
 

@@ -193,7 +193,7 @@ def test_every_code_removes_discs_at_the_engines_outlet_height(tmp_path, dem_bin
     liggghts_backend.write_inputs(case, tmp_path / "l")
     assert np.allclose(meshio.read(str(tmp_path / "l" / "outlet.stl")).points[:, 1], expected)
     assert yade_backend.case_data(case)["outlet_y"] == expected
-    r = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(tmp_path / "n"), "--no-plots", "--quiet",
+    r = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(tmp_path / "n"), "--quiet",
                         "--end-time", "0.01"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert json.loads((tmp_path / "n" / "summary.json").read_text())["discharge"]["outlet_y"] == expected

@@ -200,8 +200,7 @@ def _engine_disc_end(tmp: Path, case: Case) -> list[float]:
     (tmp / "scene.toml").write_text("\n".join(lines) + "\n")
     (tmp / "packing.csv").write_text("x,y,r,vx,vy,omega\n" +
                                      "\n".join(",".join(repr(float(v)) for v in row) for row in case.discs) + "\n")
-    p = subprocess.run([str(dem_binary()), "run", str(tmp / "scene.toml"), "--out", str(tmp / "run"), "--no-plots",
-                        "--quiet"], capture_output=True, text=True, timeout=120)
+    p = subprocess.run([str(dem_binary()), "run", str(tmp / "scene.toml"), "--out", str(tmp / "run"), "--quiet"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     rows = np.genfromtxt(tmp / "run" / "discs.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
     row = np.atleast_1d(rows)[0]

@@ -42,8 +42,8 @@ const char* kMainHelp =
     "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
 
 const char* kRunHelp =
-    "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--quiet]\n"
-    "               [--no-plots] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
+    "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
+    "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
     "\n"
     "  --out DIR       output directory (created; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
@@ -59,8 +59,9 @@ const char* kRunHelp =
     "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
     "                  the result is bit-identical to a run never stopped\n"
     "  --quiet         no header and no progress line\n"
-    "  --no-plots      skip the PNGs (network.png, side_walls.png, made with " DEM_PYTHON_EXE " -m compare.figures)\n"
     "\n"
+    "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
+    "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
     "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
     "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
     "end.max_overlap x r_min) stops with 3 and writes the last good state. SIGINT or SIGTERM stops\n"
@@ -139,18 +140,6 @@ std::string shell_quote(const std::string& s) {
   return q + "'";
 }
 
-// The paper's pictures of one run, drawn by the Python layer (compare/figures.py). A missing
-// Python stack costs the PNGs only, never the run.
-void make_plots(const std::string& out, bool quiet) {
-  const std::string base = std::string("PYTHONPATH=") + shell_quote(DEM_SOURCE_DIR) + " " + DEM_PYTHON_EXE +
-                           " -m compare.figures ";
-  const std::string dir = shell_quote(out);
-  const std::string redirect = quiet ? " >/dev/null 2>&1" : " >/dev/null";
-  const int a = std::system((base + "network " + dir + " --out " + shell_quote(out + "/network.png") + redirect).c_str());
-  const int b = std::system((base + "profiles " + dir + " --out " + shell_quote(out + "/side_walls.png") + redirect).c_str());
-  if (a != 0 || b != 0) std::fprintf(stderr, "dem: warning: the PNGs could not be drawn (%s -m compare.figures)\n", DEM_PYTHON_EXE);
-}
-
 // The discharge's or shear's result line.
 void print_phase_result(const SceneRun& run, const World& w) {
   if (run.discharge && run.discharge->metrics().is_object()) {
@@ -183,7 +172,7 @@ std::string resume_command(int argc, char** argv) {
 int cmd_run(int argc, char** argv) {
   std::string scene, out;
   SceneOverrides ov;
-  bool quiet = false, plots = true, resume = false;
+  bool quiet = false, resume = false;
   double checkpoint_every = -1;  // [s] -1: the scene's output.checkpoint_every
   std::string save_to;
   for (int a = 0; a < argc; ++a) {
@@ -216,8 +205,6 @@ int cmd_run(int argc, char** argv) {
       ov.threads = static_cast<int>(x);
     } else if (k == "--quiet") {
       quiet = true;
-    } else if (k == "--no-plots") {
-      plots = false;
     } else if (k == "--from") {
       const char* v = value();
       if (!v) return bad("--from needs a state file");
@@ -297,7 +284,6 @@ int cmd_run(int argc, char** argv) {
   write_outputs(out, spec, world, summary, stab, &extra);
   run.discard_kept();  // the outputs hold it when it was needed; a checkpoint carries its own copy
   if (!save_to.empty() && status != Status::unstable) save_state(world, save_to);
-  if (plots && status != Status::unstable) make_plots(out, quiet);
   if (status == Status::unstable) {
     std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", summary.reason.c_str(),
                  run.runner.last_good.time(), out.c_str());
@@ -312,8 +298,9 @@ int cmd_run(int argc, char** argv) {
     std::printf("  %s at t = %.4f s after %ld steps", to_string(status), world.time, world.steps);
     std::printf("; fill rest %s", summary.rest_reached ? "reached" : "not reached");
     if (summary.rest_reached) std::printf(" at t = %.4f s", summary.rest_time);
-    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s\n", summary.wall_seconds,
-                summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0, out.c_str());
+    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s (pictures: %s -m compare.figures run %s)\n",
+                summary.wall_seconds, summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0,
+                out.c_str(), DEM_PYTHON_EXE, shell_quote(out).c_str());
   }
   return 0;
 }
