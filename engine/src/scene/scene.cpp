@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "scene/fill.hpp"
+#include "scene/toml_reader.hpp"
 #include "physics/free_heap.hpp"
 #include "physics/neighbors.hpp"
 #include "scene/shear_scene.hpp"
@@ -23,25 +24,6 @@
 namespace dem {
 
 namespace {
-
-std::string show(const toml::node& n) {
-  std::ostringstream os;
-  n.visit([&](auto&& v) {
-    using T = std::decay_t<decltype(v)>;
-    if constexpr (std::is_same_v<T, toml::value<std::string>>) os << '"' << v.get() << '"';
-    else os << v;
-  });
-  std::string out = os.str();
-  if (out.size() > 60) out = out.substr(0, 57) + "...";
-  return out;
-}
-
-std::string show(double v) {
-  std::ostringstream os;
-  os.precision(12);
-  os << v;
-  return os.str();
-}
 
 // A limit as written in docs/scene.md: 5e7, 1e15, 2e4.
 std::string limit_text(double v) {
@@ -72,149 +54,6 @@ double physical_memory() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
 }
-
-// A TOML table being read: remembers the keys used so that unknown keys can be refused.
-class Tab {
- public:
-  Tab(const toml::table& t, std::string path, const std::string& file)
-      : t_(t), path_(std::move(path)), file_(file) {}
-
-  std::string field(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-
-  [[noreturn]] void fail(const std::string& key, const std::string& value, const std::string& why) const {
-    std::string msg = file_ + ": " + field(key);
-    if (!value.empty()) msg += " = " + value;
-    msg += ": " + why;
-    if (auto n = t_.get(key)) {
-      const auto& src = n->source();
-      if (src.begin.line) msg += " (line " + std::to_string(src.begin.line) + ")";
-    }
-    throw SceneError(msg);
-  }
-
-  bool has(const std::string& key) const { return t_.contains(key); }
-
-  const toml::node* node(const std::string& key) {
-    used_.insert(key);
-    return t_.get(key);
-  }
-
-  double num(const std::string& key, const double* def = nullptr) {
-    const toml::node* n = node(key);
-    if (!n) {
-      if (def) return *def;
-      fail(key, "", "required value is missing");
-    }
-    double v;
-    if (auto i = n->as_integer()) v = static_cast<double>(i->get());
-    else if (auto f = n->as_floating_point()) v = f->get();
-    else fail(key, show(*n), "expected a number");
-    if (!std::isfinite(v)) fail(key, show(*n), "must be a finite number");
-    return v;
-  }
-  double num(const std::string& key, double def) { return num(key, &def); }
-  double positive(const std::string& key, const double* def = nullptr) {
-    const double v = num(key, def);
-    if (!(v > 0)) fail(key, show(v), "must be > 0");
-    return v;
-  }
-  double positive(const std::string& key, double def) { return positive(key, &def); }
-  double non_negative(const std::string& key, double def) {
-    const double v = num(key, &def);
-    if (v < 0) fail(key, show(v), "must be >= 0");
-    return v;
-  }
-  long integer(const std::string& key, const long* def = nullptr) {
-    const toml::node* n = node(key);
-    if (!n) {
-      if (def) return *def;
-      fail(key, "", "required value is missing");
-    }
-    if (auto i = n->as_integer()) return static_cast<long>(i->get());
-    fail(key, show(*n), "expected an integer");
-  }
-  long integer(const std::string& key, long def) { return integer(key, &def); }
-  bool boolean(const std::string& key, bool def) {
-    const toml::node* n = node(key);
-    if (!n) return def;
-    if (auto b = n->as_boolean()) return b->get();
-    fail(key, show(*n), "expected true or false");
-  }
-  std::string str(const std::string& key, const std::string* def = nullptr) {
-    const toml::node* n = node(key);
-    if (!n) {
-      if (def) return *def;
-      fail(key, "", "required value is missing");
-    }
-    if (auto s = n->as_string()) return s->get();
-    fail(key, show(*n), "expected a string");
-  }
-  std::string str(const std::string& key, const std::string& def) { return str(key, &def); }
-  std::string choice(const std::string& key, const std::vector<std::string>& allowed,
-                     const std::string* def = nullptr) {
-    const std::string v = str(key, def);
-    if (std::find(allowed.begin(), allowed.end(), v) == allowed.end()) {
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      fail(key, '"' + v + '"', "must be one of: " + list);
-    }
-    return v;
-  }
-  std::string choice(const std::string& key, const std::vector<std::string>& allowed, const std::string& def) {
-    return choice(key, allowed, &def);
-  }
-  // [x, y] of finite numbers.
-  void vec2(const std::string& key, double& x, double& y, bool required = true) {
-    const toml::node* n = node(key);
-    if (!n) {
-      if (required) fail(key, "", "required value is missing");
-      return;
-    }
-    auto a = n->as_array();
-    if (!a || a->size() != 2) fail(key, show(*n), "expected an array of two numbers [x, y]");
-    double v[2];
-    for (int k = 0; k < 2; ++k) {
-      const toml::node& e = *a->get(k);
-      if (auto i = e.as_integer()) v[k] = static_cast<double>(i->get());
-      else if (auto f = e.as_floating_point()) v[k] = f->get();
-      else fail(key, show(*n), "expected an array of two numbers [x, y]");
-      if (!std::isfinite(v[k])) fail(key, show(*n), "must hold finite numbers");
-    }
-    x = v[0];
-    y = v[1];
-  }
-  const toml::table* table(const std::string& key, bool required) {
-    const toml::node* n = node(key);
-    if (!n) {
-      if (required) fail(key, "", "required table is missing");
-      return nullptr;
-    }
-    if (auto t = n->as_table()) return t;
-    fail(key, show(*n), "expected a table [" + field(key) + "]");
-  }
-  const toml::array* array_of_tables(const std::string& key) {
-    const toml::node* n = node(key);
-    if (!n) return nullptr;
-    auto a = n->as_array();
-    if (!a || !a->is_array_of_tables()) fail(key, show(*n), "expected an array of tables [[" + field(key) + "]]");
-    return a;
-  }
-  // Refuses keys that were never asked for.
-  void finish() const {
-    for (const auto& [k, v] : t_) {
-      const std::string key(k.str());
-      if (!used_.count(key)) fail(key, show(v), "unknown key");
-    }
-  }
-  const std::string& path() const { return path_; }
-  const std::string& file() const { return file_; }
-
- private:
-  const toml::table& t_;
-  std::string path_;
-  const std::string& file_;
-  std::set<std::string> used_;
-};
 
 // Refuses a fill of n discs beyond the disc limit or this machine's memory, before allocating it.
 void check_disc_budget(const SceneSpec& s, Tab& t, const std::string& key, const std::string& value, double n) {

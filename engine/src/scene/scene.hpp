@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "physics/clusters.hpp"
+#include "scene/scene_error.hpp"
 #include "physics/geometry.hpp"
 #include "physics/model.hpp"
 #include "scene/shear_spec.hpp"
@@ -16,9 +17,6 @@ namespace dem {
 
 class World;
 
-struct SceneError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 // Limits checked before anything is allocated (docs/scene.md, "Limits"): a scene past them is
 // refused with a message, never allowed to exhaust memory or time.
