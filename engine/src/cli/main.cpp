@@ -169,12 +169,23 @@ std::string resume_command(int argc, char** argv) {
   return cmd + " --resume";
 }
 
-int cmd_run(int argc, char** argv) {
-  std::string scene, out;
+// dem run's command line.
+struct RunArgs {
+  std::string scene, out, save_to;
   SceneOverrides ov;
   bool quiet = false, resume = false;
   double checkpoint_every = -1;  // [s] -1: the scene's output.checkpoint_every
-  std::string save_to;
+};
+
+// Reads the options into `a`; returns -1 to go on, or the exit code (0 after --help, 2 for bad input).
+int parse_run_args(int argc, char** argv, RunArgs& a_) {
+  std::string& scene = a_.scene;
+  std::string& out = a_.out;
+  std::string& save_to = a_.save_to;
+  SceneOverrides& ov = a_.ov;
+  bool& quiet = a_.quiet;
+  bool& resume = a_.resume;
+  double& checkpoint_every = a_.checkpoint_every;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     auto value = [&]() -> const char* { return a + 1 < argc ? argv[++a] : nullptr; };
@@ -229,7 +240,17 @@ int cmd_run(int argc, char** argv) {
   }
   if (scene.empty()) return bad("no scene file given (see dem run --help)");
   if (out.empty()) return bad("--out DIR is required (see dem run --help)");
+  return -1;
+}
 
+// parse -> load -> build -> run the phases -> write.
+int cmd_run(int argc, char** argv) {
+  RunArgs args;
+  if (const int code = parse_run_args(argc, argv, args); code >= 0) return code;
+  const std::string &scene = args.scene, &out = args.out, &save_to = args.save_to;
+  const SceneOverrides& ov = args.ov;
+  const bool quiet = args.quiet, resume = args.resume;
+  double checkpoint_every = args.checkpoint_every;
   SceneSpec spec;
   World world;
   StabilityReport stab;

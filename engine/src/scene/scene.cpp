@@ -392,9 +392,10 @@ Scheme parse_scheme(const std::string& v, bool& ok) {
   return Scheme::paper_eq19;
 }
 
-SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
-  SceneSpec s;
-  s.file = path;
+namespace {
+
+// The file itself: a regular file within the size limit, valid TOML.
+toml::table parse_scene_file(const std::string& path) {
   toml::table root_table;
   {
     std::ifstream probe(path);
@@ -402,7 +403,6 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     const std::string problem = regular_file_problem(path, kMaxSceneBytes);
     if (!problem.empty()) throw SceneError(path + ": " + problem);
   }
-  s.max_discs = ov.max_discs > 0 ? ov.max_discs : kMaxDiscs;
   try {
     root_table = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
@@ -411,8 +411,11 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
        << e.source().begin.column << ")";
     throw SceneError(os.str());
   }
-  Tab root(root_table, "", s.file);
+  return root_table;
+}
 
+// [scene], [physics], [integrator], [contact].
+void read_run_tables(SceneSpec& s, Tab& root) {
   {
     Tab t(*root.table("scene", true), "scene", s.file);
     s.name = t.str("name");
@@ -448,6 +451,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
                               ? LeverArm::contact_point : LeverArm::radius;
     t.finish();
   }
+}
+
+// [materials]: names and densities.
+void read_materials(SceneSpec& s, Tab& root) {
   {
     const toml::table* mt = root.table("materials", true);
     Tab t(*mt, "materials", s.file);
@@ -464,6 +471,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     if (s.material_names.empty()) t.fail("materials", "", "no material defined");
     t.finish();
   }
+}
+
+// [[pairs]]: the contact constants of each material pair (Table 2 or absolute).
+void read_pairs(SceneSpec& s, Tab& root) {
   const int nm = static_cast<int>(s.material_names.size());
   s.props.assign(nm * nm, PairProps{});
   s.props_set.assign(nm * nm, 0);
@@ -504,11 +515,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
       }
     }
   }
-  read_shear_tables(s, root_table);  // [shear_box] (adds its walls), [shear], [clusters]
-  for (const char* k : {"shear_box", "shear", "clusters"}) root.node(k);
-  read_walls(s, root);
-  read_fill(s, root);
-  finish_shear_tables(s);  // the plate above the discs; cluster indices
+}
+
+// [end] and [neighbor] (the skin defaults to 0.2 mean radii).
+void read_end_and_neighbor(SceneSpec& s, Tab& root) {
   {
     Tab t(*root.table("end", true), "end", s.file);
     s.end_time = t.positive("time");
@@ -535,6 +545,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
       t.fail("cell", show(s.cell), "must be <= 10 (2 r_max + skin) = " + show(10 * (2 * rmax + s.skin)));
     t.finish();
   }
+}
+
+// [start] from: a state file, relative to the scene file.
+void read_start(SceneSpec& s, Tab& root) {
   if (const toml::table* st = root.table("start", false)) {
     Tab t(*st, "start", s.file);
     s.start_from = t.str("from");
@@ -543,6 +557,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
       s.start_from = s.file.substr(0, slash + 1) + s.start_from;
     t.finish();
   }
+}
+
+// [discharge] (section 5(2)).
+void read_discharge(SceneSpec& s, Tab& root) {
   if (const toml::table* dt = root.table("discharge", false)) {
     Tab t(*dt, "discharge", s.file);
     DischargeSpec& d = s.discharge;
@@ -577,6 +595,13 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     for (const auto& w : s.geometry.walls) found |= w.name == d.gate;
     if (!found) throw SceneError(s.file + ": discharge.gate = \"" + d.gate + "\": no wall of that name (a [silo] with slit = \"closed\" has \"gate\")");
   }
+}
+
+// [output] (the profile bin defaults to one mean diameter).
+void read_output(SceneSpec& s, Tab& root) {
+  double rmean = 0;
+  for (const auto& d : s.discs) rmean += d.r;
+  rmean /= s.discs.size();
   s.profile_bin = 2 * rmean;
   if (const toml::table* ot = root.table("output", false)) {
     Tab t(*ot, "output", s.file);
@@ -592,9 +617,11 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     s.checkpoint_every = t.non_negative("checkpoint_every", 0.0);
     t.finish();
   }
-  root.finish();
+}
 
-  // Every pair that can meet needs constants.
+// Every pair that can meet needs constants.
+void check_pairs_complete(const SceneSpec& s) {
+  const int nm = static_cast<int>(s.material_names.size());
   std::vector<char> disc_mat(nm, 0), obst_mat(nm, 0);
   for (const auto& d : s.discs) disc_mat[d.material] = 1;
   for (const auto& w : s.geometry.walls) obst_mat[w.material] = 1;
@@ -605,6 +632,10 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
         throw SceneError(s.file + ": pairs: no [[pairs]] entry for materials [\"" + s.material_names[a] + "\", \"" +
                          s.material_names[b] + "\"]: every pair that can touch needs kn, ks, eta_n, eta_s, mu");
 
+}
+
+// The command line's overrides, then the step-count limits and the state file.
+void apply_overrides(SceneSpec& s, const SceneOverrides& ov) {
   if (ov.dt > 0) s.dt = ov.dt;
   if (!ov.scheme.empty()) {
     bool ok;
@@ -632,6 +663,31 @@ SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
     const std::string problem = regular_file_problem(s.start_from, 1e18);
     if (!problem.empty()) throw SceneError(s.file + ": start.from = \"" + s.start_from + "\": " + problem);
   }
+}
+
+}  // namespace
+
+SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
+  SceneSpec s;
+  s.file = path;
+  s.max_discs = ov.max_discs > 0 ? ov.max_discs : kMaxDiscs;
+  const toml::table root_table = parse_scene_file(path);
+  Tab root(root_table, "", s.file);
+  read_run_tables(s, root);
+  read_materials(s, root);
+  read_pairs(s, root);
+  read_shear_tables(s, root_table);  // [shear_box] (adds its walls), [shear], [clusters]
+  for (const char* k : {"shear_box", "shear", "clusters"}) root.node(k);
+  read_walls(s, root);
+  read_fill(s, root);
+  finish_shear_tables(s);  // the plate above the discs; cluster indices
+  read_end_and_neighbor(s, root);
+  read_start(s, root);
+  read_discharge(s, root);
+  read_output(s, root);
+  root.finish();
+  check_pairs_complete(s);
+  apply_overrides(s, ov);
   check_initial_discs(s);
   return s;
 }

@@ -5,7 +5,7 @@
 
 #include <toml++/toml.h>
 
-#include "scene/scene.hpp"
+#include "scene/scene_spec.hpp"
 
 namespace dem {
 
