@@ -13,7 +13,7 @@
 #include "run/discharge.hpp"
 #include "run/fill_phase.hpp"
 #include "run/runner.hpp"
-#include "run/shear_box.hpp"
+#include "run/shear_phase.hpp"
 
 namespace dem {
 

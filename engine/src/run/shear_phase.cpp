@@ -1,4 +1,4 @@
-#include "run/shear_box.hpp"
+#include "run/shear_phase.hpp"
 
 #include <algorithm>
 #include <cmath>
