@@ -141,21 +141,18 @@ std::string shell_quote(const std::string& s) {
 }
 
 // The discharge's or shear's result line.
-void print_phase_result(const SceneRun& run, const World& w) {
-  if (run.discharge && run.discharge->metrics().is_object()) {
-    const nlohmann::ordered_json m = run.discharge->metrics();
+void print_phase_result(const SceneRun& run) {
+  if (run.discharge && run.discharge->outcome().status != Status::running) {
+    const DischargeOutcome& o = run.discharge->outcome();
     std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
-                m["status"].get<std::string>().c_str(), run.discharge->duration(w), run.discharge->removals().size(),
-                m["discs_out_at_1s"].get<int>(), m["flow_rate_discs"].is_null() ? NAN : m["flow_rate_discs"].get<double>(),
-                m["pattern"].get<std::string>().c_str(), m["peak_ratio_bottom"].get<double>(),
-                m["peak_ratio_side"].get<double>());
+                to_string(o.status), o.duration, o.removed, o.out_at_1s, o.flow_rate_discs, o.pattern.c_str(),
+                o.peak_ratio_bottom, o.peak_ratio_side);
   }
-  if (run.shear && run.shear->metrics().contains("peak_ratio")) {
-    const nlohmann::ordered_json m = run.shear->metrics();
+  if (run.shear && run.shear->outcome().samples > 0) {
+    const ShearOutcome& o = run.shear->outcome();
     std::printf("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
-                to_string(run.status), m["strain_final"].get<double>(), m["peak_ratio"].get<double>(),
-                m["strain_at_peak"].get<double>(), m["peak_ratio_windowed"].get<double>(),
-                m["sigma_initial"].get<double>());
+                to_string(run.status), o.strain_final, o.peak_ratio, o.strain_at_peak, o.peak_ratio_windowed,
+                o.sigma_initial);
   }
 }
 
@@ -301,7 +298,7 @@ int cmd_run(int argc, char** argv) {
 
   nlohmann::ordered_json extra;
   const RunSummary summary = run.summary(extra);
-  if (!quiet) print_phase_result(run, world);
+  if (!quiet) print_phase_result(run);
   write_outputs(out, spec, world, summary, stab, &extra);
   run.discard_kept();  // the outputs hold it when it was needed; a checkpoint carries its own copy
   if (!save_to.empty() && status != Status::unstable) save_state(world, save_to);

@@ -628,6 +628,7 @@ void DischargePhase::finish(World& w, Status status) {
     if (!r.keystone && r.t <= 1.0 + 1e-12) ++out_1s;
   const double q = flow_rate(removals);
   const double m_disc = w.discs.size() ? w.discs.mass(0) : (removals.empty() ? 1.0 : removals[0].mass);
+  outcome_ = {status, w.time - st.t_open, removals.size(), out_1s, q / m_disc, pattern, best_bottom[0], best_side[0]};
   metrics_ = {
       {"status", to_string(status)},
       {"t_open", st.t_open},

@@ -96,6 +96,17 @@ struct DischargeFrame {
   double g = 0;
 };
 
+// What a finished discharge gives its caller (the same values as its metrics, typed).
+struct DischargeOutcome {
+  Status status = Status::running;
+  double duration = 0;          // [s] simulated since opening
+  std::size_t removed = 0;      // discs out (outlet and keystones)
+  int out_at_1s = 0;            // through the outlet by 1 s after opening
+  double flow_rate_discs = 0;   // [discs/s] NaN with fewer than 10 removals
+  std::string pattern;          // funnel, piping or undetermined
+  double peak_ratio_bottom = 0, peak_ratio_side = 0;
+};
+
 class DischargePhase : public Phase {
  public:
   DischargePhase(const SceneSpec& spec, std::string out_dir);
@@ -111,6 +122,7 @@ class DischargePhase : public Phase {
   void save(BinaryOut& o) const override { st.save(o); }
   void load(BinaryIn& r) override { st.load(r); }
   nlohmann::ordered_json metrics() const override { return metrics_; }
+  const DischargeOutcome& outcome() const { return outcome_; }
 
   // Why a discharge resumed from a checkpoint cannot go on with its wall series file ("" : it can).
   std::string series_file_problem() const;
@@ -132,6 +144,7 @@ class DischargePhase : public Phase {
   long steps_total_ = 0, sample_every_ = 1;
   std::size_t win_ = 1;
   RemovedDiscs dead_;  // the discs leaving at a step: a few indices, not a mask of all discs
+  DischargeOutcome outcome_;
   nlohmann::ordered_json metrics_;
 };
 

@@ -241,6 +241,8 @@ void ShearPhase::finish(World& w, Status) {
     }
     m["check_static_max_relative"] = worst_static;
     m["check_with_inertia_max_relative"] = worst_identity;
+    outcome_ = {samples_.size(), samples_.back().strain, samples_[kmax].ratio, samples_[kmax].strain,
+                m["peak_ratio_windowed"].get<double>(), s0.sigma};
   }
   m["plate_final"] = {w.moving.plates[0].x, w.moving.plates[0].y};
   m["bond_strain_final"] = max_bond_strain(d, w.bonds);

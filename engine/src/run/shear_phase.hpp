@@ -17,6 +17,12 @@ namespace dem {
 class World;
 struct SceneSpec;
 
+// What a finished shear gives its caller (the same values as its metrics, typed).
+struct ShearOutcome {
+  std::size_t samples = 0;
+  double strain_final = 0, peak_ratio = 0, strain_at_peak = 0, peak_ratio_windowed = 0, sigma_initial = 0;
+};
+
 // One sample of the shear: the mean over the virtual planes (stress_planes.hpp).
 struct ShearSample {
   double t, strain, sigma, tau, ratio;
@@ -41,6 +47,7 @@ class ShearPhase : public Phase {
   void save(BinaryOut& o) const override;
   void load(BinaryIn& r) override;
   nlohmann::ordered_json metrics() const override { return metrics_; }
+  const ShearOutcome& outcome() const { return outcome_; }
 
  private:
   Status at_strain(World& w);  // the sample and snapshots due at the current strain; the end test
@@ -60,6 +67,7 @@ class ShearPhase : public Phase {
   std::vector<ShearSample> samples_;
   std::string series_, planes_;   // the text of shear_series.csv and shear_planes.csv so far
   nlohmann::ordered_json snaps_ = nlohmann::ordered_json::array();
+  ShearOutcome outcome_;
   nlohmann::ordered_json metrics_;
 };
 
