@@ -62,3 +62,38 @@ def test_ensemble_fails_when_every_member_failed(tmp_path, run_dem):
                    "--dt", 2e-3, "--force-dt")
     assert proc.returncode == 3, proc.stderr
     assert json.loads((tmp_path / "unstable" / "ensemble.json").read_text())["unstable"] == 2
+
+
+def test_members_run_alone_and_merged_equal_the_ensemble(tmp_path, run_dem):
+    """--member K runs member K alone (a job of a job array); merge gathers the members into the
+    same ensemble.json, bit for bit, as the ensemble run in one process."""
+    scene = short_scene(tmp_path)
+    whole, parts = tmp_path / "whole", tmp_path / "parts"
+    proc = run_dem("ensemble", scene, "--out", whole, "--members", 3, "--seed", 5, "--jobs", 2, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    for k in (2, 0, 1):  # any order, any machine
+        proc = run_dem("ensemble", scene, "--out", parts, "--member", k, "--seed", 5, "--quiet")
+        assert proc.returncode == 0, proc.stderr
+    proc = run_dem("ensemble", "merge", parts, "--members", 3, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert (parts / "ensemble.json").read_bytes() == (whole / "ensemble.json").read_bytes()
+    for k in range(3):
+        for name in ("discs.csv", "removals.csv", "wall_series.csv"):
+            a, b = whole / f"member_{k:02d}" / name, parts / f"member_{k:02d}" / name
+            assert a.read_bytes() == b.read_bytes(), (k, name)
+
+
+def test_merge_refuses_missing_members_and_other_ensembles(tmp_path, run_dem):
+    scene = short_scene(tmp_path)
+    out = tmp_path / "parts"
+    for k, seed in ((0, 5), (1, 6)):
+        proc = run_dem("ensemble", scene, "--out", out, "--member", k, "--seed", seed, "--quiet")
+        assert proc.returncode == 0, proc.stderr
+    proc = run_dem("ensemble", "merge", out, "--quiet")
+    assert proc.returncode == 2 and "another ensemble" in proc.stderr, proc.stderr
+    assert not (out / "ensemble.json").exists()
+    (out / "member_01" / "member.json").unlink()
+    proc = run_dem("ensemble", "merge", out, "--members", 2, "--quiet")
+    assert proc.returncode == 2 and "member_01" in proc.stderr and "missing" in proc.stderr, proc.stderr
+    proc = run_dem("ensemble", "merge", out, "--members", 3, "--quiet")
+    assert proc.returncode == 2, proc.stderr

@@ -71,11 +71,19 @@ const char* kRunHelp =
 const char* kEnsembleHelp =
     "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
     "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet]\n"
+    "       dem ensemble SCENE.toml --out DIR --member K [--seed S] [--perturb CM] [...]\n"
+    "       dem ensemble merge DIR [--members M] [--quiet]\n"
     "\n"
     "Runs M copies of the scene (default 8) whose initial disc centres are moved by a seeded\n"
     "uniform amount in [-CM, CM] (default 1e-4 cm), J at a time (default: all cores), into\n"
     "DIR/member_KK, and writes DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
-    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n";
+    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n"
+    "\n"
+    "--member K runs member K alone (0-based), the same member bit for bit as in a full ensemble\n"
+    "of that seed and perturbation: one job of a job array. `merge DIR` gathers the finished\n"
+    "members into DIR/ensemble.json, the same file a full ensemble writes; it refuses members of\n"
+    "another ensemble and, with --members M, any of 0..M-1 missing (docs/ensembles.md).\n"
+    "Exit codes: 0; 3 when every member was unstable; 4 when every member failed or one could not run.\n";
 
 const char* kParamsHelp =
     "usage: dem params [--E kgf/cm2,...] [--nu V] [--r CM] [--rho G/CM3] [--q GF/CM] [--s V] [--g CM/S2]\n"
@@ -327,7 +335,8 @@ int cmd_ensemble(int argc, char** argv) {
   std::string scene, out;
   SceneOverrides ov;
   EnsembleOptions eo;
-  bool quiet = false;
+  bool quiet = false, merge = false;
+  int member = -1;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     if (k == "--help" || k == "-h") {
@@ -336,8 +345,9 @@ int cmd_ensemble(int argc, char** argv) {
     }
     if (k == "--quiet") { quiet = true; continue; }
     if (k == "--force-dt") { ov.force_dt = true; continue; }
+    if (a == 0 && k == "merge") { merge = true; continue; }
     if (!k.empty() && k[0] != '-') {
-      if (!scene.empty()) return bad("more than one scene given");
+      if (!scene.empty()) return bad(merge ? "merge takes one folder" : "more than one scene given");
       scene = k;
       continue;
     }
@@ -348,11 +358,22 @@ int cmd_ensemble(int argc, char** argv) {
     else if (k == "--scheme") ov.scheme = v;
     else if (!number_arg(v.c_str(), x)) return bad(k + ": \"" + v + "\" is not a number");
     else if (k == "--members") { if (!(x >= 1 && x <= 10000 && x == std::floor(x))) return bad("--members must be an integer in [1, 10000]"); eo.members = static_cast<int>(x); }
+    else if (k == "--member") { if (!(x >= 0 && x < 10000 && x == std::floor(x))) return bad("--member must be an integer in [0, 9999]"); member = static_cast<int>(x); }
     else if (k == "--seed") { if (!(x >= 0 && x == std::floor(x))) return bad("--seed must be an integer >= 0"); eo.seed = static_cast<unsigned long>(x); }
     else if (k == "--perturb") { if (!(x >= 0)) return bad("--perturb must be >= 0"); eo.perturb = x; }
     else if (k == "--jobs") { if (!(x >= 1 && x == std::floor(x))) return bad("--jobs must be an integer >= 1"); eo.jobs = static_cast<int>(x); }
     else if (k == "--dt") { if (!(x > 0)) return bad("--dt must be > 0"); ov.dt = x; }
     else return bad("unknown option " + k + " (see dem ensemble --help)");
+  }
+  if (merge) {
+    if (scene.empty()) return bad("merge: no folder given (dem ensemble merge DIR)");
+    bool members_given = false;
+    for (int a = 0; a < argc; ++a) members_given |= std::string(argv[a]) == "--members";
+    try {
+      return merge_ensemble(scene, members_given ? eo.members : 0, quiet);
+    } catch (const std::runtime_error& e) {
+      return bad(std::string("ensemble merge: ") + e.what());
+    }
   }
   if (scene.empty()) return bad("no scene file given (see dem ensemble --help)");
   if (out.empty()) return bad("--out DIR is required (see dem ensemble --help)");
@@ -363,6 +384,7 @@ int cmd_ensemble(int argc, char** argv) {
     if (!spec.start_from.empty()) return bad("dem ensemble starts from the fill: remove start.from");
     if (spec.shear_box.shear)  // its members would compress and stop: the shear runs in cmd_run only
       return bad("dem ensemble runs fills and discharges; a [shear] scene runs with dem run");
+    if (member >= 0) return run_member_alone(spec, eo, member, out, quiet);
     return run_ensemble(spec, eo, out, quiet);
   } catch (const SceneError& e) {
     return bad(e.what());

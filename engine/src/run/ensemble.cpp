@@ -4,9 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -55,67 +57,77 @@ double get(const json& m, const char* key) {
 
 }  // namespace
 
-int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::string& out_dir, bool quiet) {
-  // Every member's scene is checked before anything runs or is written.
-  std::vector<SceneSpec> specs(opt.members, spec);
-  for (int k = 0; k < opt.members; ++k) {
-    std::mt19937_64 rng(opt.seed * 1000003ull + static_cast<unsigned long>(k));
-    std::uniform_real_distribution<double> u(-opt.perturb, opt.perturb);
-    for (DiscInit& d : specs[k].discs) {
-      d.x += u(rng);
-      d.y += u(rng);
-    }
-    specs[k].progress = false;
-    try {
-      check_initial_discs(specs[k]);
-    } catch (const SceneError& e) {
-      throw SceneError(std::string("--perturb ") + std::to_string(opt.perturb) + " makes member " + std::to_string(k) +
-                       " invalid: " + e.what());
-    }
-  }
-  std::filesystem::create_directories(out_dir);
-  std::vector<Member> members(opt.members);
-  std::atomic<int> next{0};
-  std::mutex print;
-  auto work = [&]() {
-    for (int k; (k = next++) < opt.members;) {
-      char name[32];
-      std::snprintf(name, sizeof name, "member_%02d", k);
-      const std::string dir = out_dir + "/" + name;
-      try {
-      std::filesystem::create_directories(dir);
-      World w;
-      const StabilityReport stab = build_world_releasing_discs(specs[k], w);
-      SceneRun run(specs[k], w, dir);
-      const Status status = run.run(false, false);
-      json extra;
-      const RunSummary summary = run.summary(extra);
-      Member& m = members[k];
-      m.index = k;
-      m.fill_rest = summary.rest_reached;
-      m.status = to_string(status);
-      if (run.discharge && run.discharge->metrics().is_object()) m.metrics = run.discharge->metrics();
-      write_outputs(dir, specs[k], w, summary, stab, &extra);
-      run.discard_kept();
-      } catch (const std::exception& e) {  // one failed member must not take the others down
-        members[k].index = k;
-        members[k].status = std::string("error: ") + e.what();
-      }
-      const Member& m = members[k];
-      if (!quiet) {
-        std::lock_guard<std::mutex> lock(print);
-        std::printf("  %s: %s, %d out by 1 s, flow %.4g discs/s, %s\n", name, m.status.c_str(),
-                    m.metrics.value("discs_out_at_1s", 0), get(m.metrics, "flow_rate_discs"),
-                    m.metrics.value("pattern", std::string("-")).c_str());
-        std::fflush(stdout);
-      }
-    }
-  };
-  const int jobs = opt.jobs > 0 ? opt.jobs : std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::min(jobs, opt.members); ++t) pool.emplace_back(work);
-  for (auto& t : pool) t.join();
+namespace {
 
+std::string member_name(int k) {
+  char name[32];
+  std::snprintf(name, sizeof name, "member_%02d", k);
+  return name;
+}
+
+// Member k's scene: every initial centre moved by a uniform amount in [-perturb, perturb] from
+// a generator seeded by (seed, k) alone, so a member run alone is the member of any ensemble.
+SceneSpec member_spec(const SceneSpec& spec, const EnsembleOptions& opt, int k) {
+  SceneSpec s = spec;
+  std::mt19937_64 rng(opt.seed * 1000003ull + static_cast<unsigned long>(k));
+  std::uniform_real_distribution<double> u(-opt.perturb, opt.perturb);
+  for (DiscInit& d : s.discs) {
+    d.x += u(rng);
+    d.y += u(rng);
+  }
+  s.progress = false;
+  try {
+    check_initial_discs(s);
+  } catch (const SceneError& e) {
+    throw SceneError(std::string("--perturb ") + std::to_string(opt.perturb) + " makes member " + std::to_string(k) +
+                     " invalid: " + e.what());
+  }
+  return s;
+}
+
+// What identifies the ensemble a member belongs to (DIR/member_KK/member.json): merge checks it.
+json member_identity(const SceneSpec& spec, const EnsembleOptions& opt, int k) {
+  return {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
+          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}};
+}
+
+// Runs member k into dir; a member that cannot run is a failed member ("error: ..."), never the
+// end of the others.
+Member run_member(const SceneSpec& spec_k, const json& identity, int k, const std::string& dir) {
+  Member m;
+  m.index = k;
+  try {
+    std::filesystem::create_directories(dir);
+    SceneSpec s = spec_k;
+    World w;
+    const StabilityReport stab = build_world_releasing_discs(s, w);
+    SceneRun run(s, w, dir);
+    const Status status = run.run(false, false);
+    json extra;
+    const RunSummary summary = run.summary(extra);
+    m.fill_rest = summary.rest_reached;
+    m.status = to_string(status);
+    if (run.discharge && run.discharge->metrics().is_object()) m.metrics = run.discharge->metrics();
+    write_outputs(dir, s, w, summary, stab, &extra);
+    run.discard_kept();
+    write_file_atomic(dir + "/member.json", identity.dump(2) + "\n");
+  } catch (const std::exception& e) {
+    m.status = std::string("error: ") + e.what();
+  }
+  return m;
+}
+
+void print_member(const Member& m) {
+  std::printf("  %s: %s, %d out by 1 s, flow %.4g discs/s, %s\n", member_name(m.index).c_str(), m.status.c_str(),
+              m.metrics.value("discs_out_at_1s", 0), get(m.metrics, "flow_rate_discs"),
+              m.metrics.value("pattern", std::string("-")).c_str());
+  std::fflush(stdout);
+}
+
+// The statistics of the members (DIR/ensemble.json) and the exit code.
+int write_ensemble(const json& identity, int members_wanted, const std::vector<Member>& members,
+                   const std::string& out_dir, bool quiet) {
+  const EnsembleOptions opt{members_wanted, identity["seed"].get<unsigned long>(), identity["perturb"].get<double>(), 0};
   std::vector<double> flow, flow_mass, out1, pb, pbw, ps, psw, jam_at;
   int jammed = 0, unstable = 0, failed = 0, funnel = 0, piping = 0;
   json list = json::array();
@@ -140,8 +152,8 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
                     {"pattern", p}, {"jam_at", m.metrics.contains("jam_at") ? m.metrics["jam_at"] : json(nullptr)}});
   }
   const double M = opt.members;
-  json js = {{"scene", spec.name}, {"file", spec.file}, {"members", opt.members}, {"seed", opt.seed},
-             {"perturb", opt.perturb}, {"scheme", to_string(spec.scheme)}, {"dt", spec.dt},
+  json js = {{"scene", identity["scene"]}, {"file", identity["file"]}, {"members", opt.members}, {"seed", opt.seed},
+             {"perturb", opt.perturb}, {"scheme", identity["scheme"]}, {"dt", identity["dt"]},
              {"flow_rate_discs", stats(flow)}, {"flow_rate_mass", stats(flow_mass)},
              {"discs_out_at_1s", stats(out1)},
              {"peak_ratio_bottom", stats(pb)}, {"peak_ratio_bottom_windowed", stats(pbw)},
@@ -163,8 +175,8 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
       else
         std::printf("  %-28s %10s\n", label, "-");
     };
-    std::printf("ensemble %s: %d members, seed %lu, perturb %g cm\n", spec.name.c_str(), opt.members, opt.seed,
-                opt.perturb);
+    std::printf("ensemble %s: %d members, seed %lu, perturb %g cm\n", identity["scene"].get<std::string>().c_str(),
+                opt.members, opt.seed, opt.perturb);
     show("flow rate [discs/s]", js["flow_rate_discs"]);
     show("discs out at 1 s", js["discs_out_at_1s"]);
     show("peak/static bottom", js["peak_ratio_bottom"]);
@@ -183,6 +195,94 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
     return unstable == opt.members ? 3 : 4;
   }
   return 0;
+}
+
+}  // namespace
+
+int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::string& out_dir, bool quiet) {
+  // Every member's scene is checked before anything runs or is written.
+  std::vector<SceneSpec> specs;
+  for (int k = 0; k < opt.members; ++k) specs.push_back(member_spec(spec, opt, k));
+  std::filesystem::create_directories(out_dir);
+  std::vector<Member> members(opt.members);
+  std::atomic<int> next{0};
+  std::mutex print;
+  auto work = [&]() {
+    for (int k; (k = next++) < opt.members;) {
+      members[k] = run_member(specs[k], member_identity(spec, opt, k), k, out_dir + "/" + member_name(k));
+      if (!quiet) {
+        std::lock_guard<std::mutex> lock(print);
+        print_member(members[k]);
+      }
+    }
+  };
+  const int jobs = opt.jobs > 0 ? opt.jobs : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::min(jobs, opt.members); ++t) pool.emplace_back(work);
+  for (auto& t : pool) t.join();
+  json identity = member_identity(spec, opt, 0);
+  identity.erase("member");
+  return write_ensemble(identity, opt.members, members, out_dir, quiet);
+}
+
+int run_member_alone(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir, bool quiet) {
+  const SceneSpec s = member_spec(spec, opt, k);  // checked before anything is written
+  std::filesystem::create_directories(out_dir);
+  const Member m = run_member(s, member_identity(spec, opt, k), k, out_dir + "/" + member_name(k));
+  if (!quiet) print_member(m);
+  if (m.status == "unstable") return 3;
+  return m.status.rfind("error", 0) == 0 ? 4 : 0;
+}
+
+int merge_ensemble(const std::string& out_dir, int members_wanted, bool quiet) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<int, fs::path>> found;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(out_dir, ec)) {
+    const std::string n = e.path().filename().string();
+    int k = -1;
+    if (e.is_directory() && std::sscanf(n.c_str(), "member_%d", &k) == 1 && k >= 0 && n == member_name(k))
+      found.emplace_back(k, e.path());
+  }
+  if (ec) throw std::runtime_error(out_dir + ": cannot read the folder: " + ec.message());
+  std::sort(found.begin(), found.end());
+  if (found.empty()) throw std::runtime_error(out_dir + ": no member_KK folders to merge");
+  const auto read_json = [](const fs::path& p) {
+    std::ifstream in(p);
+    if (!in) throw std::runtime_error(p.string() + ": missing (the member did not finish)");
+    try {
+      return json::parse(in);
+    } catch (const json::exception& e) {
+      throw std::runtime_error(p.string() + ": not JSON: " + e.what());
+    }
+  };
+  json identity;
+  std::vector<Member> members;
+  for (const auto& [k, dir] : found) {
+    json id = read_json(dir / "member.json");
+    if (id.value("member", -1) != k) throw std::runtime_error((dir / "member.json").string() + ": member " +
+                                                              id["member"].dump() + " in the folder of member " + std::to_string(k));
+    id.erase("member");
+    if (identity.is_null()) identity = id;
+    else if (id != identity)
+      throw std::runtime_error((dir / "member.json").string() + ": another ensemble (" + id.dump() + ", not " +
+                               identity.dump() + ")");
+    const json s = read_json(dir / "summary.json");
+    Member m;
+    m.index = k;
+    m.status = s.value("status", std::string("?"));
+    m.fill_rest = s.contains("rest") && s["rest"].value("reached", false);
+    if (s.contains("discharge") && s["discharge"].is_object()) m.metrics = s["discharge"];
+    members.push_back(std::move(m));
+  }
+  const int wanted = members_wanted > 0 ? members_wanted : static_cast<int>(members.size());
+  for (int k = 0; k < wanted; ++k)
+    if (k >= static_cast<int>(members.size()) || members[k].index != k)
+      throw std::runtime_error(out_dir + "/" + member_name(k) + ": missing (merge needs members 0 to " +
+                               std::to_string(wanted - 1) + ")");
+  if (static_cast<int>(members.size()) != wanted)
+    throw std::runtime_error(out_dir + ": " + std::to_string(members.size()) + " members, --members " + std::to_string(wanted));
+  return write_ensemble(identity, wanted, members, out_dir, quiet);
 }
 
 }  // namespace dem

@@ -20,4 +20,14 @@ struct EnsembleOptions {
 // run). Throws SceneError for bad input.
 int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::string& out_dir, bool quiet);
 
+// Member k alone into out_dir/member_KK: the same member, bit for bit, as in run_ensemble with
+// the same seed and perturbation (for job arrays across machines). Exit code 0, 3 unstable, 4 failed.
+int run_member_alone(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir, bool quiet);
+
+// Gathers finished members (out_dir/member_KK with summary.json and member.json) into
+// out_dir/ensemble.json, the same as run_ensemble writes. Refuses members of another ensemble
+// (scene, seed, perturbation, scheme, dt) and missing ones (members_wanted: 0 = those found,
+// which must be 0..n-1). Throws std::runtime_error naming the folder; returns the exit code.
+int merge_ensemble(const std::string& out_dir, int members_wanted, bool quiet);
+
 }  // namespace dem
