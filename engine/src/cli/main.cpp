@@ -37,6 +37,7 @@ const char* kMainHelp =
     "  dem params [options]                     contact constants from elasticity, eqs. (22)-(26)\n"
     "  dem resolve SCENE.toml [--out FILE.json] the validated scene with every value resolved (JSON)\n"
     "  dem compare SCENE.toml|LIST --out DIR     the scene in this engine, LIGGGHTS and YADE: agreement report (dem compare --help)\n"
+    "  dem --version                            the version and build (compiler, build type)\n"
     "\n"
     "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
     "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
@@ -183,7 +184,22 @@ struct RunArgs {
 };
 
 // Reads the options into `a`; returns -1 to go on, or the exit code (0 after --help, 2 for bad input).
-int parse_run_args(int argc, char** argv, RunArgs& a_) {
+int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
+  // --option=value is read as --option value.
+  std::vector<std::string> words;
+  for (int a = 0; a < argc; ++a) {
+    const std::string w = argv_in[a];
+    const auto eq = w.find('=');
+    if (w.rfind("--", 0) == 0 && eq != std::string::npos) {
+      words.push_back(w.substr(0, eq));
+      words.push_back(w.substr(eq + 1));
+    } else {
+      words.push_back(w);
+    }
+  }
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argc = static_cast<int>(argv.size());
   std::string& scene = a_.scene;
   std::string& out = a_.out;
   std::string& save_to = a_.save_to;
@@ -494,6 +510,10 @@ int main(int argc, char** argv) {
   }
   const std::string cmd = argv[1];
   g_program = argv[0];
+  if (cmd == "--version" || cmd == "version") {
+    std::printf("dem %s (%s)\n", DEM_VERSION, DEM_BUILD_ID);
+    return 0;
+  }
   // What the commands do not turn into an exit code of their own (a file that cannot be written
   // in the middle of a run, say) ends the run with a message naming it, not with an abort.
   try {

@@ -346,7 +346,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   js["scene"] = {{"name", spec.name}, {"file", spec.file}, {"description", spec.description}, {"fill", spec.fill_summary}};
   js["status"] = res.status;
   if (unstable) js["reason"] = res.reason;
-  js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt},
+  js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt}, {"threads", w.threads},
                    {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},
                    {"friction_cap", to_string(w.options.friction_cap)}, {"lever_arm", to_string(w.options.lever_arm)},
                    {"gravity", {w.gx, w.gy}},
