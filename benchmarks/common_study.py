@@ -1,7 +1,8 @@
 """Shared helpers of the work-precision and stability studies.
 
 Both studies drive the engine binary (``--dem PATH``, else ``$DEM_BINARY``, else
-``build/dem``) as a subprocess, read its ``summary.json`` and ``discs.csv``, and write
+``build/dem``) as a subprocess, write their scenes with ``compare.scene_toml``, read its
+``summary.json`` and ``discs.csv`` with ``compare.run_dir``, and write
 ``results.json`` + ``report.md`` (+ PNGs) under ``--out``. Python is Debian's
 ``/usr/bin/python3`` (numpy, matplotlib). Nothing here edits the engine or ``compare/``.
 """
@@ -10,7 +11,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import subprocess
 import sys
 import time
@@ -25,6 +25,9 @@ PAPER_LAW = {"normal_spring": "incremental", "no_tension": "elastic", "friction_
 
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
+
+from compare import scene_toml  # noqa: E402
+from compare.run_dir import RunDir, RunDirError  # noqa: E402
 
 
 def setup_binary(path: str | None) -> Path:
@@ -54,16 +57,16 @@ KE_REST = 1e-6
 
 def energy_scale(out_dir: Path, summary: dict) -> float:
     """Total weight x mean radius (force x length per unit thickness) of the run's discs."""
-    d = np.atleast_1d(np.genfromtxt(Path(out_dir) / "discs.csv", delimiter=",", names=True))
-    return float(summary["weight"]) * (float(np.mean(d["r"])) if d.size else 1.0)
+    d = RunDir(out_dir).discs()
+    return float(summary["weight"]) * (float(np.mean(d["r"])) if d["r"].size else 1.0)
 
 
 def kinetic_energy_run(out_dir: Path, summary: dict) -> float:
     """Translational + rotational energy [force x length per unit thickness] of the run's
     discs.csv (I = m r^2 / 2); the density comes from summary.json's disc_weight (m g of disc
     0) and disc 0's radius. One disc material is assumed (true of every scene here)."""
-    d = np.atleast_1d(np.genfromtxt(Path(out_dir) / "discs.csv", delimiter=",", names=True))
-    if d.size == 0:
+    d = RunDir(out_dir).discs()
+    if d["r"].size == 0:
         return 0.0
     g = math.hypot(*summary["options"]["gravity"])
     r0 = float(d["r"][d["id"] == 0][0]) if np.any(d["id"] == 0) else float(d["r"][0])
@@ -92,14 +95,16 @@ def run_dem(scene: Path, out: Path, scheme: str, dt: float, end_time: float | No
     except subprocess.TimeoutExpired:
         rc, err = None, f"timed out after {timeout} s"
     proc = time.perf_counter() - t0
-    s = None
+    s, why = None, ""
     try:
-        s = json.loads((Path(out) / "summary.json").read_text())
-    except (OSError, ValueError):
-        pass
+        s = RunDir(out, strict=True).summary
+    except RunDirError as e:
+        why = str(e)
+    message = " ".join(err.strip().splitlines()[-2:]) if rc not in (0,) else ""
+    if s is None and rc == 0:
+        message = why
     return {"rc": rc, "status": (s or {}).get("status", "no_summary"), "loop_s": (s or {}).get("wall_time_s"),
-            "process_s": proc, "steps": (s or {}).get("steps"), "summary": s,
-            "message": " ".join(err.strip().splitlines()[-2:]) if rc not in (0,) else ""}
+            "process_s": proc, "steps": (s or {}).get("steps"), "summary": s, "message": message}
 
 
 def timed(fn, repeats: int, cheap_below_s: float = 1.0):
@@ -180,56 +185,17 @@ def savefig(fig, path: Path) -> None:
     os.replace(tmp, path)
 
 
-def scene_text_with(base: Path, end: dict | None = None, fill: dict | None = None, pairs_scale: dict | None = None,
-                    silo: dict | None = None, extra_tables: str = "") -> str:
-    """A paper scene's TOML text with [end], [fill] or [silo] keys replaced (whole tables
-    rewritten from the given dicts merged over the originals' simple key = value lines) and
-    pair constants scaled (pairs_scale: key -> factor, e.g. {"ks_rho_g": 2.0}). The paper's
-    scenes are generated files with one key per line (scripts/make_paper_scenes.py)."""
-    text = Path(base).read_text()
-
-    def table(name, new):
-        nonlocal text
-        m = re.search(r"^\[" + re.escape(name) + r"\][^\n]*\n(.*?)(?=^\[|\Z)", text, flags=re.S | re.M)
-        if not m:
-            raise ValueError(f"{base}: no [{name}] table")
-        old = {}
-        for line in m.group(1).splitlines():
-            kv = re.match(r"\s*([A-Za-z_]+)\s*=\s*(.*?)\s*(#.*)?$", line)
-            if kv:
-                old[kv.group(1)] = kv.group(2)
-        merged = dict(old)
-        for k, v in new.items():
-            if v is None:
-                merged.pop(k, None)
-            else:
-                merged[k] = toml_value(v)
-        body = "".join(f"{k} = {v}\n" for k, v in merged.items()) + "\n"
-        text = text[:m.start(1)] + body + text[m.end(1):]
-
-    if end:
-        table("end", end)
-    if fill:
-        table("fill", fill)
-    if silo:
-        table("silo", silo)
+def scene_with(base: Path, out: Path, changes: dict | None = None, add: dict | None = None, remove=(),
+               pairs_scale: dict | None = None) -> Path:
+    """Writes the scene ``base`` to ``out`` with keys changed, added and removed by dotted path
+    (compare.scene_toml.edit: a key to change or remove that the scene does not have is an
+    error) and the constants of every [[pairs]] entry scaled (pairs_scale: key -> factor, e.g.
+    {"ks_rho_g": 2.0}; each entry must have the key). Returns out."""
+    changes = dict(changes or {})
     if pairs_scale:
-        def scale(mm):
-            k, v = mm.group(1), float(mm.group(2))
-            return f"{k} = {v * pairs_scale[k]!r}" if k in pairs_scale else mm.group(0)
-        text = re.sub(r"^(kn_rho_g|ks_rho_g|eta_n_rho_g|eta_s_rho_g|mu)\s*=\s*([-+0-9.eE]+)", scale, text, flags=re.M)
-    return text + extra_tables
-
-
-def toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(toml_value(x) for x in v) + "]"
-    raise TypeError(type(v))
+        for k, pair in enumerate(scene_toml.load(base).get("pairs", [])):
+            for name, factor in pairs_scale.items():
+                if name not in pair:
+                    raise KeyError(f"{base}: pairs[{k}] has no '{name}' to scale")
+                changes[f"pairs[{k}].{name}"] = pair[name] * factor
+    return scene_toml.edit(base, changes, out, add=add, remove=remove)

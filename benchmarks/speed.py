@@ -45,6 +45,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from compare import scene_toml  # noqa: E402
+from compare.run_dir import RunDir  # noqa: E402
+
 SCENES = ROOT / "reference_inputs" / "scenes"
 DT_SHARED = 5e-5
 DT_PAPER = 1e-4
@@ -57,11 +60,10 @@ SIZES = {
 }
 
 
-def without_sections(text: str, *names: str) -> str:
-    """A scene's TOML text without the tables [name] (each up to the next table)."""
-    for name in names:
-        text = re.sub(rf"(?ms)^\[{name}\].*?(?=^\[|\Z)", "", text)
-    return text
+def without_tables(scene: Path, *names: str) -> list[str]:
+    """Those of the tables ``names`` that the scene has (to remove before adding them anew)."""
+    doc = scene_toml.load(scene)
+    return [n for n in names if n in doc]
 
 
 SETTLE_TIME = 0.25  # s: the lattice columns (up to 1667 rows) close their gaps and rest
@@ -74,37 +76,27 @@ def settled_scene(base: Path, dem: str, out: Path) -> Path:
     packing = out / f"{base.stem}_settled" / "discs.csv"
     if scene.exists() and packing.exists():
         return scene
-    text = without_sections(base.read_text(), "discharge", "end")
-    settle = out / f"{base.stem}_settle.toml"
-    settle.write_text(text + f"\n[end]\ntime = {SETTLE_TIME!r}\nstop_at_rest = false\n")
+    settle = scene_toml.edit(base, None, out / f"{base.stem}_settle.toml", remove=without_tables(base, "discharge", "end"),
+                             add={"end": {"time": SETTLE_TIME, "stop_at_rest": False}})
     t0 = time.monotonic()
     p = subprocess.run([dem, "run", str(settle), "--out", str(packing.parent), "--quiet", "--threads", str(os.cpu_count() or 1)], capture_output=True, text=True)
     if p.returncode != 0:
         raise RuntimeError(f"settling {base.name} failed (dem exit {p.returncode}): {p.stderr.strip()[-300:]}")
-    s = json.loads((packing.parent / "summary.json").read_text())
+    s = RunDir(packing.parent, strict=True).summary
     print(f"settled {base.name}: {s['n_discs']} discs, {SETTLE_TIME} s in {time.monotonic() - t0:.0f} s", flush=True)
     # The bottom of a tall column rests with overlaps of several per cent of a radius (its weight on kn).
-    base_text = base.read_text()
-    old_fill = re.search(r"(?ms)^\[fill\].*?(?=^\[|\Z)", base_text)
-    material = re.search(r'(?m)^material\s*=\s*"([^"]+)"', old_fill.group(0)) if old_fill else None
-    if not material:
-        raise RuntimeError(f"{base}: no [fill] material to settle")
-    fill = (f'[fill]\ntype = "file"\nfile = "{packing.parent.name}/discs.csv"\nmaterial = "{material.group(1)}"\n'
-            f"max_initial_overlap = 0.3\n\n")
-    text = base_text[:old_fill.start()] + fill + base_text[old_fill.end():]
-    scene.write_text(text)
-    return scene
+    material = scene_toml.get(scene_toml.load(base), "fill.material")
+    return scene_toml.edit(base, {"fill": {"type": "file", "file": f"{packing.parent.name}/discs.csv",
+                                           "material": material, "max_initial_overlap": 0.3}}, scene)
 
 
 def scene_with_phases(base: Path, settle_steps: int, discharge_steps: int, dt: float, out: Path) -> Path:
     """The base scene with [end] = settle for S steps and [discharge] = D steps (no snapshots)."""
-    text = without_sections(base.read_text(), "discharge", "end")
     settle, dis = settle_steps * dt, discharge_steps * dt
-    text += (f"\n[end]\ntime = {settle!r}\nstop_at_rest = false\n\n"
-             f"[discharge]\ntime = {dis!r}\ngate = \"gate\"\noutlet_depth = 4.0\njam_time = {dis + 1.0!r}\n"
-             f"series_interval = {dis!r}\npeak_window = {dis!r}\nsnapshots = []\n")
-    out.write_text(text)
-    return out
+    return scene_toml.edit(base, None, out, remove=without_tables(base, "discharge", "end"), add={
+        "end": {"time": settle, "stop_at_rest": False},
+        "discharge": {"time": dis, "gate": "gate", "outlet_depth": 4.0, "jam_time": dis + 1.0,
+                      "series_interval": dis, "peak_window": dis, "snapshots": []}})
 
 
 # ------------------------------------------------------------------ workers (one run each)
@@ -121,7 +113,7 @@ def _native(args) -> dict:
     p = subprocess.run(measured(args) + cmd, capture_output=True, text=True)
     if p.returncode != 0:
         return {"error": f"dem exit {p.returncode}: {p.stderr.strip()[-300:]}"}
-    s = json.loads((Path(args.dir) / "run" / "summary.json").read_text())
+    s = RunDir(Path(args.dir) / "run", strict=True).summary
     return {"loop_s": s["wall_time_s"], "particle_steps": s["particle_steps"],
             "steps": s.get("steps"), "status": s["status"]}
 

@@ -42,6 +42,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import common_study as cs  # noqa: E402
+from compare.run_dir import RunDir, RunDirError  # noqa: E402
 
 KE_BLOWUP = 1e-2      # x (weight x mean radius): a blow-up even without exit 3
 PAPER_ZETA = 1.0015   # damping ratio of the paper's disc-disc pair (eta_n/(rho g) = 15.3, m* = m/2)
@@ -107,48 +108,43 @@ def make_cases(cfg, out: Path, T: float) -> list[dict]:
     """Scenes (paths) with descriptions; every scene ends at T without stopping at rest."""
     d = out / "scenes"
     d.mkdir(parents=True, exist_ok=True)
-    end = {"time": T, "stop_at_rest": False}
+    end = {"end.time": T, "end.stop_at_rest": False}
     cases = []
 
-    def add(name, group, what, text):
-        p = d / f"{name}.toml"
-        cs.write_text(p, text)
+    def add(name, group, what, base, changes=None, **edits):
+        p = cs.scene_with(base, d / f"{name}.toml", {**end, **(changes or {})}, **edits)
         cases.append({"name": name, "group": group, "scene": p, "what": what})
 
     for s in cfg["silos"]:
         name = f"silo_{s - 1}_{s}"
         add(name, "paper silo", f"paper's silo, ({s - 1})/{s} lattice, paper's constants (K_s/K_n = 0.25, zeta = 1.0)",
-            cs.scene_text_with(cs.SCENES / f"{name}.toml", end=end))
+            cs.SCENES / f"{name}.toml")
     for ratio in cfg["ks"]:
         k = ratio / PAPER_S
         add(f"ks_ratio_{ratio:g}", "stiffness ratio",
             f"17/18 with K_s/K_n = {ratio:g} (eta_s = eta_n sqrt(K_s/K_n), eq. 25; walls likewise)",
-            cs.scene_text_with(base_scene(), end=end, pairs_scale={"ks_rho_g": k, "eta_s_rho_g": math.sqrt(k)}))
+            base_scene(), pairs_scale={"ks_rho_g": k, "eta_s_rho_g": math.sqrt(k)})
     for z in cfg["zeta"]:
         f = z / PAPER_ZETA
         add(f"zeta_{z:g}", "damping ratio",
             f"17/18 with both dashpots scaled to a disc-disc normal damping ratio {z:g} (paper: 1.0)",
-            cs.scene_text_with(base_scene(), end=end, pairs_scale={"eta_n_rho_g": f, "eta_s_rho_g": f}))
+            base_scene(), pairs_scale={"eta_n_rho_g": f, "eta_s_rho_g": f})
     for kind in cfg["coordination"]:
         if kind == "hexagonal":
-            text = cs.scene_text_with(base_scene(), end=end, fill={"s": 20, "gap": 0.0, "max_initial_overlap": 1e-6})
-            what = "19/20 lattice with gap 0: every disc touches its 6 neighbours (hexagonal, 351 discs)"
-        elif kind == "square":
+            add(kind, "coordination", "19/20 lattice with gap 0: every disc touches its 6 neighbours (hexagonal, 351 discs)",
+                base_scene(), {"fill.s": 20, "fill.gap": 0.0}, add={"fill.max_initial_overlap": 1e-6})
+            continue
+        if kind == "square":
             discs = square_lattice()
             write_discs(d / "square.csv", discs)
-            text = cs.scene_text_with(base_scene(), end=end, fill={
-                "type": "file", "file": str((d / "square.csv").resolve()), "material": "sand",
-                "s": None, "radius": None, "gap": None, "count": None})
             what = f"square lattice, pitch 2r + 0.004 cm, {len(discs)} discs: 4 neighbours (stacked columns)"
         else:
             discs = loose_random()
             write_discs(d / "loose.csv", discs)
-            text = cs.scene_text_with(base_scene(), end=end, fill={
-                "type": "file", "file": str((d / "loose.csv").resolve()), "material": "sand",
-                "s": None, "radius": None, "gap": None, "count": None})
             what = (f"loose random packing: {len(discs)} discs placed at random (gaps >= 0.05 cm, seed 5) "
                     "falling and settling")
-        add(kind, "coordination", what, text)
+        add(kind, "coordination", what, base_scene(),
+            {"fill": {"type": "file", "material": "sand", "file": f"{'square' if kind == 'square' else 'loose'}.csv"}})
     return cases
 
 
@@ -192,13 +188,10 @@ def classify(scene: Path, scheme: str, dt: float, out: Path, T: float, recheck: 
 def coordination(run_dir: Path, summary: dict) -> float | None:
     """Mean number of disc-disc contacts carrying force per disc (2 N_dd / N)."""
     try:
-        n_dd = 0
-        with open(run_dir / "contacts.csv") as f:
-            for row in csv.DictReader(f):
-                if row["kind"] == "dd" and float(row["f_n"]) > 0:
-                    n_dd += 1
+        c = RunDir(run_dir).contacts()
+        n_dd = int(np.count_nonzero((c["kind"] == "dd") & (c["f_n"] > 0)))
         return 2.0 * n_dd / max(1, int(summary["n_discs"]))
-    except (OSError, KeyError, ValueError):
+    except (RunDirError, KeyError, ValueError):
         return None
 
 

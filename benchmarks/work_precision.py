@@ -36,6 +36,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import common_study as cs  # noqa: E402
+from compare.run_dir import RunDir  # noqa: E402
 
 PROFILES = {
     "full": {
@@ -274,11 +275,9 @@ def problem_static_paper(cfg, out: Path, repeats: int) -> dict:
     pk = cs.run_dem(src, base / "packing", "velocity_verlet", 1e-5)
     if pk["rc"] != 0:
         return {"error": f"packing fill failed: {pk['message']}"}
-    scene = base / "scene.toml"
-    cs.write_text(scene, cs.scene_text_with(
-        src, end={"time": cfg["static_duration"], "stop_at_rest": False},
-        fill={"type": "file", "file": str((base / "packing" / "discs.csv").resolve()), "material": "sand",
-              "max_initial_overlap": 0.05, "s": None, "radius": None, "gap": None, "count": None}))
+    scene = cs.scene_with(src, base / "scene.toml", {
+        "end.time": cfg["static_duration"], "end.stop_at_rest": False,
+        "fill": {"type": "file", "material": "sand", "file": "packing/discs.csv", "max_initial_overlap": 0.05}})
     runs = {}
 
     def one(scheme, dt, tag=""):
@@ -406,7 +405,7 @@ def ensemble(scheme, dt, members, seed, jobs, out_dir: Path, timeout: float = 18
         return {"ok": False, "failure": f"exit {p.returncode}: {p.stderr.strip()[-300:]}", "process_s": proc}
     loops, statuses = [], []
     for sj in sorted(out_dir.glob("member_*/summary.json")):
-        s = json.loads(sj.read_text())
+        s = RunDir(sj.parent).summary
         loops.append(s.get("wall_time_s"))
         statuses.append(s.get("status"))
     fr = e.get("flow_rate_discs", {})

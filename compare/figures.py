@@ -34,12 +34,9 @@ Usage, from the repository root::
 """
 
 import argparse
-import csv
-import json
 import math
 import os
 import textwrap
-import xml.etree.ElementTree as ET
 
 import numpy as np
 import matplotlib
@@ -49,23 +46,14 @@ import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
+from compare import run_dir as _run_dir  # noqa: E402
+# The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
+from compare.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
+                             PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
+                             WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
+
 # The paper's plot scale: one disc diameter stands for 50/pi (about 16) disc weights.
 DIAMETER_IN_DISC_WEIGHTS = 50.0 / math.pi
-
-CONTACT_COLUMNS = ("kind", "i", "j", "x", "y", "nx", "ny", "e_n", "e_s", "f_n", "f_s")
-DISC_COLUMNS = ("id", "x", "y", "r", "vx", "vy", "omega", "material")
-PROFILE_COLUMNS = ("wall", "group", "bin", "s_lo", "s_hi", "x_mid", "y_mid", "depth_mid",
-                   "normal", "shear", "contacts")
-# Discharge outputs (docs/outputs.md, "Discharge outputs").
-SNAPSHOT_DISC_COLUMNS = DISC_COLUMNS + ("dx", "dy")
-REMOVAL_COLUMNS = ("t", "id", "mass", "vx", "vy", "how")
-FLOW_COLUMNS = ("t", "discs_in_silo", "discs_below", "removed", "removed_mass", "moved_fraction",
-                "surface_left", "surface_centre", "surface_right", "arch_discs", "arch_crown_y")
-WALL_SERIES_COLUMNS = ("t", "wall", "bin", "s_mid", "x_mid", "y_mid", "depth_mid", "normal",
-                       "shear")
-WALL_TOTALS_COLUMNS = ("t", "name", "normal", "shear", "fx", "fy")
-TEXT_COLUMNS = {"kind", "j", "wall", "group", "material", "how", "name"}   # kept as str
-INT_COLUMNS = {"i", "id", "bin", "contacts"}                 # converted to int
 
 # Line styles of the separate side walls in the profile figure.
 SIDE_STYLES = {"side_left": "--", "side_right": ":"}
@@ -84,64 +72,26 @@ def _fail(path, message):
 # --------------------------------------------------------------------------- reading
 
 
-def read_csv(path, columns, empty=None):
-    """Read a CSV file with the given columns into a dict of numpy arrays.
+def _reading(fn, *args, **kwargs):
+    """fn(...) of compare.run_dir, its RunDirError a stop that names the file."""
+    try:
+        return fn(*args, **kwargs)
+    except RunDirError as err:
+        _fail(err.path, err.message)
 
-    A header row naming exactly ``columns`` is skipped if present. Columns in TEXT_COLUMNS
-    stay strings, INT_COLUMNS become int, the others float. An empty file (or a header
-    alone) gives arrays of length 0. With ``empty`` given (e.g. nan), an empty cell of a float
-    column reads as that value (flow_series.csv leaves the arch columns empty when there is
-    no arch); otherwise it is an error.
-    """
-    if not os.path.isfile(path):
-        _fail(path, "file is missing")
-    with open(path, newline="") as f:
-        rows = [(n, [c.strip() for c in row]) for n, row in enumerate(csv.reader(f), 1) if row]
-    if rows and rows[0][1] == list(columns):
-        rows = rows[1:]
-    data = {}
-    for k, name in enumerate(columns):
-        values = []
-        for line, row in rows:
-            if len(row) != len(columns):
-                _fail(path, f"line {line}: expected {len(columns)} fields "
-                            f"({','.join(columns)}), found {len(row)}")
-            cell = row[k]
-            if name not in TEXT_COLUMNS and empty is not None and cell == "" \
-                    and name not in INT_COLUMNS:
-                cell = empty
-            elif name not in TEXT_COLUMNS:
-                try:
-                    cell = int(cell) if name in INT_COLUMNS else float(cell)
-                except ValueError:
-                    _fail(path, f"line {line}: column '{name}' is not a number: {cell!r} "
-                                f"(expected header {','.join(columns)})")
-            values.append(cell)
-        dtype = str if name in TEXT_COLUMNS else int if name in INT_COLUMNS else float
-        data[name] = np.array(values, dtype=dtype)
-    return data
+
+def read_csv(path, columns, empty=None):
+    """A CSV file of a run as a dict of numpy arrays (compare.run_dir.read_csv); a missing or
+    malformed file stops with SystemExit naming it."""
+    return _reading(_run_dir.read_csv, path, columns, empty=empty)
 
 
 def read_summary(path):
-    """Read summary.json and check the few keys the figures need."""
-    if not os.path.isfile(path):
-        _fail(path, "file is missing")
-    try:
-        with open(path) as f:
-            summary = json.load(f)
-    except (json.JSONDecodeError, UnicodeDecodeError) as err:
-        _fail(path, f"not valid JSON: {err}")
-    if not isinstance(summary, dict):
-        _fail(path, "expected a JSON object")
-    weight = summary.get("disc_weight")
-    if not isinstance(weight, (int, float)) or not weight > 0:
-        _fail(path, f"'disc_weight' must be a positive number, found {weight!r}")
-    walls = summary.get("walls")
-    if not isinstance(walls, list):
-        _fail(path, "'walls' must be a list")
-    for w in walls:
-        if not (isinstance(w, dict) and len(w.get("from", ())) == 2 and len(w.get("to", ())) == 2):
-            _fail(path, f"wall without 'from'/'to' points: {w!r}")
+    """summary.json (compare.run_dir.read_summary) with a positive ``disc_weight``: the unit of
+    the figures' force scale."""
+    summary = _reading(_run_dir.read_summary, path)
+    if not summary["disc_weight"] > 0:
+        _fail(path, f"'disc_weight' must be a positive number, found {summary['disc_weight']!r}")
     return summary
 
 
@@ -153,12 +103,10 @@ def load_run(run_dir, parts=("contacts", "discs", "profiles")):
     as dicts of numpy arrays keyed by column name; parts not asked for are None.
     A missing or malformed file stops with SystemExit naming it.
     """
-    files = {"contacts": ("contacts.csv", CONTACT_COLUMNS),
-             "discs": ("discs.csv", DISC_COLUMNS),
-             "profiles": ("wall_profiles.csv", PROFILE_COLUMNS)}
-    run = {"dir": run_dir, "summary": read_summary(os.path.join(run_dir, "summary.json"))}
-    for part, (name, columns) in files.items():
-        run[part] = read_csv(os.path.join(run_dir, name), columns) if part in parts else None
+    rd = RunDir(run_dir)
+    run = {"dir": run_dir, "summary": read_summary(rd.file("summary.json"))}
+    for part in ("contacts", "discs", "profiles"):
+        run[part] = _reading(getattr(rd, part)) if part in parts else None
     return run
 
 
@@ -687,53 +635,14 @@ def gate_name(summary):
 
 def read_pvd(path):
     """The DataSets of a ParaView collection (.pvd) as (timestep, file) pairs sorted by time
-    (stable: equal times keep their order in the file). ``file`` is as written (relative to
-    the .pvd's folder)."""
-    if not os.path.isfile(path):
-        _fail(path, "file is missing")
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as err:
-        _fail(path, f"not valid XML: {err}")
-    found = []
-    for ds in root.iter("DataSet"):
-        try:
-            t = float(ds.get("timestep"))
-        except (TypeError, ValueError):
-            _fail(path, f"DataSet without a numeric timestep: {ds.attrib}")
-        if not ds.get("file"):
-            _fail(path, f"DataSet without a file: {ds.attrib}")
-        found.append((t, ds.get("file")))
-    return sorted(found, key=lambda pair: pair[0])
-
-
-def _same_time(a, b):
-    return abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))
+    (compare.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
+    return _reading(_run_dir.read_pvd, path)
 
 
 def snapshot_index(run_dir):
-    """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t.
-
-    Times (since opening) come from discharge_discs.pvd's timestep attributes; each VTU file
-    named there has a CSV twin of the same stem (snapshots/discs_NNNN.csv). The contacts CSV is
-    the twin of discharge_contacts.pvd's file at the same time, or, without that .pvd or time,
-    the discs file's name with 'discs_' replaced by 'contacts_'.
-    """
-    discs = read_pvd(os.path.join(run_dir, "discharge_discs.pvd"))
-    contacts_pvd = os.path.join(run_dir, "discharge_contacts.pvd")
-    contacts = read_pvd(contacts_pvd) if os.path.isfile(contacts_pvd) else []
-    snaps = []
-    for t, name in discs:
-        match = [c for tc, c in contacts if _same_time(t, tc)]
-        if match:
-            cname = match[0]
-        else:
-            folder, base = os.path.split(name)
-            cname = os.path.join(folder, base.replace("discs_", "contacts_", 1))
-        snaps.append({"t": t,
-                      "discs": os.path.join(run_dir, os.path.splitext(name)[0] + ".csv"),
-                      "contacts": os.path.join(run_dir, os.path.splitext(cname)[0] + ".csv")})
-    return snaps
+    """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t
+    (compare.run_dir.RunDir.discharge_snapshots)."""
+    return _reading(RunDir(run_dir).discharge_snapshots)
 
 
 def select_snapshots(snaps, times=None):
@@ -957,8 +866,9 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     spath = os.path.join(run_dir, "summary.json")
     summary = read_summary(spath)
     info = discharge_info(summary, spath)
-    series = read_csv(os.path.join(run_dir, "wall_series.csv"), WALL_SERIES_COLUMNS)
-    totals = read_csv(os.path.join(run_dir, "wall_totals_series.csv"), WALL_TOTALS_COLUMNS)
+    rd = RunDir(run_dir)
+    series = _reading(rd.wall_series)
+    totals = _reading(rd.wall_totals_series)
     gate = gate_name(summary)
     sides = [w for w in summary["walls"] if str(w.get("group", "")).startswith("side")]
     bottoms = [w for w in summary["walls"]
@@ -1056,8 +966,9 @@ def plot_flow(run_dir, out_png):
     spath = os.path.join(run_dir, "summary.json")
     summary = read_summary(spath)
     info = discharge_info(summary, spath)
-    removals = read_csv(os.path.join(run_dir, "removals.csv"), REMOVAL_COLUMNS)
-    flow = read_csv(os.path.join(run_dir, "flow_series.csv"), FLOW_COLUMNS, empty=float("nan"))
+    rd = RunDir(run_dir)
+    removals = _reading(rd.removals)
+    flow = _reading(rd.flow_series)
     order = np.argsort(flow["t"], kind="stable")
     flow = {k: v[order] for k, v in flow.items()}
     order = np.argsort(removals["t"], kind="stable")

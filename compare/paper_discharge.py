@@ -10,13 +10,13 @@ the pictures of each configuration's first member.
 """
 import argparse
 import json
-import re
 import subprocess
 import sys
 from pathlib import Path
 
-from compare import figures
+from compare import figures, scene_toml
 from compare.common import write_text_atomic
+from compare.run_dir import RunDir
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -36,12 +36,10 @@ CONFIGS = [  # (tag, arrangement, scheme, dt, contact overrides)
 
 
 def scene_with(arr, contact, folder):
-    text = (SCENES / f"discharge_{arr}.toml").read_text()
-    for key, value in contact.items():
-        text = re.sub(rf'(?m)^{key} = "[a-z]+"', f'{key} = "{value}"', text, count=1)
+    """The paper's discharge scene with the contact-law keys changed (compare.scene_toml: a key
+    the scene does not have is an error, never a silent no-op), written into folder."""
     path = folder / f"discharge_{arr}_{'_'.join(contact.values()) or 'paper'}.toml"
-    write_text_atomic(path, text)
-    return path
+    return scene_toml.edit(SCENES / f"discharge_{arr}.toml", {f"contact.{k}": v for k, v in contact.items()}, path)
 
 
 def fmt(stat, digits=3):
@@ -70,12 +68,11 @@ def main(argv=None):
                "contact": contact or "paper", "exit": proc.returncode}
         if (ens / "ensemble.json").exists():
             rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
-            first = ens / "member_00"
-            summ = json.loads((first / "summary.json").read_text())
-            if summ.get("status") != "unstable" and (first / "snapshots").exists():
-                figures.plot_discharge_frames(first, out / f"frames_{tag}.png")
-                figures.plot_wall_ratios(first, out / f"ratios_{tag}.png")
-                figures.plot_flow(first, out / f"flow_{tag}.png")
+            first = RunDir(ens / "member_00")
+            if first.status != "unstable" and first.file("snapshots").exists():
+                figures.plot_discharge_frames(first.path, out / f"frames_{tag}.png")
+                figures.plot_wall_ratios(first.path, out / f"ratios_{tag}.png")
+                figures.plot_flow(first.path, out / f"flow_{tag}.png")
         else:
             rec["error"] = proc.stderr.strip()[-400:]
         results.append(rec)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from compare import figures
 from compare.common import write_text_atomic
+from compare.run_dir import RunDir, RunDirError
 
 REPO = Path(__file__).resolve().parents[1]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -43,7 +44,11 @@ def run_one(dem, s, scheme, dt, out_root):
     if proc.returncode not in (0, 3):
         rec.update(status="error", note=proc.stderr.strip()[-300:])
         return rec
-    summ = json.loads((out / "summary.json").read_text())
+    try:
+        summ = RunDir(out, strict=True).summary
+    except RunDirError as e:
+        rec.update(status="error", note=str(e))
+        return rec
     dw = summ["disc_weight"]
     g = summ["groups"]
     left, right = g["side_left"]["normal_total"] / dw, g["side_right"]["normal_total"] / dw

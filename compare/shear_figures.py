@@ -15,7 +15,6 @@ Usage, from the repository root::
 """
 
 import argparse
-import json
 import math
 import os
 
@@ -26,8 +25,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
-from compare.figures import (CONTACT_COLUMNS, DISC_COLUMNS, _draw_discs, _fail, _save,  # noqa: E402
-                             read_csv)
+from compare.figures import _draw_discs, _fail, _reading, _save  # noqa: E402
+from compare.run_dir import CONTACT_COLUMNS, DISC_COLUMNS, RunDir, read_header_csv  # noqa: E402
 
 SERIES_NEEDED = ("strain", "sigma", "tau", "ratio")
 STYLES = {"free": ("0.2", "-"), "clusters": ("tab:red", "-"), "touching": ("tab:orange", "--"),
@@ -35,18 +34,9 @@ STYLES = {"free": ("0.2", "-"), "clusters": ("tab:red", "-"), "touching": ("tab:
 
 
 def read_series(path):
-    """shear_series.csv as a dict of float arrays (only the columns named in the header)."""
-    if not os.path.isfile(path):
-        _fail(path, "file is missing")
-    with open(path) as f:
-        head = f.readline().strip().split(",")
-    for c in SERIES_NEEDED:
-        if c not in head:
-            _fail(path, f"no column '{c}' (header {','.join(head)})")
-    data = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)
-    if data.size == 0:
-        return {c: np.zeros(0) for c in head}
-    return {c: data[:, k] for k, c in enumerate(head)}
+    """shear_series.csv as a dict of float arrays (the columns its header names;
+    compare.run_dir.read_header_csv)."""
+    return _reading(read_header_csv, path, SERIES_NEEDED)
 
 
 def peak(series, window=0.011):
@@ -93,19 +83,14 @@ def plot_ratio(runs, out_png, title=None):
 
 def load_snapshot(run_dir, k):
     """Snapshot k of a shear run: (entry of snapshots/index.json, contacts, discs, summary)."""
-    folder = os.path.join(run_dir, "snapshots")
-    index_path = os.path.join(folder, "index.json")
-    if not os.path.isfile(index_path):
-        _fail(index_path, "file is missing")
-    with open(index_path) as f:
-        index = json.load(f)["snapshots"]
+    rd = RunDir(run_dir)
+    index = _reading(rd.shear_snapshots)
     if not 0 <= k < len(index):
-        _fail(index_path, f"no snapshot {k} (there are {len(index)})")
+        _fail(rd.file(os.path.join("snapshots", "index.json")), f"no snapshot {k} (there are {len(index)})")
     entry = index[k]
-    contacts = read_csv(os.path.join(folder, entry["contacts"]), CONTACT_COLUMNS)
-    discs = read_csv(os.path.join(folder, entry["discs"]), DISC_COLUMNS)
-    with open(os.path.join(run_dir, "summary.json")) as f:
-        summary = json.load(f)
+    contacts = _reading(rd.snapshot_csv, os.path.join("snapshots", entry["contacts"]), CONTACT_COLUMNS)
+    discs = _reading(rd.snapshot_csv, os.path.join("snapshots", entry["discs"]), DISC_COLUMNS)
+    summary = _reading(lambda: rd.summary)
     return entry, contacts, discs, summary
 
 

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from compare import scene_toml
+
 REPO = Path(__file__).resolve().parents[2]
 SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
 DISCHARGE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
@@ -175,8 +177,7 @@ def test_the_printed_resume_command_goes_on(tmp_path, dem_binary, full_runs):
 
 
 def test_checkpoint_every_from_the_scene(tmp_path, dem_binary, full_runs):
-    scene = tmp_path / "silo.toml"
-    scene.write_text(SILO.read_text().replace("[output]\n", "[output]\ncheckpoint_every = 0.1   # s\n", 1))
+    scene = scene_toml.edit(SILO, None, tmp_path / "silo.toml", add={"output.checkpoint_every": 0.1})
     out = tmp_path / "run"
     p = dem(dem_binary, "run", scene, "--out", out, "--quiet")
     assert p.returncode == 0, p.stderr
@@ -220,8 +221,7 @@ def test_resume_refuses_another_engine_version(checkpointed, dem_binary):
 
 
 def test_resume_refuses_a_changed_scene(checkpointed, dem_binary, tmp_path):
-    scene = tmp_path / "changed.toml"
-    scene.write_text(SILO.read_text().replace("mu = 0.577", "mu = 0.5"))
+    scene = scene_toml.edit(SILO, {"pairs[0].mu": 0.5}, tmp_path / "changed.toml")
     p = dem(dem_binary, "run", scene, "--out", checkpointed, "--quiet", "--resume")
     assert p.returncode == 2 and "the scene changed since the checkpoint" in p.stderr, p.stderr
 

@@ -10,24 +10,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from compare import scene_toml
+
 REPO = Path(__file__).resolve().parents[2]
-BASE = (REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml").read_text()
+BASE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
 
 
-def scene(tmp_path, name, **edits):
-    """The 17/18 discharge scene with `key = value` lines replaced; keys starting with d_ are
-    those of the [discharge] table (e.g. d_time), the others the first match above it."""
-    head, tail = BASE.split("[discharge]")
-    for key, value in edits.items():
-        if key.startswith("d_"):
-            tail, n = re.subn(rf"(?m)^{key[2:]} = .*$", f"{key[2:]} = {value}", tail, count=1)
-        else:
-            head, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", head, count=1)
-        assert n == 1, key
-    text = head + "[discharge]" + tail
-    path = tmp_path / f"{name}.toml"
-    path.write_text(text)
-    return path
+def scene(tmp_path, name, changes=None, **kwargs):
+    """The 17/18 discharge scene with keys changed by dotted path (compare.scene_toml: a key the
+    scene does not have is an error)."""
+    return scene_toml.edit(BASE, changes, tmp_path / f"{name}.toml", **kwargs)
 
 
 def read_csv(path):
@@ -46,7 +38,7 @@ def every_step(tmp_path_factory, dem_binary):
     """A short discharge sampled at every step (series_interval = dt)."""
     import subprocess
     tmp = tmp_path_factory.mktemp("every")
-    path = scene(tmp, "every", d_series_interval="1e-4", d_time="0.4")
+    path = scene(tmp, "every", {"discharge.series_interval": 1e-4, "discharge.time": 0.4})
     out = tmp / "out"
     proc = subprocess.run([str(dem_binary), "run", str(path), "--out", str(out), "--quiet"],
                           capture_output=True, text=True)
@@ -82,14 +74,14 @@ def test_removal_log_matches_flow_series_and_rate(every_step):
 
 
 def test_slit_narrower_than_a_disc_jams(tmp_path, run_dem):
-    s = run(run_dem, scene(tmp_path, "narrow", slit_width="1.5"), tmp_path / "out")
+    s = run(run_dem, scene(tmp_path, "narrow", {"silo.slit_width": 1.5}), tmp_path / "out")
     assert s["status"] == "jammed"
     assert s["discharge"]["removed"] == 0
     assert s["discharge"]["jam_at"] == pytest.approx(0.3, abs=2e-4)
 
 
 def test_slit_of_ten_diameters_flows(tmp_path, run_dem):
-    s = run(run_dem, scene(tmp_path, "wide", slit_width="20.0"), tmp_path / "out")
+    s = run(run_dem, scene(tmp_path, "wide", {"silo.slit_width": 20.0}), tmp_path / "out")
     assert s["status"] in ("discharged", "emptied")
     assert not s["discharge"]["jammed"]
     assert s["discharge"]["removed"] > 200
@@ -99,7 +91,7 @@ def test_wide_slit_flow_rate_is_beverloo_plausible(tmp_path, run_dem):
     """Q = C rho_b sqrt(g) (D - k d)^1.5 with C in [0.5, 1], k in [1, 2], rho_b = phi rho_s,
     phi in [0.82, 0.907] (validation.md): the plausibility band, not a target."""
     D, d, rho, g = 12.0, 2.0, 2.65, 980.0
-    s = run(run_dem, scene(tmp_path, "bev", slit_width=str(D)), tmp_path / "out")
+    s = run(run_dem, scene(tmp_path, "bev", {"silo.slit_width": float(D)}), tmp_path / "out")
     q = s["discharge"]["flow_rate_mass"]
     low = 0.5 * 0.82 * rho * math.sqrt(g) * (D - 2 * d) ** 1.5
     high = 1.0 * 0.907 * rho * math.sqrt(g) * (D - 1 * d) ** 1.5
@@ -107,7 +99,7 @@ def test_wide_slit_flow_rate_is_beverloo_plausible(tmp_path, run_dem):
 
 
 def test_same_scene_twice_is_bit_identical(tmp_path, run_dem):
-    path = scene(tmp_path, "twice", d_time="0.3")
+    path = scene(tmp_path, "twice", {"discharge.time": 0.3})
     run(run_dem, path, tmp_path / "a")
     run(run_dem, path, tmp_path / "b")
     for name in ("wall_series.csv", "removals.csv", "flow_series.csv", "discs.csv", "contacts.csv"):
@@ -116,10 +108,9 @@ def test_same_scene_twice_is_bit_identical(tmp_path, run_dem):
 
 def test_fill_saved_then_discharged_from_state_equals_one_run(tmp_path, run_dem):
     """Two phases in one run == the fill saved to a state file + a run from that state."""
-    whole = scene(tmp_path, "whole", d_time="0.3")
+    whole = scene(tmp_path, "whole", {"discharge.time": 0.3})
     run(run_dem, whole, tmp_path / "one")
-    fill = tmp_path / "fill.toml"
-    fill.write_text(re.sub(r"\n\[discharge\].*", "\n", whole.read_text(), flags=re.S))
+    fill = scene_toml.edit(whole, None, tmp_path / "fill.toml", remove=["discharge"])
     state = tmp_path / "rest.state"
     run(run_dem, fill, tmp_path / "fill", "--save-state", state)
     run(run_dem, whole, tmp_path / "two", "--from", state)
@@ -128,7 +119,7 @@ def test_fill_saved_then_discharged_from_state_equals_one_run(tmp_path, run_dem)
 
 
 def test_keystone_removal_unjams(tmp_path, run_dem):
-    s = run(run_dem, scene(tmp_path, "unjam", slit_width="3.0", d_on_jam='"remove_keystone"'),
+    s = run(run_dem, scene(tmp_path, "unjam", {"silo.slit_width": 3.0, "discharge.on_jam": "remove_keystone"}),
             tmp_path / "out")
     rem = read_csv(tmp_path / "out" / "removals.csv")
     hand = [r for r in rem if r["how"] == "keystone"]
@@ -151,7 +142,7 @@ def test_a_series_file_that_cannot_be_written_stops_the_run_with_exit_4(tmp_path
     and a message naming the file (not an abort)."""
     out = tmp_path / "out"
     (out / "wall_series.csv.tmp").mkdir(parents=True)  # a directory where the file must go
-    proc = run_dem("run", scene(tmp_path, "short", d_time="0.05"), "--out", out, "--quiet")
+    proc = run_dem("run", scene(tmp_path, "short", {"discharge.time": 0.05}), "--out", out, "--quiet")
     assert proc.returncode == 4, proc.stderr
     assert "cannot write" in proc.stderr and "wall_series.csv.tmp" in proc.stderr, proc.stderr
     assert "terminate" not in proc.stderr

@@ -1,21 +1,18 @@
 """`dem ensemble`: members differ by a seeded perturbation; statistics are those of the members."""
 import json
 import math
-import re
 from pathlib import Path
 
 import numpy as np
+
+from compare import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
 
 
 def short_scene(tmp_path):
-    head, tail = SCENE.read_text().split("[discharge]")
-    tail = re.sub(r"(?m)^time = .*$", "time = 0.4", tail, count=1)
-    path = tmp_path / "short.toml"
-    path.write_text(head + "[discharge]" + tail)
-    return path
+    return scene_toml.edit(SCENE, {"discharge.time": 0.4}, tmp_path / "short.toml")
 
 
 def test_ensemble_statistics_and_seeds(tmp_path, run_dem):

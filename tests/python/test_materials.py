@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import liggghts_backend, native_backend, probe as P, yade_backend
+from compare import liggghts_backend, native_backend, probe as P, scene_toml, yade_backend
 from compare.common import PYTHON, ROOT, SHARED_VARIANT, Case, CaseError, dem_binary, kinetic_energy, resolve
 
 needs_liggghts = pytest.mark.skipif(not liggghts_backend.available(), reason="liggghts is not on PATH")
@@ -73,21 +73,17 @@ def write_scene(folder: Path, cross: dict, name: str = "two_materials") -> Path:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["x", "y", "r", "material"])
         w.writerows([[x, y, r, m] for x, y, r, m in discs()])
-    lines = [f'[scene]\nname = "{name}"', "[physics]\ngravity = [0.0, -980.0]",
-             '[integrator]\nscheme = "velocity_verlet"\ndt = 5e-5']
-    lines += [f"[materials.{m}]\ndensity = {rho!r}" for m, rho in DENSITY.items()]
-    lines += ["[materials.steelwall]", "[materials.rubber]"]
-    for (a, b), vals in (OWN | cross).items():
-        lines.append(f'[[pairs]]\nmaterials = ["{a}", "{b}"]\n'
-                     + "\n".join(f"{k} = {v!r}" for k, v in zip(FIELDS, vals)))
-    for wname, a, b, m in WALLS:
-        lines.append(f'[[walls]]\nname = "{wname}"\nfrom = {list(a)}\nto = {list(b)}\nmaterial = "{m}"')
-    lines += [f'[fill]\ntype = "file"\nfile = "{name}.csv"\nmaterial = "glass"\ncount = {len(discs())}\n'
-              "max_initial_overlap = 0.01",
-              "[end]\ntime = 1.0", "[output]\nprofile_bin = 2.0"]
-    path = folder / f"{name}.toml"
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return scene_toml.write(folder / f"{name}.toml", {
+        "scene": {"name": name},
+        "physics": {"gravity": [0.0, -980.0]},
+        "integrator": {"scheme": "velocity_verlet", "dt": 5e-5},
+        "materials": {**{m: {"density": rho} for m, rho in DENSITY.items()}, "steelwall": {}, "rubber": {}},
+        "pairs": [{"materials": [a, b], **dict(zip(FIELDS, vals))} for (a, b), vals in (OWN | cross).items()],
+        "walls": [{"name": wname, "from": list(a), "to": list(b), "material": m} for wname, a, b, m in WALLS],
+        "fill": {"type": "file", "file": f"{name}.csv", "material": "glass", "count": len(discs()),
+                 "max_initial_overlap": 0.01},
+        "end": {"time": 1.0},
+        "output": {"profile_bin": 2.0}})
 
 
 def pair_of(cross: dict, a: str, b: str) -> dict:

@@ -91,10 +91,8 @@ def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
     import subprocess
     assert "phi" not in read_csv(run_dir / "discs.csv")[0]
     assert "phi" not in meshio.read(run_dir / "discs.vtu").point_data
-    text = SCENE.read_text()
-    scene = tmp_path / "angle.toml"
-    scene.write_text(text.replace("[output]\n", "[output]\nrotation_angle = true\n", 1) if "[output]\n" in text
-                     else text + "\n[output]\nrotation_angle = true\n")
+    from compare import scene_toml
+    scene = scene_toml.edit(SCENE, None, tmp_path / "angle.toml", add={"output.rotation_angle": True})
     out = tmp_path / "run"
     proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
                           capture_output=True, text=True)

@@ -29,10 +29,10 @@ def with_fill(fill):
 CASES = [
     ("unknown key", edit(BASE, "[integrator]\n", "[integrator]\nsheme = 1\n"), ["integrator.sheme", "unknown key"]),
     ("unknown table", BASE + "\n[extra]\nx = 1\n", ["extra", "unknown key"]),
-    ("missing dt", edit(BASE, "dt = 1e-4", ""), ["integrator.dt", "missing"]),
+    ("missing dt", edit(BASE, "dt = 0.0001", ""), ["integrator.dt", "missing"]),
     ("missing table", re.sub(r"\[end\].*?(?=\n\[output\])", "", BASE, flags=re.S), ["end", "missing"]),
-    ("wrong type", edit(BASE, "dt = 1e-4", 'dt = "small"'), ["integrator.dt", '"small"', "expected a number"]),
-    ("negative dt", edit(BASE, "dt = 1e-4", "dt = -1e-5"), ["integrator.dt", "-1e-05", "> 0"]),
+    ("wrong type", edit(BASE, "dt = 0.0001", 'dt = "small"'), ["integrator.dt", '"small"', "expected a number"]),
+    ("negative dt", edit(BASE, "dt = 0.0001", "dt = -1e-5"), ["integrator.dt", "-1e-05", "> 0"]),
     ("zero density", edit(BASE, "density = 2.65", "density = 0"), ["materials.sand.density", "> 0"]),
     ("zero radius", edit(BASE, "radius = 1.0 ", "radius = 0.0 "), ["fill.radius", "> 0"]),
     ("list radius", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[12.5, 5.0, -1.0]")), ["disc 1", "radius", "> 0"]),
@@ -43,8 +43,8 @@ CASES = [
     ("outside", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[55.0, 5.0, 1.0]")), ["disc 1", "outside the walls"]),
     ("through wall", with_fill(LIST_FILL.replace("[12.5, 5.0, 1.0]", "[0.5, 5.0, 1.0]")), ["disc 1", "overlaps wall", "left"]),
     ("count mismatch", with_fill(LIST_FILL + "count = 3\n"), ["fill.count", "3", "does not match"]),
-    ("dt above bound", edit(BASE, "dt = 1e-4", "dt = 4e-4"), ["integrator.dt", "0.0004", "stability bound", "force_dt"]),
-    ("nan", edit(BASE, "dt = 1e-4", "dt = nan"), ["integrator.dt", "finite"]),
+    ("dt above bound", edit(BASE, "dt = 0.0001", "dt = 4e-4"), ["integrator.dt", "0.0004", "stability bound", "force_dt"]),
+    ("nan", edit(BASE, "dt = 0.0001", "dt = nan"), ["integrator.dt", "finite"]),
     ("lattice too wide", edit(BASE, "s = 18 ", "s = 25 "), ["fill.s", "25", "do not fit"]),
     ("huge lattice", edit(BASE, "count = 350 ", "count = 1000000000000 "), ["fill.count", "5e7"]),
     ("missing pair", re.sub(r'\[\[pairs\]\]\s*# Table 2, particle to wall.*?(?=\n\[silo\])', "", BASE, flags=re.S),
@@ -68,7 +68,7 @@ def test_bad_scene_is_refused(tmp_path, run_dem, case, text, expect):
 
 def test_dt_above_bound_runs_when_forced(tmp_path, run_dem):
     scene = tmp_path / "forced.toml"
-    scene.write_text(edit(edit(BASE, "dt = 1e-4", "dt = 4e-4"), "time = 5.0 ", "time = 0.004 "))
+    scene.write_text(edit(edit(BASE, "dt = 0.0001", "dt = 4e-4"), "time = 5.0 ", "time = 0.004 "))
     proc = run_dem("run", scene, "--out", tmp_path / "out", "--force-dt")
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "out" / "summary.json").exists()

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from compare import scene_toml
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -23,10 +25,10 @@ def generator():
 def small_scene(variant, alpha=50, max_strain=0.02):
     gen = generator()
     gen.WIDTH, gen.HEIGHT = 12.0, 6.0
-    text = gen.scene_text(alpha, variant)
-    text = text.replace("max_strain = 0.15", f"max_strain = {max_strain}")
-    text = text.replace("snapshots = [0.0, 0.05, 0.15]", f"snapshots = [0.0, {max_strain}]")
-    return text.replace("progress = true", "progress = false")
+    doc = scene_toml.loads(gen.scene_text(alpha, variant))
+    return scene_toml.dumps(scene_toml.with_changes(doc, {"shear.max_strain": max_strain,
+                                                          "shear.snapshots": [0.0, max_strain],
+                                                          "output.progress": False}))
 
 
 def test_committed_scenes_are_up_to_date():
@@ -106,12 +108,9 @@ def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
         assert stab["dt_bound"] <= stab["dt_clusters"]
 
 
-def without_shear(text):
-    """The same box, compressed only: the scene less its [shear] table."""
-    import re
-    out = re.sub(r"(?ms)^\[shear\]\n.*?(?=^\[)", "", text)
-    assert "[shear]" not in out and "[shear_box]" in out
-    return out
+def without_shear(scene, out):
+    """The same box, compressed only: the scene less its [shear] table, written to out."""
+    return scene_toml.edit(scene, None, out, remove=["shear"])
 
 
 def dem(binary, *args):
@@ -127,9 +126,7 @@ def test_shear_from_a_saved_compression_is_the_run_in_one_piece(small_runs, dem_
     turned, plate moving): the second part's samples are the one-piece run's from there on."""
     one = small_runs["clusters"]
     scene = one.parent / "clusters.toml"
-    text = scene.read_text()
-    comp = tmp_path / "compress.toml"
-    comp.write_text(without_shear(text))
+    comp = without_shear(scene, tmp_path / "compress.toml")
     proc = dem(dem_binary, "run", comp, "--out", tmp_path / "comp", "--save-state", tmp_path / "sample.bin")
     assert proc.returncode == 0, proc.stderr
     proc = dem(dem_binary, "run", scene, "--out", tmp_path / "two", "--from", tmp_path / "sample.bin")
@@ -138,8 +135,7 @@ def test_shear_from_a_saved_compression_is_the_run_in_one_piece(small_runs, dem_
                  "contacts.csv"):
         assert (tmp_path / "two" / name).read_bytes() == (one / name).read_bytes(), name
 
-    half = tmp_path / "half.toml"
-    half.write_text(text.replace("max_strain = 0.02", "max_strain = 0.01"))
+    half = scene_toml.edit(scene, {"shear.max_strain": 0.01}, tmp_path / "half.toml")
     proc = dem(dem_binary, "run", half, "--out", tmp_path / "half", "--save-state", tmp_path / "half.bin")
     assert proc.returncode == 0, proc.stderr
     proc = dem(dem_binary, "run", scene, "--out", tmp_path / "rest", "--from", tmp_path / "half.bin")
@@ -158,8 +154,7 @@ def test_shear_from_a_saved_compression_is_the_run_in_one_piece(small_runs, dem_
 def test_a_state_fits_only_its_own_box_and_clusters(small_runs, dem_binary, tmp_path):
     free = small_runs["free"].parent / "free.toml"
     clusters = small_runs["clusters"].parent / "clusters.toml"
-    comp = tmp_path / "free_compress.toml"
-    comp.write_text(without_shear(free.read_text()))
+    comp = without_shear(free, tmp_path / "free_compress.toml")
     proc = dem(dem_binary, "run", comp, "--out", tmp_path / "comp", "--save-state", tmp_path / "free.bin")
     assert proc.returncode == 0, proc.stderr
     cases = [
@@ -167,9 +162,8 @@ def test_a_state_fits_only_its_own_box_and_clusters(small_runs, dem_binary, tmp_
         (free.parent / "wider.toml", "another plate"),
         (free.parent / "follow.toml", "shear_box.plate_horizontal"),
     ]
-    (free.parent / "wider.toml").write_text(free.read_text().replace("plate_volume = 1500.0", "plate_volume = 1400.0"))
-    (free.parent / "follow.toml").write_text(free.read_text().replace('plate_horizontal = "free"',
-                                                                      'plate_horizontal = "with_walls"'))
+    scene_toml.edit(free, {"shear_box.plate_volume": 1400.0}, free.parent / "wider.toml")
+    scene_toml.edit(free, {"shear_box.plate_horizontal": "with_walls"}, free.parent / "follow.toml")
     for k, (scene, fragment) in enumerate(cases):
         proc = dem(dem_binary, "run", scene, "--out", tmp_path / f"o{k}", "--from", tmp_path / "free.bin")
         assert proc.returncode == 2, proc.stderr

@@ -107,8 +107,8 @@ def test_a_scene_a_reference_code_cannot_express_is_refused_before_any_run(tmp_p
     """A disc-wall spring stiffer than twice the disc-disc one: YADE combines the two materials of a
     contact in series and cannot reach it; the refusal names the field, the code and why, and
     nothing is written (exit 2)."""
-    text = (SCENES / "silo_17_18.toml").read_text().replace("kn_rho_g = 7.28e4", "kn_rho_g = 1.5e5")
-    scene = _entry(tmp_path, text)
+    from compare import scene_toml
+    scene = scene_toml.edit(SCENES / "silo_17_18.toml", {"pairs[1].kn_rho_g": 1.5e5}, tmp_path / "s.toml")
     out = tmp_path / "out"
     p = subprocess.run([str(dem_binary), "compare", str(scene), "--out", str(out), "--codes", "native,yade"],
                        capture_output=True, text=True, timeout=120)

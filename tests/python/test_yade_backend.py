@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import yade_backend as yb
+from compare import scene_toml, yade_backend as yb
+from compare.run_dir import RunDir
 from compare.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
 
 pytestmark = pytest.mark.skipif(not yb.available(), reason="yade is not on PATH (Debian: apt-get install yade)")
@@ -185,26 +186,25 @@ def test_oblique_gross_sliding_spin(base, tmp_path):
 def _engine_disc_end(tmp: Path, case: Case) -> list[float]:
     """The same scene run by build/dem (velocity Verlet, same contact variant)."""
     r = case.resolved
-    lines = ["[scene]", 'name = "oblique_engine"', "[physics]", f"gravity = {list(r['gravity'])}",
-             "[integrator]", 'scheme = "velocity_verlet"', f"dt = {case.dt!r}", "[contact]"]
-    lines += [f'{k} = "{v}"' for k, v in r["contact"].items()]
-    lines += ["[materials.sand]", "density = 2.65", "[materials.wall]"]
-    for p in r["pairs"]:
-        lines += ["[[pairs]]", f"materials = {json.dumps(p['materials'])}"]
-        lines += [f"{k} = {float(p[k])!r}" for k in ("kn", "ks", "eta_n", "eta_s", "mu")]
-    for w in r["walls"]:
-        lines += ["[[walls]]", f'name = "{w["name"]}"', f"from = {list(map(float, w['from']))}",
-                  f"to = {list(map(float, w['to']))}", 'material = "wall"']
-    lines += ["[fill]", 'type = "file"', 'file = "packing.csv"', 'material = "sand"', "velocities = true",
-              "[end]", f"time = {case.duration!r}", "stop_at_rest = false", "[output]", "progress = false"]
-    (tmp / "scene.toml").write_text("\n".join(lines) + "\n")
+    scene_toml.write(tmp / "scene.toml", {
+        "scene": {"name": "oblique_engine"},
+        "physics": {"gravity": list(r["gravity"])},
+        "integrator": {"scheme": "velocity_verlet", "dt": case.dt},
+        "contact": dict(r["contact"]),
+        "materials": {"sand": {"density": 2.65}, "wall": {}},
+        "pairs": [{"materials": p["materials"], **{k: float(p[k]) for k in ("kn", "ks", "eta_n", "eta_s", "mu")}}
+                  for p in r["pairs"]],
+        "walls": [{"name": w["name"], "from": list(map(float, w["from"])), "to": list(map(float, w["to"])),
+                   "material": "wall"} for w in r["walls"]],
+        "fill": {"type": "file", "file": "packing.csv", "material": "sand", "velocities": True},
+        "end": {"time": case.duration, "stop_at_rest": False},
+        "output": {"progress": False}})
     (tmp / "packing.csv").write_text("x,y,r,vx,vy,omega\n" +
                                      "\n".join(",".join(repr(float(v)) for v in row) for row in case.discs) + "\n")
     p = subprocess.run([str(dem_binary()), "run", str(tmp / "scene.toml"), "--out", str(tmp / "run"), "--quiet"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
-    rows = np.genfromtxt(tmp / "run" / "discs.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
-    row = np.atleast_1d(rows)[0]
-    return [float(row[k]) for k in ("x", "y", "r", "vx", "vy", "omega")]
+    discs = RunDir(tmp / "run").discs()
+    return [float(discs[k][0]) for k in ("x", "y", "r", "vx", "vy", "omega")]
 
 
 def test_oblique_sticking_spin_matches_the_engine(base, tmp_path):
