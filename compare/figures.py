@@ -285,15 +285,24 @@ def side_wall_contacts(summary, contacts, tol=SAME_DEPTH):
 # --------------------------------------------------------------------------- figures
 
 
+# The formats a figure is written in, by the file's suffix (matplotlib's Agg and vector backends).
+FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
+
+
 def _save(fig, out_png):
-    """Save a figure as PNG at 150 dpi, creating the folder, and close it. The PNG is written to
-    NAME.tmp in the same folder and renamed when complete (a killed run leaves no half PNG)."""
+    """Save a figure at 150 dpi in the format its suffix names (.png, .pdf or .svg), creating
+    the folder, and close it. The file is written to NAME.tmp in the same folder and renamed when
+    complete (a killed run leaves no half file)."""
+    fmt = FORMATS.get(os.path.splitext(out_png)[1].lower())
+    if fmt is None:
+        plt.close(fig)
+        raise ValueError(f"{out_png}: a figure is written as .png, .pdf or .svg")
     folder = os.path.dirname(out_png)
     if folder:
         os.makedirs(folder, exist_ok=True)
     tmp = f"{out_png}.tmp"
     try:
-        fig.savefig(tmp, dpi=150, format="png")
+        fig.savefig(tmp, dpi=150, format=fmt)
         os.replace(tmp, out_png)
     finally:
         plt.close(fig)

@@ -805,3 +805,14 @@ def test_discharge_figures_need_a_discharge_run(tmp_path):
     for plot in (figures.plot_discharge_frames, figures.plot_wall_ratios, figures.plot_flow):
         with pytest.raises(SystemExit, match="summary.json.*not a discharge run"):
             plot(run, str(tmp_path / "x.png"))
+
+
+def test_figures_are_written_in_the_format_their_suffix_names(tmp_path):
+    run = make_run(tmp_path / "run")
+    figures.plot_network(str(run), str(tmp_path / "network.pdf"))
+    assert (tmp_path / "network.pdf").read_bytes()[:5] == b"%PDF-"
+    figures.plot_network(str(run), str(tmp_path / "network.svg"))
+    assert b"<svg" in (tmp_path / "network.svg").read_bytes()[:400]
+    with pytest.raises(ValueError, match="png, .pdf or .svg"):
+        figures.plot_network(str(run), str(tmp_path / "network.jpeg"))
+    assert not list(tmp_path.glob("network.jpeg*"))
