@@ -48,6 +48,14 @@ def fmt(stat, digits=3):
     return f"{stat['mean']:.{digits}g} ± {stat['stderr']:.2g}"
 
 
+def jam_text(j):
+    """The jam fraction of ensemble.json: 'k/n' of the members with a result, '-' when none had one."""
+    if j.get("value") is None:
+        return "-"
+    n = j.get("of")
+    return f"{j['value']:.2f}" + (f" ({j['jammed']}/{n})" if n is not None else "")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="out/paper_silo/discharge")
@@ -96,7 +104,7 @@ def main(argv=None):
         p = e["pattern"]
         lines.append(
             f"| {r['tag']} | {fmt(e['discs_out_at_1s'])} | {fmt(e['flow_rate_discs'])} | "
-            f"{e['jam_fraction']['value']:.2f} | {fmt(e['peak_ratio_bottom'])} / {fmt(e['peak_ratio_bottom_windowed'])} | "
+            f"{jam_text(e['jam_fraction'])} | {fmt(e['peak_ratio_bottom'])} / {fmt(e['peak_ratio_bottom_windowed'])} | "
             f"{fmt(e['peak_ratio_side'])} / {fmt(e['peak_ratio_side_windowed'])} | "
             f"{p['funnel']} / {p['piping']} / {p['undetermined']} | {e['unstable']} |")
     lines += ["", "Definitions (docs/outputs.md): flow rate = slope of removed mass from the 5th removal on;",

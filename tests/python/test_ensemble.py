@@ -94,3 +94,27 @@ def test_merge_refuses_missing_members_and_other_ensembles(tmp_path, run_dem):
     assert proc.returncode == 2 and "member_01" in proc.stderr and "missing" in proc.stderr, proc.stderr
     proc = run_dem("ensemble", "merge", out, "--members", 3, "--quiet")
     assert proc.returncode == 2, proc.stderr
+
+
+def test_members_without_a_result_count_in_no_statistic(tmp_path, run_dem):
+    """An unstable member (here: one member's summary marked so before the merge) is left out of
+    the means, the jam fraction and the pattern counts, and counted as failed."""
+    scene = short_scene(tmp_path)
+    out = tmp_path / "parts"
+    for k in range(3):
+        proc = run_dem("ensemble", scene, "--out", out, "--member", k, "--seed", 5, "--quiet")
+        assert proc.returncode == 0, proc.stderr
+    path = out / "member_02" / "summary.json"
+    s = json.loads(path.read_text())
+    s["status"] = "unstable"
+    path.write_text(json.dumps(s))
+    proc = run_dem("ensemble", "merge", out, "--members", 3, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    e = json.loads((out / "ensemble.json").read_text())
+    members = [json.loads((out / f"member_{k:02d}" / "summary.json").read_text())["discharge"] for k in range(2)]
+    assert e["unstable"] == 1 and e["failed"] == 1
+    assert e["discs_out_at_1s"]["n"] == 2
+    assert e["discs_out_at_1s"]["mean"] == np.mean([m["discs_out_at_1s"] for m in members])
+    assert e["jam_fraction"]["of"] == 2
+    assert e["jam_fraction"]["value"] == sum(1 for m in members if m["jams"] > 0) / 2
+    assert sum(e["pattern"].values()) == 2

@@ -132,39 +132,46 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
   int jammed = 0, unstable = 0, failed = 0, funnel = 0, piping = 0;
   json list = json::array();
   for (const Member& m : members) {
-    flow.push_back(get(m.metrics, "flow_rate_discs"));
-    flow_mass.push_back(get(m.metrics, "flow_rate_mass"));
-    out1.push_back(get(m.metrics, "discs_out_at_1s"));
-    pb.push_back(get(m.metrics, "peak_ratio_bottom"));
-    pbw.push_back(get(m.metrics, "peak_ratio_bottom_windowed"));
-    ps.push_back(get(m.metrics, "peak_ratio_side"));
-    psw.push_back(get(m.metrics, "peak_ratio_side_windowed"));
-    jam_at.push_back(get(m.metrics, "jam_at"));
-    jammed += m.status == "jammed" || m.metrics.value("jams", 0) > 0;
     unstable += m.status == "unstable";
-    failed += m.status == "unstable" || m.status.rfind("error", 0) == 0;
-    const std::string p = m.metrics.value("pattern", std::string());
-    funnel += p == "funnel";
-    piping += p == "piping";
+    // A member that blew up or could not run has no result: it counts in no statistic.
+    const bool ok = m.status != "unstable" && m.status.rfind("error", 0) != 0;
+    failed += !ok;
+    const std::string p = ok ? m.metrics.value("pattern", std::string()) : std::string();
+    if (ok) {
+      flow.push_back(get(m.metrics, "flow_rate_discs"));
+      flow_mass.push_back(get(m.metrics, "flow_rate_mass"));
+      out1.push_back(get(m.metrics, "discs_out_at_1s"));
+      pb.push_back(get(m.metrics, "peak_ratio_bottom"));
+      pbw.push_back(get(m.metrics, "peak_ratio_bottom_windowed"));
+      ps.push_back(get(m.metrics, "peak_ratio_side"));
+      psw.push_back(get(m.metrics, "peak_ratio_side_windowed"));
+      jam_at.push_back(get(m.metrics, "jam_at"));
+      jammed += m.status == "jammed" || m.metrics.value("jams", 0) > 0;
+      funnel += p == "funnel";
+      piping += p == "piping";
+    }
     list.push_back({{"member", m.index}, {"status", m.status}, {"fill_rest", m.fill_rest},
                     {"discs_out_at_1s", m.metrics.value("discs_out_at_1s", 0)},
                     {"flow_rate_discs", m.metrics.contains("flow_rate_discs") ? m.metrics["flow_rate_discs"] : json(nullptr)},
                     {"pattern", p}, {"jam_at", m.metrics.contains("jam_at") ? m.metrics["jam_at"] : json(nullptr)}});
   }
-  const double M = opt.members;
+  const int valid = opt.members - failed;
+  const double M = std::max(1, valid);  // the jam fraction's denominator: members with a result
   json js = {{"scene", identity["scene"]}, {"file", identity["file"]}, {"members", opt.members}, {"seed", opt.seed},
              {"perturb", opt.perturb}, {"scheme", identity["scheme"]}, {"dt", identity["dt"]},
              {"flow_rate_discs", stats(flow)}, {"flow_rate_mass", stats(flow_mass)},
              {"discs_out_at_1s", stats(out1)},
              {"peak_ratio_bottom", stats(pb)}, {"peak_ratio_bottom_windowed", stats(pbw)},
              {"peak_ratio_side", stats(ps)}, {"peak_ratio_side_windowed", stats(psw)},
-             {"jam_fraction", {{"value", jammed / M}, {"stderr", std::sqrt(jammed / M * (1 - jammed / M) / M)},
-                               {"jammed", jammed}}},
+             {"jam_fraction", {{"value", valid > 0 ? json(jammed / M) : json(nullptr)},
+                               {"stderr", valid > 0 ? json(std::sqrt(jammed / M * (1 - jammed / M) / M)) : json(nullptr)},
+                               {"jammed", jammed}, {"of", valid}}},
              {"jam_at", stats(jam_at)},
-             {"pattern", {{"funnel", funnel}, {"piping", piping}, {"undetermined", opt.members - funnel - piping}}},
-             {"unstable", unstable},
-             {"note", "mean and standard error (std / sqrt(n)) over members with a value; jam fraction: members "
-                      "that met a jam; perturbation: uniform [-perturb, perturb] cm on every initial centre"},
+             {"pattern", {{"funnel", funnel}, {"piping", piping}, {"undetermined", valid - funnel - piping}}},
+             {"unstable", unstable}, {"failed", failed},
+             {"note", "mean and standard error (std / sqrt(n)) over members with a value; members that were unstable "
+                      "or could not run (failed) count in no statistic; jam fraction: members that met a jam, of "
+                      "those with a result; perturbation: uniform [-perturb, perturb] cm on every initial centre"},
              {"runs", list}};
   write_file_atomic(out_dir + "/ensemble.json", js.dump(2) + "\n");
   if (!quiet) {
@@ -183,9 +190,10 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
     show("peak/static bottom (window)", js["peak_ratio_bottom_windowed"]);
     show("peak/static side", js["peak_ratio_side"]);
     show("peak/static side (window)", js["peak_ratio_side_windowed"]);
-    std::printf("  %-28s %10.3g +- %-8.3g\n", "jam fraction", jammed / M, js["jam_fraction"]["stderr"].get<double>());
+    std::printf("  %-28s %10.3g +- %-8.3g (of %d members with a result)\n", "jam fraction", jammed / M,
+                valid > 0 ? js["jam_fraction"]["stderr"].get<double>() : NAN, valid);
     std::printf("  %-28s funnel %d, piping %d, undetermined %d\n", "pattern", funnel, piping,
-                opt.members - funnel - piping);
+                valid - funnel - piping);
     std::printf("  written to %s/ensemble.json\n", out_dir.c_str());
   }
   // A study with no member to read fails: 3 when every member was unstable, 4 when some could not run.
