@@ -116,8 +116,9 @@ def read_list(path: Path, base: Options) -> list[Entry]:
     """A list file: one scene a line (relative to the file), then its options; # starts a comment."""
     ap = argparse.ArgumentParser(prog=str(path), add_help=False, exit_on_error=False)
     ap.add_argument("scene")
-    ap.add_argument("--codes", default="", help="the codes this line runs (native and any of liggghts,yade): "
-                    "a scene a reference code cannot express names the others; default: the command's --codes")
+    ap.add_argument("--codes", default="", help="the codes this line runs (native, always, and any of "
+                    "liggghts,yade): a scene a reference code cannot express names the others; default: the "
+                    "command's --codes")
     add_arguments(ap)
     out = []
     for k, line in enumerate(Path(path).read_text().splitlines(), 1):
@@ -132,10 +133,11 @@ def read_list(path: Path, base: Options) -> list[Entry]:
         if not scene.exists():
             raise PlanError(f"{path}:{k}: scene {ns.scene} not found")
         o = options_from(ns, base)
-        o.codes = tuple(c.strip() for c in ns.codes.split(",") if c.strip())
-        bad = [c for c in o.codes if c not in ("native",) + REFERENCE_CODES]
-        if bad or (o.codes and "native" not in o.codes):
-            raise PlanError(f"{path}:{k}: --codes: " + (f"unknown {bad}" if bad else "native must be included"))
+        named = tuple(c.strip() for c in ns.codes.split(",") if c.strip())
+        bad = [c for c in named if c not in ("native",) + REFERENCE_CODES]
+        if bad:
+            raise PlanError(f"{path}:{k}: --codes: unknown {bad}")
+        o.codes = ("native",) + tuple(c for c in named if c != "native") if named else ()
         out.append(Entry(scene, o, f"{path}:{k}"))
     if not out:
         raise PlanError(f"{path}: no scenes listed")
