@@ -140,7 +140,7 @@ class Case:
     discs: np.ndarray           # (n, 6): x, y, r [cm], vx, vy [cm/s], omega [1/s] at the start
     dt: float                   # [s]
     duration: float             # [s] simulated (static: settling time; discharge: after opening)
-    mode: str = "static"        # "static" | "discharge"
+    mode: str = "static"        # "static" | "discharge" | "shear" (compare/shear.py)
     settle: float = 0.0         # [s] discharge: settling before the gate opens
     series_interval: float = 0.005  # [s] wall-force sampling
     seed: int = 0               # ensemble member (perturbation already applied to discs)
@@ -151,6 +151,9 @@ class Case:
     # the scene's own discs' materials when the case has as many discs as the scene, else the
     # scene's one disc material (a scene with several refuses: see ``material_index``).
     materials: np.ndarray | None = None
+    # A shear case's clusters: "bonds" (the scene's [clusters] as elastic bonds: what every code
+    # runs) or "clumps" (rigid YADE clumps: the shear study's YADE variant; the engine refuses it).
+    clusters: str = "bonds"
 
     @property
     def profile_bin(self) -> float:
@@ -188,7 +191,8 @@ class Case:
     def to_json(self) -> dict:
         return {"name": self.name, "dt": self.dt, "duration": self.duration, "mode": self.mode,
                 "settle": self.settle, "series_interval": self.series_interval, "seed": self.seed,
-                "snapshot_interval": self.snapshot_interval, "n_discs": int(len(self.discs))}
+                "snapshot_interval": self.snapshot_interval, "n_discs": int(len(self.discs)),
+                "clusters": self.clusters}
 
     def snapshot_steps(self) -> int:
         """Steps between snapshots (0: none); the interval must be a whole number of steps."""

@@ -157,6 +157,9 @@ def _mesh_id(name: str) -> str:
 
 def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     """Writes discs.data, one STL per wall (and the outlet), and in.liggghts into out_dir."""
+    if case.mode == "shear" or "clusters" in case.resolved:
+        from . import shear
+        raise CaseError(shear.liggghts_refusal(case.resolved))
     _check_variant(case)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -14,8 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-# (name, what, factor, scope): what = pair constant (kn, ks, eta_n, eta_s, mu) of the "disc-disc",
-# "disc-wall" or "all" pairs, or "density" / "gravity"; scope "gravity" = only cases with gravity.
+# (name, what, pairs, factor, scope): what = pair constant (kn, ks, eta_n, eta_s, mu) of the
+# "disc-disc", "disc-wall" or "all" pairs, or "density" / "gravity", or "bonds" (clusters bonded
+# only where their discs touch: the gap bonds of closed triangles dropped; changes only scenes whose
+# [clusters] bond every pair); scope "gravity" = only cases with gravity.
 SPECS = [
     ("kn_x1.05", "kn", "all", 1.05, "all"),
     ("ks_x0.5", "ks", "all", 0.5, "all"),
@@ -25,6 +27,7 @@ SPECS = [
     ("mu_disc_wall_x0.9_gravity_cases", "mu", "disc-wall", 0.9, "gravity"),
     ("density_x1.01", "density", "", 1.01, "all"),
     ("gravity_x1.01", "gravity", "", 1.01, "all"),
+    ("bonds_touching_only", "bonds", "", 1.0, "all"),
 ]
 
 
@@ -50,6 +53,9 @@ class Mutation:
         r = copy.deepcopy(resolved)
         if self.what == "gravity":
             r["gravity"] = [g * self.factor for g in r["gravity"]]
+        elif self.what == "bonds":
+            if "clusters" in r and r["clusters"].get("bonds") == "all":
+                r["clusters"] = dict(r["clusters"], bonds="touching")
         elif self.what == "density":
             for m in r["materials"]:
                 m["density"] = m["density"] * self.factor

@@ -26,7 +26,7 @@ import numpy as np
 from . import collision_judge
 from . import janssen, stats, study
 from .common import Case, Result, scene_material_index
-from .plan import Entry, Plan, PlanError, jittered, make_plan, member_case, refusals, start_discs
+from .plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -83,6 +83,7 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
     """Each reference code's constants read back from the code (compare/probe.py) against
     ``dem resolve`` to 1e-9 relative."""
     from . import probe
+    codes = codes_of(plan, codes)
     metrics = []
     case = member_case(plan, 0, start_discs(plan.shared))
     expected = probe.expected_constants(plan.shared, case.discs, plan.dt, case.material_index())
@@ -354,7 +355,27 @@ def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
 KIND_RUNNERS = {"collision": collision, "janssen": janssen_column, "discharge": discharge}
 
 
+def shear_box(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    """Paper 2's shear box (compare/shear.py): jittered members compressed to rest and sheared in
+    every code; sigma0, the windowed peak of tau/sigma, its mean in strain bands (the curve) and
+    the dilation compared as ensemble means (Welch), every member at rest before the shear."""
+    from . import shear
+    per = ensemble_runs(plan, codes, out, mutation)
+    metrics, detail = shear.judge(plan.name, {c: [r for r, _ in runs] for c, runs in per.items()},
+                                  float(plan.shared["shear"]["max_strain"]),
+                                  float(plan.shared["shear"]["sample_strain"]))
+    detail["dt"], detail["settle"] = plan.dt, plan.settle
+    if mutation is None and detail["curves"]:
+        detail["png"] = f"shear_{plan.name}.png"
+        shear.plot(detail, out.parent.parent / detail["png"])
+    return metrics, detail
+
+
+KIND_RUNNERS["shear"] = shear_box
+
+
 def run_plan(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    codes = codes_of(plan, codes)
     if plan.kind == "static":
         fn = static_frozen if plan.options.start == "frozen" else static_members
     else:
@@ -374,7 +395,7 @@ def plans_of(entries: list[Entry], codes) -> list[Plan]:
             p.name, k = f"{base}_{k}", k + 1
         names.add(p.name)
         plans.append(p)
-        refused += refusals(p, codes)
+        refused += refusals(p, codes_of(p, codes))
     if refused:
         raise PlanError("\n".join(refused))
     return plans
@@ -410,6 +431,8 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
             report["discharge"][p.name] = detail
         elif p.kind == "janssen":
             report["janssen"].append(detail)
+        elif p.kind == "shear":
+            report.setdefault("shear", []).append(detail)
         else:
             report["static"].append(detail)
     report["elapsed_s"] = time.monotonic() - t0

@@ -16,6 +16,12 @@ Kinds (``--kind``, default from the scene):
   averaged over the members and fitted with Janssen's law (compare/janssen.py);
 - ``discharge`` (a scene with ``[discharge]``): members jittered by ``--perturb``, each settles
   for ``--settle`` then the gate opens for the scene's ``discharge.time`` (or ``--duration``).
+- ``shear`` (a scene with ``[shear_box]``: paper 2's simple shear box, bonded ``[clusters]`` or
+  free discs): members jittered by ``--perturb``, each compressed under the plate to rest (at most
+  ``end.time``, or ``--settle``) and sheared to ``shear.max_strain`` (or for ``--duration`` s of
+  wall rotation); dt: ``--dt``, else the scene's halved until the shared scheme is stable with
+  the clusters (compare/shear.py ``stable_dt``). LIGGGHTS refuses it (compare/shear.py
+  ``liggghts_refusal``).
 
 Every code runs the shared law (common.SHARED_VARIANT) and velocity Verlet at the same dt.
 Whatever a reference code cannot express is refused before any run (exit 2), naming the scene
@@ -26,6 +32,7 @@ from __future__ import annotations
 import argparse
 import copy
 import dataclasses
+import math
 import shlex
 import tempfile
 from pathlib import Path
@@ -34,7 +41,7 @@ import numpy as np
 
 from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
-KINDS = ("collision", "static", "janssen", "discharge")
+KINDS = ("collision", "static", "janssen", "discharge", "shear")
 REFERENCE_CODES = ("liggghts", "yade")
 # Defaults per profile (a scene's own values win where it has them: dt, discharge.time).
 PROFILE_DEFAULTS = {
@@ -59,6 +66,7 @@ class Options:
     perturb: float = 1e-3        # [cm] members' uniform jitter of x and y
     native_law: str = "shared"   # "shared" | "scene": the native side runs the scene's own law
     timeout: float = 900.0       # [s] per reference run
+    codes: tuple = ()            # a list line's --codes: the codes this entry runs (empty: the command's)
 
     def resolved_members(self) -> int:
         return self.members or PROFILE_DEFAULTS[self.profile]["members"]
@@ -67,7 +75,7 @@ class Options:
 def add_arguments(ap: argparse.ArgumentParser) -> None:
     """The per-scene options (the command line's and every list line's)."""
     ap.add_argument("--kind", choices=KINDS, default="", help="what to compare (default: discharge when the "
-                    "scene has [discharge], else static)")
+                    "scene has [discharge], shear when it has [shear_box], else static)")
     ap.add_argument("--start", choices=("frozen", "scene"), default="frozen",
                     help="static: every code from the native engine's rested packing (frozen, deterministic) "
                          "or from the scene's own start, as jittered members (scene, statistical)")
@@ -108,6 +116,9 @@ def read_list(path: Path, base: Options) -> list[Entry]:
     """A list file: one scene a line (relative to the file), then its options; # starts a comment."""
     ap = argparse.ArgumentParser(prog=str(path), add_help=False, exit_on_error=False)
     ap.add_argument("scene")
+    ap.add_argument("--codes", default="", help="the codes this line runs (native, always, and any of "
+                    "liggghts,yade): a scene a reference code cannot express names the others; default: the "
+                    "command's --codes")
     add_arguments(ap)
     out = []
     for k, line in enumerate(Path(path).read_text().splitlines(), 1):
@@ -121,7 +132,13 @@ def read_list(path: Path, base: Options) -> list[Entry]:
         scene = (Path(path).parent / ns.scene).resolve()
         if not scene.exists():
             raise PlanError(f"{path}:{k}: scene {ns.scene} not found")
-        out.append(Entry(scene, options_from(ns, base), f"{path}:{k}"))
+        o = options_from(ns, base)
+        named = tuple(c.strip() for c in ns.codes.split(",") if c.strip())
+        bad = [c for c in named if c not in ("native",) + REFERENCE_CODES]
+        if bad:
+            raise PlanError(f"{path}:{k}: --codes: unknown {bad}")
+        o.codes = ("native",) + tuple(c for c in named if c != "native") if named else ()
+        out.append(Entry(scene, o, f"{path}:{k}"))
     if not out:
         raise PlanError(f"{path}: no scenes listed")
     return out
@@ -151,6 +168,8 @@ def _kind(resolved: dict, o: Options) -> str:
         return o.kind
     if "discharge" in resolved:
         return "discharge"
+    if "shear_box" in resolved:
+        return "shear"
     return "static"
 
 
@@ -161,11 +180,14 @@ def make_plan(entry: Entry) -> Plan:
     except CaseError as e:
         raise PlanError(f"{entry.scene}: {e}") from None
     kind = _kind(r, o)
-    for key, why in (("clusters", "bonded clusters"), ("shear_box", "the shear box")):
-        if key in r:
-            raise PlanError(f"{entry.scene}: [{key}]: {why} are compared by the shear study "
-                            "(bash scripts/shear_study.sh: native and YADE); LIGGGHTS has no bonds, and "
-                            "dem compare does not translate them")
+    if kind == "shear" and not ("shear_box" in r and "shear" in r):
+        raise PlanError(f"{entry.scene}: --kind shear: the scene has no [shear_box] with [shear]")
+    if kind != "shear" and "shear_box" in r:
+        raise PlanError(f"{entry.scene}: [shear_box]: a shear-box scene is compared as --kind shear; "
+                        f"--kind {kind} cannot run it")
+    if kind != "shear" and "clusters" in r:
+        raise PlanError(f"{entry.scene}: [clusters]: bonded clusters are compared in the shear box only "
+                        f"(--kind shear); the {kind} comparison translates no bonds")
     if kind in ("collision", "janssen") and len(set(scene_material_index(r).tolist())) > 1:
         raise PlanError(f"{entry.scene}: fill: --kind {kind} judges discs of one material (its reference "
                         f"{'integrates one mass pair' if kind == 'collision' else 'fits one density'}); "
@@ -180,6 +202,23 @@ def make_plan(entry: Entry) -> Plan:
     dt = o.dt or float(r["integrator"]["dt"])
     prof = PROFILE_DEFAULTS[o.profile]
     settle = o.settle or prof["settle"]
+    if kind == "shear":
+        from . import shear
+        if not o.dt:
+            dt = shear.stable_dt(shared, dt)
+        if o.duration:      # a shorter (or longer) shear: the walls turn for --duration s
+            strain = math.tan(float(r["shear"]["rate"]) * o.duration)
+            if not 0 < strain <= 1:
+                raise PlanError(f"{entry.scene}: --duration {o.duration!r}: gives the shear strain "
+                                f"{strain!r}; shear.max_strain must lie in (0, 1]")
+            shared["shear"] = dict(shared["shear"], max_strain=strain)
+        if o.settle:        # the compression's longest time (the scene's end.time)
+            shared["end"] = dict(shared["end"], time=o.settle)
+        r = dict(r, shear=shared["shear"], end=shared["end"])   # --native-law scene: the same run
+        settle = float(shared["end"]["time"])
+        duration = shear.shear_time(shared)
+        members = o.resolved_members()
+        return Plan(entry, entry.scene.stem, kind, r, shared, dt, duration, settle, members)
     if kind == "collision":
         duration = o.duration or float(r["end"]["time"])
     elif kind == "discharge":
@@ -191,6 +230,11 @@ def make_plan(entry: Entry) -> Plan:
         members = o.resolved_members()
     name = entry.scene.stem + ("_members" if kind == "static" and o.start == "scene" else "")
     return Plan(entry, name, kind, r, shared, dt, duration, settle, members)
+
+
+def codes_of(plan: Plan, codes) -> tuple:
+    """The codes a plan runs: the command's, narrowed to its list line's --codes when it has them."""
+    return tuple(c for c in codes if not plan.options.codes or c in plan.options.codes)
 
 
 def start_discs(resolved: dict) -> np.ndarray:
@@ -223,6 +267,9 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
     if plan.kind == "discharge":
         return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
                     mode="discharge", settle=plan.settle, seed=member, materials=mats)
+    if plan.kind == "shear":
+        return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
+                    mode="shear", settle=plan.settle, seed=member, materials=mats)
     return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
                 seed=member, materials=mats)
 

@@ -186,6 +186,9 @@ METHOD = [
     "intervals; peaks as the largest 0.05 s average of a wall group's total (bootstrap interval of the median "
     "shown). The family level 5 % is split over a scene's tests (Bonferroni); each metric states the "
     "smallest difference it detects with 80 % power. No blanket floor.",
+    "- Shear box (paper 2): jittered members compressed under the plate to rest and sheared in every code; "
+    "sigma0, the windowed peak of tau/sigma, its mean in strain bands and the dilation by Welch tests "
+    "(Bonferroni), each with the smallest difference it detects; every member at rest before the shear.",
     "- A run that crashed, timed out, blew up, lost discs or wrote no output fails every metric that needs it.",
 ]
 
@@ -205,6 +208,9 @@ def write(report: dict, out: Path) -> None:
     for jd in report.get("janssen", []):
         if jd.get("png") and (out / jd["png"]).exists():
             pngs.append((f"Janssen column, {jd['case']}", jd["png"]))
+    for sd in report.get("shear", []):
+        if sd.get("png") and (out / sd["png"]).exists():
+            pngs.append((f"Shear box, {sd['case']}", sd["png"]))
     for name in report.get("discharge", {}):
         sj = out / "discharge" / name / "series.json"
         if sj.exists():
@@ -288,6 +294,16 @@ def write(report: dict, out: Path) -> None:
                 L.append("")
     for jd in report.get("janssen", []):
         L += ["", f"## Janssen column {jd['case']}", ""] + jd.get("table", [])
+    for sd in report.get("shear", []):
+        from .shear import label
+        cols = sd["keys"] + ["peak_raw", "strain_at_peak"]
+        L += ["", f"## Shear box {sd['case']} (mean ± s.e. (members); dt {sd.get('dt', float('nan')):g} s)", "",
+              "| code | at rest before the shear | " + " | ".join(label(k) for k in cols) + " |",
+              "|---|---|" + "---|" * len(cols)]
+        for c, v in sd["summary"].items():
+            L.append(f"| {c} | {sum(v['rested'])}/{len(v['rested'])} | " + " | ".join(_ms(v[k]) for k in cols) + " |")
+            for f in v["failed"]:
+                L.append(f"| {c} | FAILED {f} |" + " |" * len(cols))
     if report.get("discharge"):
         L += ["", "## Discharge ensembles (mean ± s.e. (members))", "",
               "| scene | code | members (failed) | discs out | flow rate [discs/s] | jammed (Wilson 95 %) | "

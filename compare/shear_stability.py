@@ -132,7 +132,7 @@ def dt_bound(K, C, minv, scheme, tol=1e-9):
 
 
 def bonds_of(resolved):
-    from compare.shear_yade import bonds_of as engine_bonds
+    from compare.shear import bonds_of as engine_bonds
     return engine_bonds(resolved["discs"], resolved["clusters"])
 
 

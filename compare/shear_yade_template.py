@@ -1,16 +1,18 @@
-# Paper 2's simple shear test in YADE 2023.02a (run by compare/shear_yade.py as
-# `yade -n -j1 -x shear_yade_script.py CASE.json`; CASE.json names every value, nothing here is a
-# scene constant). Writes, at full precision, into the case's out_dir: shear_series.csv,
-# shear_planes.csv, summary.json, snapshots/ (contacts and discs CSV as the engine's, index.json).
+# Paper 2's simple shear test in YADE 2023.02a: the shear path of compare/yade_backend.py, run as
+# `yade -n -jN -x yade_script.py` in the case's folder, next to yade_case.json (written by
+# yade_backend.shear_case_data: every value is there, nothing here is a scene constant). Writes, at
+# full precision, into that folder: shear_series.csv, shear_planes.csv, summary.json, snapshots/
+# (contacts and discs CSV as the engine's, index.json).
 #
-# The model (the translation and what differs: compare/shear_yade.py):
-# - 2D discs: spheres at z = 0, blockedDOFs 'zXY', mass rho pi r^2, inertia m r^2 / 2 (per cm);
+# The model (the translation and what differs: compare/yade_backend.py):
+# - 2D discs: spheres at z = 0, blockedDOFs 'zXY', mass rho pi r^2, inertia m r^2 / 2 (per cm),
+#   each disc with its own material's density;
 # - contacts between clusters, free discs, walls and plate: ViscElMat (F_n = kn overlap + cn v_n
-#   clamped >= 0, Coulomb cap on the total normal force); disc material = 2 x the disc-disc pair
-#   (materials combine in series), wall material 0 = "absent" (disc-wall = 2 x disc-disc, the
-#   paper's walls); friction per material pair by MatchMaker;
+#   clamped >= 0, Coulomb cap on the total normal force); the disc and wall materials of
+#   yade_backend.materials (series combination: disc material = 2 x its disc-disc pair, wall
+#   material solved for the disc-wall pair, 0 = "absent"); friction per material pair by MatchMaker;
 # - clusters, mode "bonds": every bonded pair is an interaction made at the start whose physics
-#   is replaced by a CohFrictPhys (kn, ks of the disc-disc pair, normal and shear adhesion 1e30:
+#   is replaced by a CohFrictPhys (kn, ks of the pair, normal and shear adhesion 1e30:
 #   elastic and unbreakable, no dashpot, lever arms to the bond point at mid-gap); mode "clumps":
 #   YADE clumps (rigid clusters, contacts between clumps by the ViscEl law);
 # - walls and plate are boxes: the floor fixed, the side walls turned about their lower inner
@@ -20,46 +22,49 @@
 import json
 import math
 import os
-import sys
 import time
 
 from yade import *  # noqa: F401,F403  (O, bodies, engines, functors)
 from yade import utils
 
-CASE = json.load(open(sys.argv[-1]))
-OUT = CASE["out_dir"]
+CASE = json.load(open("yade_case.json"))
+OUT = os.getcwd()
 os.makedirs(os.path.join(OUT, "snapshots"), exist_ok=True)
 dt = CASE["dt"]
 gx, gy = CASE["gravity"]
-rho = CASE["density"]
-dd, dw = CASE["pair_dd"], CASE["pair_dw"]
 box = CASE["box"]
 sh = CASE["shear"]
 mode = CASE["clusters"]["mode"]
 W, L = box["width"], box["wall_length"]
 HALF_Z = 2.0
 
-disc_mat = O.materials.append(ViscElMat(kn=2 * dd["kn"], cn=2 * dd["eta_n"], ks=2 * dd["ks"], cs=2 * dd["eta_s"],
-                                        frictionAngle=math.atan(dd["mu"]), density=rho))
-# The wall material: 0 = "absent", the contact takes the disc material's values (2 x disc-disc),
-# exactly the paper's walls; anything else cannot be expressed this way.
-for k in ("kn", "ks", "eta_n", "eta_s"):
-    if abs(dw[k] - 2 * dd[k]) > 1e-9 * abs(dw[k]):
-        raise SystemExit(f"shear_yade: disc-wall {k} = {dw[k]} is not 2 x disc-disc ({2 * dd[k]})")
-wall_mat = O.materials.append(ViscElMat(kn=0, cn=0, ks=0, cs=0, frictionAngle=math.atan(dw["mu"]), density=rho))
+mat_id = {}
+for name, d in sorted(CASE["disc_materials"].items()):
+    mat_id[name] = O.materials.append(ViscElMat(kn=d["kn"], cn=d["cn"], ks=d["ks"], cs=d["cs"],
+                                                density=d["density"], label="disc_" + name))
+wall_ids = []
+for name, m in sorted(CASE["wall_materials"].items()):
+    mat_id[name] = O.materials.append(ViscElMat(kn=m["kn"], cn=m["cn"], ks=m["ks"], cs=m["cs"],
+                                                density=1.0, label="wall_" + name))
+    wall_ids.append(mat_id[name])
+matches = [(mat_id[a], mat_id[b], math.atan(mu)) for a, b, mu in CASE["friction"]]
+for a in range(len(wall_ids)):
+    for b in range(a, len(wall_ids)):
+        matches.append((wall_ids[a], wall_ids[b], 0.0))   # walls never touch each other
+wall_of = CASE["wall_material_of"]
 
 
-def add_box(centre, half, fixed=True):
+def add_box(centre, half, material, fixed=True):
     b = utils.box(center=(centre[0], centre[1], 0), extents=(half[0], half[1], HALF_Z), fixed=fixed,
-                  material=wall_mat, wire=True)
+                  material=mat_id[material], wire=True)
     return O.bodies.append(b)
 
 
-floor = add_box((0.5 * W, -0.5), (0.5 * W + 3, 0.5))
-left = add_box((-0.5, 0.5 * L), (0.5, 0.5 * L))
-right = add_box((W + 0.5, 0.5 * L), (0.5, 0.5 * L))
+floor = add_box((0.5 * W, -0.5), (0.5 * W + 3, 0.5), wall_of["floor"])
+left = add_box((-0.5, 0.5 * L), (0.5, 0.5 * L), wall_of["left"])
+right = add_box((W + 0.5, 0.5 * L), (0.5, 0.5 * L), wall_of["right"])
 ov = box["plate_overhang"]
-plate = add_box((0.5 * W, box["plate_y"] + 0.5), (0.5 * W + ov, 0.5), fixed=False)
+plate = add_box((0.5 * W, box["plate_y"] + 0.5), (0.5 * W + ov, 0.5), wall_of["plate"], fixed=False)
 pb = O.bodies[plate]
 pb.state.blockedDOFs = "zXYZ"
 pb.state.mass = box["plate_mass"]
@@ -67,25 +72,26 @@ pb.state.inertia = (1.0, 1.0, 1.0)
 WALL_NAMES = {floor: "floor", left: "left", right: "right", plate: "plate"}
 
 discs = []
-for x, y, r in CASE["discs"]:
-    i = O.bodies.append(utils.sphere((x, y, 0), r, material=disc_mat))
+for (x, y, r, vx, vy, om), name in zip(CASE["discs"], CASE["disc_material_of"]):
+    i = O.bodies.append(utils.sphere((x, y, 0), r, material=mat_id[name]))
     b = O.bodies[i]
-    m = rho * math.pi * r * r
+    m = CASE["disc_materials"][name]["density"] * math.pi * r * r
     b.state.blockedDOFs = "zXY"
     b.state.mass = m
     b.state.inertia = (0.5 * m * r * r,) * 3
+    b.state.vel = Vector3(vx, vy, 0.0)
+    b.state.angVel = Vector3(0.0, 0.0, om)
     discs.append(i)
 disc_index = {bid: k for k, bid in enumerate(discs)}
-radius = [r for _, _, r in CASE["discs"]]
+radius = [row[2] for row in CASE["discs"]]
 
-mm = MatchMaker(matches=((disc_mat, disc_mat, math.atan(dd["mu"])), (disc_mat, wall_mat, math.atan(dw["mu"]))))
 bonded = set()
 O.engines = [
     ForceResetter(),
     InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()], verletDist=0.1),
     InteractionLoop(
         [Ig2_Sphere_Sphere_ScGeom6D(avoidGranularRatcheting=False), Ig2_Box_Sphere_ScGeom6D()],
-        [Ip2_ViscElMat_ViscElMat_ViscElPhys(frictAngle=mm)],
+        [Ip2_ViscElMat_ViscElMat_ViscElPhys(frictAngle=MatchMaker(matches=matches))],
         [Law2_ScGeom_ViscElPhys_Basic(), Law2_ScGeom6D_CohFrictPhys_CohesionMoment()]),
     RotationEngine(rotateAroundZero=True, zeroPoint=(0, 0, 0), rotationAxis=(0, 0, -1),
                    angularVelocity=sh["rate"], ids=[left], dead=True, label="turn_left"),
@@ -96,13 +102,13 @@ O.engines = [
 O.dt = dt
 
 if mode == "bonds":
-    for i, j in CASE["clusters"]["bonds"]:
+    for i, j, kn, ks in CASE["clusters"]["bonds"]:
         inter = utils.createInteraction(discs[i], discs[j])
         ph = CohFrictPhys()
-        ph.kn, ph.ks = dd["kn"], dd["ks"]
+        ph.kn, ph.ks = kn, ks
         ph.normalAdhesion = ph.shearAdhesion = 1e30
         ph.cohesionBroken = False
-        ph.tangensOfFrictionAngle = dd["mu"]
+        ph.tangensOfFrictionAngle = 0.0  # never used: the bond never breaks
         ph.unp = inter.geom.penetrationDepth  # the bond is unloaded as built
         inter.phys = ph
         bonded.add((min(discs[i], discs[j]), max(discs[i], discs[j])))
@@ -203,7 +209,7 @@ while steps < max_steps:
     steps += check
     mx, my = mean_speed()
     if not (math.isfinite(mx) and math.isfinite(my)):
-        raise SystemExit("shear_yade: non-finite velocities in the compression")
+        raise SystemExit("yade shear: non-finite velocities in the compression")
     if mx < rest_speed and my < rest_speed:
         rest_time = O.time
         break
@@ -266,7 +272,7 @@ def snapshot(k, strain, wanted, theta):
     dl = ["id,x,y,r,vx,vy,omega,material"]
     for k2, i in enumerate(discs):
         s = O.bodies[i].state
-        dl.append(",".join([str(k2)] + [f17(v) for v in (s.pos[0], s.pos[1], radius[k2], s.vel[0], s.vel[1], s.angVel[2])] + ["sand"]))
+        dl.append(",".join([str(k2)] + [f17(v) for v in (s.pos[0], s.pos[1], radius[k2], s.vel[0], s.vel[1], s.angVel[2])] + [CASE["disc_material_of"][k2]]))
     with open(os.path.join(OUT, "snapshots", f"discs_{name}.csv"), "w") as f:
         f.write("\n".join(dl) + "\n")
     snaps.append({"strain": strain, "strain_wanted": wanted, "t": O.time - compress_time,
@@ -345,6 +351,9 @@ summary = {
     "dt": dt,
     "rest": {"reached": rest_time is not None, "time": rest_time, "compression_time": compress_time},
     "disc_weight": O.bodies[discs[0]].state.mass * g,
+    "kinetic_energy_end": kinetic(),
+    "discs_end": [[O.bodies[i].state.pos[0], O.bodies[i].state.pos[1], radius[k], O.bodies[i].state.vel[0],
+                   O.bodies[i].state.vel[1], O.bodies[i].state.angVel[2]] for k, i in enumerate(discs)],
     "walls": walls_now(theta),
     "shear": {"width": W, "rate": sh["rate"], "plate_weight": PLATE_WEIGHT, "discs_weight": WEIGHT,
               "rows": len(rows), "planes": len(USE_PLANES), "bonds": len(bonded), "samples": len(samples),

@@ -48,6 +48,21 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
   yade_template.py), yade.log, yade_process.json (exit code, wall time), yade_result.json and
   yade_series.csv (written by the script, full precision).
 
+- shear (``case.mode == "shear"``: paper 2's shear box, compare/shear.py): ``shear_case_data``
+  gives the same materials, friction and masses (``materials``) to the script
+  compare/shear_yade_template.py (copied as yade_script.py): the floor and side walls are fixed
+  boxes, the side walls turned about their lower inner corners by RotationEngines, the plate a
+  dynamic box of the plate's mass free in x and y (no rotation), placed plate_gap above the case's
+  highest disc; compression to the engine's rest criterion (mean |du| and |dv| per step below
+  rest_factor g dt^2) for at most ``case.settle``, then the shear to shear.max_strain. Clusters
+  (``case.clusters``): "bonds", every bonded pair of the engine's bond list an interaction made at
+  the start with a CohFrictPhys of that pair's kn and ks and adhesion 1e30 (elastic, in tension,
+  no Coulomb cap, never broken; no dashpots: YADE's cohesive law has none; normal spring on the
+  distance change since bonding; shear force rotated with the contact frame; lever arms to the
+  mid-gap point with avoidGranularRatcheting = False); "clumps", rigid YADE clumps. It writes the
+  engine's shear outputs (shear_series.csv, shear_planes.csv, summary.json, snapshots/), read by
+  compare.shear.read_outputs into ``Result.extra["shear"]``.
+
 What YADE cannot express exactly (see also the module's ``LIMITATIONS``): the paper's incremental
 normal spring and elastic-force rules (only the shared variant); the engine's integration
 schemes (eq. 18/19, Verlet): YADE is leapfrog with velocities half a step behind the positions;
@@ -78,6 +93,8 @@ from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_mat
 
 NAME = "yade"
 TEMPLATE = Path(__file__).resolve().parent / "yade_template.py"
+SHEAR_TEMPLATE = Path(__file__).resolve().parent / "shear_yade_template.py"
+SHEAR_FILES = ("summary.json", "shear_series.csv", "shear_planes.csv")
 SCRIPT = "yade_script.py"
 CASE_FILE = "yade_case.json"
 RESULT_FILE = "yade_result.json"
@@ -103,6 +120,8 @@ LIMITATIONS = [
     "damping cannot be expressed",
     "points: only at wall ends (facet vertices), with the material of the walls ending there",
     "friction coefficient passes through tan(atan(mu)) (1 ulp)",
+    "shear box: cluster bonds (CohFrictPhys) have no dashpots (the engine's bonds keep the pair's "
+    "dashpots); the walls and plate are boxes; the plate moves only by the forces on it",
 ]
 
 
@@ -236,8 +255,61 @@ def _steps(x: float, dt: float, what: str) -> int:
     return k
 
 
+def shear_case_data(case: Case) -> dict:
+    """Everything the shear script (compare/shear_yade_template.py) needs (yade_case.json)."""
+    from . import shear
+    _check_variant(case)
+    r = case.resolved
+    if not shear.is_shear(r):
+        raise CaseError("mode shear: the scene has no [shear_box] with [shear]")
+    dt = float(case.dt)
+    if not (math.isfinite(dt) and dt > 0):
+        raise CaseError(f"dt: {dt!r} must be finite and > 0")
+    d = np.asarray(case.discs, float)
+    if d.ndim != 2 or d.shape[1] != 6 or len(d) == 0 or not np.all(np.isfinite(d)) or np.any(d[:, 2] <= 0):
+        raise CaseError("discs: need finite rows x, y, r > 0, vx, vy, omega")
+    disc_of = case.material_names()
+    discs_m, wall_mats, friction = materials(r, case.disc_materials())
+    b = shear.box(r, d)
+    sh = dict(r["shear"])
+    if not float(sh.get("rate", 0)) > 0:
+        raise CaseError("shear.rate: must be > 0")
+    if b["plate_horizontal"] != "free":
+        raise CaseError(f"shear_box.plate_horizontal: {b['plate_horizontal']!r}: the YADE translation moves the "
+                        "plate by the forces on it only ('free')")
+    mode = case.clusters if "clusters" in r else "none"
+    if mode not in ("bonds", "clumps", "none"):
+        raise CaseError(f"clusters: {case.clusters!r} is not 'bonds' or 'clumps'")
+    cl = {"mode": mode}
+    if mode == "bonds":
+        bonds = []
+        for i, j in shear.bonds_of(d, r["clusters"]):
+            p = pair(r, disc_of[i], disc_of[j])
+            bonds.append([i, j, float(p["kn"]), float(p["ks"])])
+        cl["bonds"] = bonds
+        cl["bond_set"] = r["clusters"]["bonds"]
+    elif mode == "clumps":
+        cl["members"] = r["clusters"]["members"]
+    walls = {w["name"]: w["material"] for w in r["walls"]}
+    return {
+        "name": case.name, "mode": "shear", "dt": dt,
+        "gravity": [float(v) for v in r["gravity"]],
+        "discs": [[float(v) for v in row] for row in d],
+        "disc_materials": discs_m, "disc_material_of": disc_of,
+        "wall_materials": wall_mats, "friction": friction,
+        "wall_material_of": {"floor": walls["floor"], "left": walls["left"], "right": walls["right"],
+                             "plate": walls["plate"]},
+        "box": {k: b[k] for k in ("width", "wall_length", "plate_y", "plate_mass", "plate_overhang")},
+        "shear": sh,
+        "compress": {"max_time": float(case.settle), "rest_factor": float(r["end"]["rest_factor"])},
+        "clusters": cl,
+    }
+
+
 def case_data(case: Case) -> dict:
     """Everything the YADE script needs (yade_case.json)."""
+    if case.mode == "shear":
+        return shear_case_data(case)
     _check_variant(case)
     r = case.resolved
     if case.mode not in ("static", "discharge"):
@@ -312,16 +384,16 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     d = np.asarray(case.discs, float)
     if not np.all(np.isfinite(d)) or np.any(d[:, 2] <= 0):
         raise CaseError("discs: need finite rows x, y, r > 0, vx, vy, omega")
-    return _write(data, Path(out_dir), threads)
+    return _write(data, Path(out_dir), threads, SHEAR_TEMPLATE if case.mode == "shear" else TEMPLATE)
 
 
-def _write(data: dict, out_dir: Path, threads: int) -> Path:
+def _write(data: dict, out_dir: Path, threads: int, template: Path = TEMPLATE) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     data = dict(data, threads=int(threads))
     write_text_atomic(out_dir / CASE_FILE, json.dumps(data, indent=1) + "\n")
     script = out_dir / SCRIPT
-    write_text_atomic(script, TEMPLATE.read_text())
-    for f in (RESULT_FILE, SERIES_FILE, PROCESS_FILE):   # no stale outputs
+    write_text_atomic(script, Path(template).read_text())
+    for f in (RESULT_FILE, SERIES_FILE, PROCESS_FILE) + SHEAR_FILES:   # no stale outputs
         (out_dir / f).unlink(missing_ok=True)
     for f in (out_dir / SNAPSHOT_DIR).glob("discs_spheres.*.vtu"):
         f.unlink()
@@ -411,6 +483,8 @@ def _read(case: Case, out_dir: Path) -> Result:
     proc = {}
     if (out_dir / PROCESS_FILE).exists():
         proc = json.loads((out_dir / PROCESS_FILE).read_text())
+    if case.mode == "shear":
+        return _read_shear(case, out_dir, proc)
     res_path = out_dir / RESULT_FILE
     res = json.loads(res_path.read_text()) if res_path.exists() else None
     wall = float(proc.get("wall_time_s", res["script_time_s"] if res else float("nan")))
@@ -503,6 +577,34 @@ def _read(case: Case, out_dir: Path) -> Result:
                   wall_time_s=wall, steps=int(res["steps"]), n_initial=n0, n_final=n1,
                   profiles=profiles, series=series, removals=removals,
                   kinetic_energy_end=float(res["kinetic_energy_end"]), discs_end=discs_end,
+                  extra=extra, out_dir=str(out_dir))
+
+
+def _read_shear(case: Case, out_dir: Path, proc: dict) -> Result:
+    """A shear run: the script's summary.json and shear_series.csv (compare.shear.read_outputs)."""
+    from . import shear
+    common = {"wall_time_s": float(proc.get("wall_time_s", float("nan")))}
+    if proc.get("error"):
+        return _fail(case, out_dir, proc["error"], **common)
+    if proc.get("timed_out"):
+        return _fail(case, out_dir, f"timeout: yade killed after {proc.get('timeout')} s "
+                     f"(log: {_log_tail(out_dir, 3)})", **common)
+    rc = proc.get("rc", 0)
+    if rc not in (0, None) or not (out_dir / "summary.json").exists():
+        return _fail(case, out_dir, f"yade exited with code {rc}; log: {_log_tail(out_dir)}", **common)
+    summary = json.loads((out_dir / "summary.json").read_text())
+    if summary.get("status") != "sheared":
+        return _fail(case, out_dir, f"shear: status {summary.get('status')!r} (non-finite velocities)", **common)
+    discs_end = summary.get("discs_end") or []
+    flat = np.array(discs_end, float).ravel()
+    if len(discs_end) != len(case.discs) or not np.all(np.isfinite(flat)):
+        return _fail(case, out_dir, f"shear: {len(discs_end)} finite discs at the end for {len(case.discs)}", **common)
+    extra = {"shear": shear.read_outputs(out_dir), "yade_log": str(out_dir / LOG_FILE),
+             "script_time_s": summary.get("wall_time_s"), "limitations": LIMITATIONS}
+    return Result(code=NAME, case=case.name, status="ok", version=summary.get("engine") or version(),
+                  wall_time_s=common["wall_time_s"], steps=int(summary.get("steps", 0)),
+                  n_initial=len(case.discs), n_final=len(discs_end), discs_end=discs_end,
+                  kinetic_energy_end=float(summary.get("kinetic_energy_end", float("nan"))),
                   extra=extra, out_dir=str(out_dir))
 
 

@@ -91,8 +91,9 @@ def test_kinds_come_from_the_scene():
     assert p.resolved["contact"]["normal_spring"] == "incremental"      # the scene's own law kept apart
     with pytest.raises(plan.PlanError, match=r"\[discharge\]"):
         plan.make_plan(plan.Entry(SCENES / "discharge_11_12.toml", plan.Options(kind="static")))
-    with pytest.raises(plan.PlanError, match=r"\[clusters\]"):
-        plan.make_plan(plan.Entry(SCENES / "shear_a58_clusters.toml", o))
+    assert plan.make_plan(plan.Entry(SCENES / "shear_a58_clusters.toml", o)).kind == "shear"
+    with pytest.raises(plan.PlanError, match=r"\[shear_box\]"):
+        plan.make_plan(plan.Entry(SCENES / "shear_a58_clusters.toml", plan.Options(kind="static")))
 
 
 def test_members_are_seeded_jitters_of_the_scene_start():
