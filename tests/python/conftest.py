@@ -27,3 +27,13 @@ def run_dem(dem_binary):
     def run(*args, timeout=300):
         return subprocess.run([str(dem_binary), *map(str, args)], capture_output=True, text=True, timeout=timeout)
     return run
+
+
+def pytest_collection_modifyitems(config, items):
+    """DEM_ENGINE_TESTS_ONLY=1 (the sanitizer build's run): keep the tests that run the engine
+    (those using the dem_binary fixture, directly or through another fixture)."""
+    if os.environ.get("DEM_ENGINE_TESTS_ONLY") != "1":
+        return
+    keep = [item for item in items if "dem_binary" in getattr(item, "fixturenames", ())]
+    config.hook.pytest_deselected(items=[item for item in items if item not in keep])
+    items[:] = keep
