@@ -82,12 +82,11 @@ void BM_ContactForces(benchmark::State& st) {
   // The law two pairs a vector (SSE2) or four (AVX2), or the widest the processor has.
   const int widest = World::vector_width;
   const int width = st.range(0) == narrow_law ? 2 : st.range(0) == four_law ? std::min(4, widest) : widest;
-  World::vector_width = width;
+  w.set_vector_width(width);
   for (auto _ : st) {
     w.compute_forces_now();
     benchmark::DoNotOptimize(w.discs.fx.data());
   }
-  World::vector_width = widest;
   st.SetItemsProcessed(st.iterations() * static_cast<long>(w.neighbors.pairs.size()));
   st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
   static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond",
