@@ -1,4 +1,4 @@
-// The integration loop (World::kick_drift_block: kick, drift and the skin/2 test) runs several
+// The integration loop (World::move_block: kick, drift and the skin/2 test) runs several
 // discs a vector, two (SSE2), four (AVX2) or eight (AVX-512; World::vector_width, the widest the
 // processor has, unless a world is set narrower): each disc must still get
 // exactly eqs. (17)-(19) as written, whatever its place in a vector (the loop's remainder

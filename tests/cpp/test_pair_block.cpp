@@ -1,4 +1,4 @@
-// The pair pass by blocks (World::pair_pass): on a dense, jittered packing with random history,
+// The pair stage by blocks (World::pair_contacts): on a dense, jittered packing with random history,
 // where pairs touch, slide, go slack and come apart side by side, the forces and the new history
 // are those of the law applied pair by pair (eqs. 3-15, written out here), for every option of
 // the law and for 1 and 2 threads, and so are the recorded totals of an output step's pass (in
