@@ -366,7 +366,8 @@ constexpr MoveKernel move_kernel() {
   constexpr bool ONE_KIND = M / 4 % 2 == 1, PHI = D != 0 && M / 2 % 2 == 1, FAR = D != 0 && M % 2 == 1;
 #if defined(__x86_64__) && defined(__GNUC__)
   if constexpr (W == 8) return &move_avx512<D, ONE_KIND, PHI, FAR>;
-  if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR>;
+  else if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR>;
+  else
 #endif
   return &move_sse2<D, ONE_KIND, PHI, FAR>;
 }
@@ -488,6 +489,10 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
 // for AVX-512 (eight); the kernel table holds all three, a world runs its width's. IEEE
 // operations give the same bits at any width, and no contraction into FMA (-ffp-contract=off,
 // and the AVX2 version does not enable FMA).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
+static void pair_block_law_sse2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+}
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt,
@@ -500,14 +505,15 @@ DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const P
   pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 #endif
-// The block law at W doubles a vector (a row of the kernel table).
+// The block law at W doubles a vector (a row of the kernel table holds each width's).
 template <int W, NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
-static void pair_block_law_at(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
+constexpr auto pair_block_law_at() {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if constexpr (W == 8) return pair_block_law_avx512<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
-  if constexpr (W == 4) return pair_block_law_avx2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  if constexpr (W == 8) return &pair_block_law_avx512<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
+  else if constexpr (W == 4) return &pair_block_law_avx2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
+  else
 #endif
-  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  return &pair_block_law_sse2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
 }
 
 // The stage of the disc pairs: the block's pairs [p0, p1) of the sorted list, a block of touching
@@ -761,12 +767,12 @@ World::Kernel World::make_kernel() {
   k.pairs[1][1] = &World::pair_contacts<NS, NT, FC, LA, S, D, true, true>;
   k.walls = &World::wall_contacts<NS, NT, FC, LA, M, S, D>;
   if constexpr (key.features.bonds) k.bonds = &World::bond_contacts<NS>;
-  k.pair_law[0][0] = &pair_block_law_at<2, NS, NT, FC, LA, S, D, false>;
-  k.pair_law[0][1] = &pair_block_law_at<2, NS, NT, FC, LA, S, D, true>;
-  k.pair_law[1][0] = &pair_block_law_at<4, NS, NT, FC, LA, S, D, false>;
-  k.pair_law[1][1] = &pair_block_law_at<4, NS, NT, FC, LA, S, D, true>;
-  k.pair_law[2][0] = &pair_block_law_at<8, NS, NT, FC, LA, S, D, false>;
-  k.pair_law[2][1] = &pair_block_law_at<8, NS, NT, FC, LA, S, D, true>;
+  k.pair_law[0][0] = pair_block_law_at<2, NS, NT, FC, LA, S, D, false>();
+  k.pair_law[0][1] = pair_block_law_at<2, NS, NT, FC, LA, S, D, true>();
+  k.pair_law[1][0] = pair_block_law_at<4, NS, NT, FC, LA, S, D, false>();
+  k.pair_law[1][1] = pair_block_law_at<4, NS, NT, FC, LA, S, D, true>();
+  k.pair_law[2][0] = pair_block_law_at<8, NS, NT, FC, LA, S, D, false>();
+  k.pair_law[2][1] = pair_block_law_at<8, NS, NT, FC, LA, S, D, true>();
   return k;
 }
 
