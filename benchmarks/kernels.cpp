@@ -2,8 +2,9 @@
 // integration pass on a settled 10k-disc lattice silo (reference_inputs/scenes/bench_silo_10k.toml,
 // the paper's law and eq. 19, 300 steps after the start so the lattice is in contact), at 1 and 2
 // threads; and the rows of the skip table: the same force pass with and without a feature
-// (shear, dashpots, walls, bonds), each variant its own compiled kernel, the pass that records
-// the pair totals (an output step's) against the one that does not, and a scene of one disc kind
+// (shear, dashpots, walls, bonds), each variant its own row of the kernel table (physics/
+// kernels.hpp; the label names it), the pass that records the pair totals (an output step's)
+// against the one that does not, and a scene of one disc kind
 // (its constants in registers) against several (read through each disc's kind); and the pair
 // law eight or four pairs a vector (AVX-512 or AVX2, the widest the processor has) against four
 // (`four_law`) and two (SSE2, `narrow_law`).
@@ -82,19 +83,17 @@ void BM_ContactForces(benchmark::State& st) {
   // The law two pairs a vector (SSE2) or four (AVX2), or the widest the processor has.
   const int widest = World::vector_width;
   const int width = st.range(0) == narrow_law ? 2 : st.range(0) == four_law ? std::min(4, widest) : widest;
-  World::vector_width = width;
+  w.set_vector_width(width);
   for (auto _ : st) {
     w.compute_forces_now();
     benchmark::DoNotOptimize(w.discs.fx.data());
   }
-  World::vector_width = widest;
   st.SetItemsProcessed(st.iterations() * static_cast<long>(w.neighbors.pairs.size()));
   st.counters["pairs"] = static_cast<double>(w.neighbors.pairs.size());
   static const char* names[] = {"full", "no_dashpots", "no_shear", "no_shear_no_dashpots", "no_walls", "with_bond",
                                 "recorded", "several_kinds", "narrow_law", "four_law"};
-  st.SetLabel(std::string(names[st.range(0)]) + " [" + std::to_string(width) + " a vector]" +
-              (w.kernel_shear ? "" : " [shear compiled out]") +
-              (w.kernel_dashpots ? "" : " [dashpots compiled out]"));
+  st.SetLabel(std::string(names[st.range(0)]) + " [" + std::to_string(width) + " a vector] [kernel " + w.kernel_name() +
+              "]");
 }
 BENCHMARK(BM_ContactForces)
     ->ArgsProduct({{full, no_dashpots, no_shear, no_shear_no_dashpots, no_walls, with_bond, recorded, several_kinds,

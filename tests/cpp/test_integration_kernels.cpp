@@ -1,6 +1,6 @@
-// The integration loop (World::kick_drift_block: kick, drift and the skin/2 test) runs several
+// The integration loop (World::move_block: kick, drift and the skin/2 test) runs several
 // discs a vector, two (SSE2), four (AVX2) or eight (AVX-512; World::vector_width, the widest the
-// processor has unless set narrower): each disc must still get
+// processor has, unless a world is set narrower): each disc must still get
 // exactly eqs. (17)-(19) as written, whatever its place in a vector (the loop's remainder
 // included), with one kind of disc or several; the skin/2 test must catch a single far disc
 // anywhere; and every vector width must give the bits of two over whole runs.
@@ -19,9 +19,10 @@ namespace {
 
 // n discs in a loose row (no contacts), random velocities, forces and eq. 19 increments; two
 // radii when several_kinds.
-World row_world(Scheme scheme, int n, bool several_kinds, bool angle, unsigned seed) {
+World row_world(Scheme scheme, int n, bool several_kinds, bool angle, unsigned seed, int width) {
   PairProps p = testing::linear(9.45e7, 0.3, 4.16, 0.577, 2.36e7, 2.0e4);
   World w = testing::make_world(p, ContactOptions{}, scheme, 1e-4, -980.0);
+  w.set_vector_width(width);
   w.rotation_angle = angle;
   for (int i = 0; i < n; ++i) w.discs.add(3.0 * i, 0.0, several_kinds && i % 3 == 1 ? 0.7 : 1.0, 2.65, 0);
   w.prepare();
@@ -43,15 +44,13 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
 
 // Eq. (17) and the drift of (18) or (19), disc by disc, as the paper writes them.
 TEST(IntegrationKernels, EveryDiscGetsTheSchemeAsWritten) {
-  const int had = World::vector_width;
   for (int width : {2, 4, 8}) {
     if (width > World::cpu_vector_width()) continue;
-    World::vector_width = width;
     for (Scheme scheme : {Scheme::paper_eq18, Scheme::paper_eq19})
       for (bool kinds : {false, true})
         for (bool angle : {false, true})
           for (int n : {1, 3, 4, 5, 8, 9, 37}) {  // remainders of two, four and eight discs a vector
-            World w = row_world(scheme, n, kinds, angle, 17u + static_cast<unsigned>(n));
+            World w = row_world(scheme, n, kinds, angle, 17u + static_cast<unsigned>(n), width);
             const Discs before = w.discs;
             const double h = 0.7e-4, dt = w.dt;
             if (scheme == Scheme::paper_eq19) w.kick_drift_eq19(h);
@@ -75,27 +74,23 @@ TEST(IntegrationKernels, EveryDiscGetsTheSchemeAsWritten) {
                 EXPECT_EQ(d.phi[i], b.phi[i] + e);
               }
               if (::testing::Test::HasFailure()) {
-                World::vector_width = had;
                 FAIL() << "disc " << i << " of " << n << ", " << width << " doubles a vector" << (kinds ? ", two kinds" : "")
                        << (angle ? ", angle kept" : "");
               }
             }
           }
   }
-  World::vector_width = had;
 }
 
 // One disc past skin/2 from its list position, at any place (vector lanes and the remainder):
 // the drift reports it; the same disc just short of the limit: not reported.
 TEST(IntegrationKernels, OneFarDiscAnywhereIsCaught) {
-  const int had = World::vector_width;
   for (int width : {2, 4, 8}) {
     if (width > World::cpu_vector_width()) continue;
-    World::vector_width = width;
     const int n = 23;
     for (int far_one = 0; far_one < n; ++far_one)
       for (bool past : {false, true}) {
-        World w = row_world(Scheme::paper_eq18, n, false, false, 5);
+        World w = row_world(Scheme::paper_eq18, n, false, false, 5, width);
         Discs& d = w.discs;
         std::fill(d.vx.begin(), d.vx.end(), 0.0); std::fill(d.vy.begin(), d.vy.end(), 0.0);
         std::fill(d.fx.begin(), d.fx.end(), 0.0); std::fill(d.fy.begin(), d.fy.end(), 0.0);
@@ -105,14 +100,12 @@ TEST(IntegrationKernels, OneFarDiscAnywhereIsCaught) {
         EXPECT_EQ(w.kick_drift_eq18(0.0), past) << "disc " << far_one << ", " << width << " doubles a vector";
       }
   }
-  World::vector_width = had;
 }
 
 // Whole runs of a dense packing under gravity, every scheme, one kind or two, 1 and 2 threads:
 // four and eight discs a vector give the bits of two.
 TEST(IntegrationKernels, WideAndNarrowGiveTheSameBitsOverARun) {
   if (World::cpu_vector_width() < 4) GTEST_SKIP() << "this processor has no AVX2: only the SSE2 loops run";
-  const int had = World::vector_width;
   for (Scheme scheme : testing::kSchemes)
     for (bool kinds : {false, true})
       for (int threads : {1, 2}) {
@@ -120,9 +113,9 @@ TEST(IntegrationKernels, WideAndNarrowGiveTheSameBitsOverARun) {
         std::vector<long> rebuilds;
         for (int width : {2, 4, 8}) {
           if (width > World::cpu_vector_width()) continue;
-          World::vector_width = width;
           PairProps p = testing::linear(9.45e7, 0.3, 4.16, 0.577, 2.36e7, 2.0e4);
           World w = testing::make_world(p, ContactOptions{}, scheme, 5e-5, -980.0);
+          w.set_vector_width(width);
           w.threads = threads;
           std::mt19937 rng(3);
           std::uniform_real_distribution<double> jitter(-0.02, 0.02);
@@ -136,7 +129,6 @@ TEST(IntegrationKernels, WideAndNarrowGiveTheSameBitsOverARun) {
           out.push_back(w.discs);
           rebuilds.push_back(w.neighbors.rebuilds);
         }
-        World::vector_width = had;
         for (std::size_t k = 1; k < out.size(); ++k) {  // out[0]: two a vector
           const Discs &a = out[0], &b = out[k];
           EXPECT_TRUE(same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.vx, b.vx) && same_bits(a.vy, b.vy) &&

@@ -1,4 +1,4 @@
-// The pair pass by blocks (World::pair_pass): on a dense, jittered packing with random history,
+// The pair stage by blocks (World::pair_contacts): on a dense, jittered packing with random history,
 // where pairs touch, slide, go slack and come apart side by side, the forces and the new history
 // are those of the law applied pair by pair (eqs. 3-15, written out here), for every option of
 // the law and for 1 and 2 threads, and so are the recorded totals of an output step's pass (in
@@ -48,7 +48,8 @@ struct Result {
   std::vector<PairForce> totals;  // the touching pairs' f_n, f_s, in list order
 };
 
-Result forces_of(World w) {  // a copy: each call starts from the same history
+Result forces_of(World w, int width = World::vector_width) {  // a copy: each call starts from the same history
+  w.set_vector_width(width);
   w.record_pair_forces = true;
   w.compute_forces_now();
   Result r{w.discs.fx, w.discs.fy, w.discs.torque, {}, {}, w.recorded_pairs()};
@@ -168,17 +169,13 @@ TEST(PairBlock, ForcesAndHistoryAreThoseOfThePairByPairLaw) {
 // two (SSE2): forces, history and recorded totals.
 TEST(PairBlock, WideAndNarrowLawGiveTheSameBits) {
   if (World::cpu_vector_width() < 4) GTEST_SKIP() << "this processor has no AVX2: only the SSE2 law runs";
-  const int had = World::vector_width;
   for (const ContactOptions& o : all_options())
     for (int threads : {1, 2}) {
       const World w = dense_world(o, threads, 11);
-      World::vector_width = 2;
-      const Result narrow = forces_of(w);
+      const Result narrow = forces_of(w, 2);
       for (int width : {4, 8}) {
         if (width > World::cpu_vector_width()) continue;
-        World::vector_width = width;
-        const Result wide = forces_of(w);
-        World::vector_width = had;
+        const Result wide = forces_of(w, width);
         EXPECT_EQ(wide.fx, narrow.fx) << width;
         EXPECT_EQ(wide.fy, narrow.fy) << width;
         EXPECT_EQ(wide.tq, narrow.tq) << width;
@@ -190,7 +187,6 @@ TEST(PairBlock, WideAndNarrowLawGiveTheSameBits) {
           EXPECT_EQ(wide.totals[k].fs, narrow.totals[k].fs) << width;
         }
       }
-      World::vector_width = had;
     }
 }
 

@@ -3,8 +3,9 @@
 // tension and without limit, with their dashpots. Every other contact follows paper 1's law.
 //
 // A bonded pair is not a neighbour-list contact: it lives in its own fixed list (World::bonds)
-// with its own history, and stays there when the discs separate. The force kernel has a
-// compile-time flag for bonds, so a scene without clusters runs the kernel without bond code.
+// with its own history, and stays there when the discs separate. Its law is contact_law.hpp's
+// bond_law. Bonds are a feature of the kernel table (kernels.hpp): a scene without clusters runs
+// a kernel without bond code.
 #pragma once
 
 #include <string>

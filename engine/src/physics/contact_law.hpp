@@ -1,6 +1,7 @@
 // The paper's contact law for one contact over one step, eqs. (6)-(14). The options are
 // template parameters so the per-contact loop carries no branch for a variant a scene does not
-// use (docs/scene.md lists them).
+// use (docs/scene.md lists them). Paper 2's cluster bonds are the variant without the two
+// conditions: NoTension::none and FrictionCap::none (bond_law).
 #pragma once
 
 #include <algorithm>
@@ -36,7 +37,7 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
     en = std::max(en, 0.0);
     fn = std::max(en + dn, 0.0);
   } else {
-    fn = en + dn;  // viscous pull allowed while the discs overlap
+    fn = en + dn;  // overlap: viscous pull allowed while the discs overlap; none: tension too
   }
 
   double s = 0;  // the new e_s
@@ -45,10 +46,12 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
     s = es + p.ks * du_s;                       // (10a), (11a)
     double ds = 0;
     if constexpr (DASH) ds = p.eta_s * du_s * inv_dt;  // (10b), (11b)
-    const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
-    const bool slide = std::abs(s) > cap;       // (13a): capped, not reset
-    s = slide ? std::copysign(cap, s) : s;
-    ds = slide ? 0.0 : ds;                      // (13b): no shear dashpot while sliding
+    if constexpr (FC != FrictionCap::none) {
+      const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
+      const bool slide = std::abs(s) > cap;     // (13a): capped, not reset
+      s = slide ? std::copysign(cap, s) : s;
+      ds = slide ? 0.0 : ds;                    // (13b): no shear dashpot while sliding
+    }
     fs = s + ds;                                // (14)
   } else {
     fs = 0;
@@ -61,6 +64,14 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
   }
   if constexpr (SHEAR) es = s;
   else if constexpr (NT == NoTension::elastic) es = slack ? 0.0 : es;
+}
+
+// Paper 2: inside a cluster both springs act in tension and without limit, with their dashpots.
+// overlap: for NormalSpring::overlap, the shortening from the bonded distance.
+template <NormalSpring NS>
+inline void bond_law(const PairProps& p, double overlap, double du_n, double du_s, double inv_dt, double& en,
+                     double& es, double& fn, double& fs) {
+  contact_law<NS, NoTension::none, FrictionCap::none>(p, overlap, du_n, du_s, inv_dt, en, es, fn, fs);
 }
 
 }  // namespace dem

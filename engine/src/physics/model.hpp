@@ -16,13 +16,15 @@ enum class NormalSpring {
 enum class NoTension {
   elastic,  // paper eqs. (8), (12): if e_n < 0 then e_n = d_n = e_s = d_s = 0
   total,    // f_n = max(0, e_n + d_n) (YADE, LIGGGHTS limitForce on)
-  overlap   // no clamp; the contact ends only when the overlap vanishes (LIGGGHTS limitForce off)
+  overlap,  // no clamp; the contact ends only when the overlap vanishes (LIGGGHTS limitForce off)
+  none      // paper 2's cluster bonds: tension carried, no rule at all (no scene option)
 };
 
 // What the Coulomb cap of eq. (13) is measured against.
 enum class FrictionCap {
   elastic,  // paper eq. (13): |e_s| <= mu e_n
-  total     // |e_s| <= mu |f_n| (LIGGGHTS, YADE)
+  total,    // |e_s| <= mu |f_n| (LIGGGHTS, YADE)
+  none      // paper 2's cluster bonds: no cap (no scene option)
 };
 
 // The lever arm of a contact: the distance from a disc's centre at which the shear force acts

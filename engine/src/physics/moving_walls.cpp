@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "physics/integrator.hpp"
 #include "physics/world.hpp"
 
 namespace dem {
@@ -30,16 +31,19 @@ double followed_x(const RigidPlate& p, const RotatingWall& r) {
 }
 }  // namespace
 
-void World::kick_walls(double h) {
-  for (RigidPlate& p : moving.plates) {  // (16), (17) for the plate; it does not rotate
+// The plates move by the discs' integrator (integrator.hpp); the rotating walls turn at their
+// prescribed rate, the exact turn of each step.
+void World::move_walls(Move move, double h) {
+  if (move == Move::none || moving.empty()) return;
+  for (RigidPlate& p : moving.plates) {  // (16), (17); a plate does not rotate
     const ObstacleMotion& m = moving.motion[p.wall];
-    if (p.follow < 0) p.vx += (m.fx + p.mass * gx) / p.mass * h;
-    p.vy += (m.fy + p.mass * gy) / p.mass * h;
+    // (16) as X / M, X the discs' forces plus M g: a plate's stored results have this rounding.
+    if (p.follow < 0) p.vx = kick(p.vx, (m.fx + p.mass * gx) / p.mass, h);
+    p.vy = kick(p.vy, (m.fy + p.mass * gy) / p.mass, h);
   }
-}
-
-void World::drift_walls(bool eq19) {
-  for (RotatingWall& r : moving.rotating) {  // prescribed: the exact turn of this step
+  if (move == Move::kick) return;
+  const bool eq19 = move == Move::kick_drift_eq19;
+  for (RotatingWall& r : moving.rotating) {
     const double dtheta = r.omega * dt;
     r.theta += dtheta;
     place_rotated(geometry.walls[r.wall], r);
@@ -50,15 +54,14 @@ void World::drift_walls(bool eq19) {
     m.pivot_y = r.pivot_y;
   }
   for (RigidPlate& p : moving.plates) {
-    // (18) or (19), as for the discs.
-    p.duy = eq19 ? 0.5 * (p.duy + p.vy * dt) : p.vy * dt;
+    p.duy = eq19 ? move_increment<true>(p.duy, p.vy, dt) : move_increment<false>(p.duy, p.vy, dt);  // (19), (18)
     p.y += p.duy;
     if (p.follow >= 0) {
       const double x = followed_x(p, moving.rotating[p.follow]);
       p.dux = x - p.x;
       p.vx = p.dux / dt;
     } else {
-      p.dux = eq19 ? 0.5 * (p.dux + p.vx * dt) : p.vx * dt;
+      p.dux = eq19 ? move_increment<true>(p.dux, p.vx, dt) : move_increment<false>(p.dux, p.vx, dt);
     }
     p.x += p.dux;
     place_plate(geometry.walls[p.wall], p);

@@ -1,8 +1,8 @@
 // Moving obstacles: walls rotating about a pivot at a prescribed rate (the shear box's side
 // walls) and rigid plates with their own weight (its top plate), integrated with the discs'
 // scheme. A wall's motion over the last step enters the contact increments (5a), (5b) through
-// the displacement of the wall's material point at the contact. The force kernel has a
-// compile-time flag for moving walls: a scene whose walls stay put runs the kernel without it.
+// the displacement of the wall's material point at the contact. The kernel table has a feature
+// for moving walls (kernels.hpp): a scene whose walls stay put runs a kernel without it.
 #pragma once
 
 #include <vector>
@@ -38,7 +38,7 @@ struct RigidPlate {
   double ax0 = 0, ay0 = 0, bx0 = 0, by0 = 0;  // endpoints at zero displacement
   double x = 0, y = 0;                  // displacement [cm]
   double vx = 0, vy = 0;
-  double dux = 0, duy = 0;              // last step's increments (eqs. 18/19)
+  double dux = 0, duy = 0;              // last step's increments, (18) or (19)
   int follow = -1;                      // index into MovingWalls::rotating, or -1: free
   double x_free = 0;                    // follow: horizontal displacement at theta = 0
   double x_listed = 0, y_listed = 0;    // displacement at the last neighbour-list build

@@ -45,7 +45,7 @@ class Neighbors {
   bool stale(const Discs& d) const { return x0_.size() != d.size(); }
   // Past skin/2 from its position at the last rebuild a disc may have a partner the lists miss
   // (two discs approaching each other use up the skin). The drifts ask it of the discs they have
-  // just moved (World::kick_drift_block): a disc is far when (x - origin_x - x0)^2 + (...)^2 exceeds
+  // just moved (World::move_block): a disc is far when (x - origin_x - x0)^2 + (...)^2 exceeds
   // moved_far_limit2(). The reference positions are floats, relative to the grid's corner (8
   // bytes a disc less, 4 % of a million-disc run); the limit is skin/2 less their largest
   // rounding, so every disc that has really moved skin/2 is caught (a rebuild may come a little

@@ -5,15 +5,17 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "physics/contact_frame.hpp"
+
 namespace dem {
 
 namespace {
 // Force on the upper disc of a cut pair i-j from the lower one, given the total normal and shear
 // forces of the contact and the unit normal from i to j: on j it is f_n n + f_s t, t = (-ny, nx).
 void cut_force(double fn, double fs, double nx, double ny, bool j_above, double& fx, double& fy) {
-  const double jx = fn * nx - fs * ny, jy = fn * ny + fs * nx;  // on j (eq. 15 reversed)
-  fx = j_above ? jx : -jx;
-  fy = j_above ? jy : -jy;
+  const ContactForce j = contact_force(-fn, -fs, {nx, ny});  // on j: (15) of the opposite forces
+  fx = j_above ? j.x : -j.x;
+  fy = j_above ? j.y : -j.y;
 }
 }  // namespace
 
@@ -70,8 +72,9 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
     }
     for (const WallContact& c : w.neighbors.walls) {
       if (!c.touching || !(py[c.i] > p.y)) continue;
-      gxs += -c.fn * c.nx + c.fs * c.ny;  // (15) on the disc
-      gys += -c.fn * c.ny - c.fs * c.nx;
+      const ContactForce f = contact_force(c.fn, c.fs, {c.nx, c.ny});  // on the disc
+      gxs += f.x;
+      gys += f.y;
     }
     // Force on the part below from the part above = (gxs, gys) - (max, may).
     p.sigma = -p.fy / width;

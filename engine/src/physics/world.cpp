@@ -1,15 +1,18 @@
 #include "physics/world.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
+#include "physics/contact_frame.hpp"
 #include "physics/contact_law.hpp"
 #include "physics/parallel.hpp"
 
 namespace dem {
 
-// Code compiled for a wider vector than the build's (chosen at run time by vector_width): AVX2,
+// Code compiled for a wider vector than the build's (the kernel table holds each width's): AVX2,
 // four doubles a vector, without FMA; AVX-512, eight (512-bit, which GCC otherwise avoids), whose
 // FMA is never used for a contraction (-ffp-contract=off).
 #define DEM_TARGET_AVX2 __attribute__((target("avx2")))
@@ -23,44 +26,165 @@ int World::cpu_vector_width() {
 #endif
   return 2;
 }
-int World::vector_width = World::cpu_vector_width();
+const int World::vector_width = World::cpu_vector_width();
+
+void World::set_vector_width(int width) {
+  if ((width != 2 && width != 4 && width != 8) || width > vector_width)
+    throw std::invalid_argument("set_vector_width: " + std::to_string(width) + " doubles a vector, this processor has " +
+                                std::to_string(vector_width));
+  width_ = width;
+}
 
 int World::threads_for(int n) const {
   return std::max(1, std::min(threads, n / kMinDiscsPerThread));
 }
 
-// With threads, a step is two parallel regions (Verlet) or one (eqs. 18, 19): every fork and
-// join costs microseconds, as much as a small world's pass. A drift also tells whether the lists
-// must be rebuilt (a disc more than skin/2 from its list position); they are rebuilt right after
-// it, or at the start of a step when stale (walls moved far, a wall removed, a restart).
+struct World::ForceBlock {
+  int t = 0, threads = 1;  // this block's thread, of `threads`
+  int i0 = 0, i1 = 0;
+  std::size_t p0 = 0, p1 = 0, w0 = 0, w1 = 0;
+  std::vector<Deferred>* later = nullptr;  // the reactions on discs of later blocks
+  PairTotals::Force* record = nullptr;     // a recorded pass: this block's first pair total
+  double pair_overlap = 0, wall_overlap = 0;  // the largest overlaps (max_overlap)
+};
+
+// One time step. Eqs. (18) and (19) take the forces from the increments of the last move and
+// then move; velocity Verlet moves first (half kick, drift), takes the forces at the new
+// positions and closes with a half kick. The forces and the move after them are fused
+// (forces_then_move): each thread takes its block of discs through all their stages in one
+// parallel region, a fork and join being as dear as a small world's whole pass.
 void World::step() {
-  const bool walls_move = !moving.empty();  // one test per step, none per contact
-  bool far = false;
-  if (scheme == Scheme::velocity_verlet) {
-    far = kick_drift_eq18(0.5 * dt);  // v(t + dt/2); du = v(t + dt/2) dt; x += du
-    if (walls_move) { kick_walls(0.5 * dt); drift_walls(false); }
+  const bool verlet = scheme == Scheme::velocity_verlet;
+  bool far = false;  // some disc is now skin/2 from its list position
+  if (verlet) {
+    far = move_discs(Move::kick_drift_eq18, 0.5 * dt);  // (17) v(t + dt/2); (18) du = v(t + dt/2) dt; x += du
+    move_walls(Move::kick_drift_eq18, 0.5 * dt);
   }
-  if (walls_move && walls_moved_far()) neighbors.invalidate();
+  refresh_lists(far);                                    // the candidates of (3)
+  if (steps % kRebalanceEvery == 0) balance_blocks();    // the threads' blocks (and whenever they do not fit)
+  if (verlet && measure_increments) measure_increment_sums();  // the move's |v dt|, before the kick overwrites v
+  const Move move = verlet ? Move::kick : scheme == Scheme::paper_eq18 ? Move::kick_drift_eq18 : Move::kick_drift_eq19;
+  const double h = verlet ? 0.5 * dt : dt;
+  far = forces_then_move(move, h);                       // (3)-(15), then (16)-(19) for the discs
+  move_walls(move, h);                                   // (16)-(19) for the plates; the walls' turns
+  if (far) rebuild_lists();                              // for the next step's forces
+  time += dt;
+  ++steps;
+  if (measure_increments && verlet) increments_measured_step_ = steps;
+  particle_steps += static_cast<double>(discs.size());
+}
+
+// The stages of a force pass and the move, for each block of discs: the row of the kernel table
+// this scene runs (select_kernel) says which code each force stage is. With threads every block
+// adds its discs' sums in a fixed order, so a thread count always gives the same bits; the order
+// of the walls and the pairs differs between one thread and several, each fixed.
+bool World::forces_then_move(Move move, double h) {
+  const Kernel& k = *kernel_;
+  const bool record = record_pair_forces;
+  // Totals recorded by an earlier pass are stale after this one (pair_forces_current is false):
+  // freed, so that they never sit beside a list build's scratch (one or the other at the peak).
+  if (!record && pair_totals.allocated()) drop_pair_forces();
+  const Stage pairs = k.pairs[record][one_kind()];
+  // Bonds and moving walls run on one thread: their stages reach across any block.
+  const bool serial = k.key.features.bonds || k.key.features.moving_walls;
+  const bool far = each_block(serial ? 1 : threads_for(static_cast<int>(discs.size())), [&](ForceBlock& b) {
+    start_resultants(b.i0, b.i1);             // (15): m_i g in X_i, Y_i; M_i = 0
+    if (record) start_recording(b);
+    if (b.threads > 1) (this->*k.walls)(b);   // (3)-(15) discs on walls and points: first with threads,
+    (this->*pairs)(b);                        // (3)-(15) disc pairs
+    if (k.bonds) (this->*k.bonds)(b);         // paper 2's bonds: the law without (8), (13)
+    if (b.threads == 1) (this->*k.walls)(b);  //   last on one thread
+    add_deferred(b);                          // the pairs' reactions from earlier blocks
+    return move_block(move, h, b.i0, b.i1);   // (16)-(19)
+  });
+  if (record) pair_forces_step = steps + (move == Move::none ? 0 : 1);  // a step's pass: the step it ends
+  return far;
+}
+
+void World::refresh_lists(bool far) {
+  if (!moving.empty() && walls_moved_far()) neighbors.invalidate();
   if (far || neighbors.stale(discs)) {
     drop_pair_forces();  // the last step's totals, stale once this step runs: never beside a build's scratch
     rebuild_lists();
   }
-  if (steps % kRebalanceEvery == 0) balance_blocks();  // and whenever they do not fit (compute_forces)
-  // Eqs. (3)-(15) from the increments of the last move; then, for each thread's discs:
-  switch (scheme) {
-    case Scheme::paper_eq18: far = force_pass(Then::kick_drift_eq18, dt); break;  // (17), (18)
-    case Scheme::paper_eq19: far = force_pass(Then::kick_drift_eq19, dt); break;  // (17), (19)
-    case Scheme::velocity_verlet: far = force_pass(Then::kick, 0.5 * dt); break;  // v(t + dt)
+}
+
+
+// Threads own contiguous blocks of discs (force_blocks: of equal work, set every kRebalanceEvery
+// steps); a pair is computed by the owner of its i, and what a block adds to a later block's
+// discs is added by that block's owner once all are done, in block order (add_deferred).
+template <class F>
+bool World::each_block(int nt, F&& stages) {
+  const int n = static_cast<int>(discs.size());
+  const auto& pairs = neighbors.pairs;
+  const auto& wl = neighbors.walls;
+  if (nt == 1) {
+    ForceBlock b;
+    b.i1 = n;
+    b.p1 = pairs.size();
+    b.w1 = wl.size();
+    const bool far = stages(b);
+    max_overlap = std::max(b.pair_overlap, b.wall_overlap);
+    return far;
   }
-  if (walls_move) {
-    if (scheme == Scheme::velocity_verlet) kick_walls(0.5 * dt);
-    else { kick_walls(dt); drift_walls(scheme == Scheme::paper_eq19); }
+  if (!blocks_fit()) balance_blocks();  // other threads or discs than at the last balance
+  std::vector<double>& part = thread_overlap_;
+  part.assign(nt, 0.0);
+  unsigned far = 0;
+#pragma omp parallel num_threads(nt) reduction(| : far)
+  {
+    ForceBlock b;
+    b.t = omp_thread_index();
+    b.threads = nt;
+    b.i0 = force_blocks[b.t];
+    b.i1 = force_blocks[b.t + 1];
+    const auto by_i = [](const auto& c, int i) { return c.i < i; };
+    b.p0 = std::lower_bound(pairs.begin(), pairs.end(), b.i0, by_i) - pairs.begin();
+    b.p1 = std::lower_bound(pairs.begin(), pairs.end(), b.i1, by_i) - pairs.begin();
+    b.w0 = std::lower_bound(wl.begin(), wl.end(), b.i0, by_i) - wl.begin();
+    b.w1 = std::lower_bound(wl.begin(), wl.end(), b.i1, by_i) - wl.begin();
+    deferred_[b.t].value.clear();
+    b.later = &deferred_[b.t].value;
+    far |= stages(b) ? 1u : 0u;
+    part[b.t] = std::max(b.pair_overlap, b.wall_overlap);
   }
-  if (far) rebuild_lists();  // eqs. (18), (19): for the next step's forces
-  time += dt;
-  ++steps;
-  if (measure_increments && scheme == Scheme::velocity_verlet) increments_measured_step_ = steps;
-  particle_steps += static_cast<double>(discs.size());
+  double worst = 0;
+  for (int t = 0; t < nt; ++t) worst = std::max(worst, part[t]);
+  max_overlap = worst;
+  return far != 0;
+}
+
+// A recorded pass: each thread writes its touching pairs' totals into its own slice of
+// pair_totals, sized once to the exact count (the list's order; no growth, no copy).
+void World::start_recording(ForceBlock& b) {
+  if (b.threads == 1) {
+    size_pair_forces(touching_pairs(b.p0, b.p1));
+    b.record = pair_totals.forces();
+    return;
+  }
+  touching_[b.t].value = touching_pairs(b.p0, b.p1);
+#pragma omp barrier
+  if (b.t == 0) {  // the main thread: its malloc arena, where the list is freed again
+    std::size_t total = 0;
+    for (int u = 0; u < b.threads; ++u) total += touching_[u].value;
+    size_pair_forces(total);
+  }
+#pragma omp barrier
+  std::size_t offset = 0;
+  for (int u = 0; u < b.t; ++u) offset += touching_[u].value;
+  b.record = pair_totals.forces() + offset;
+}
+
+void World::add_deferred(ForceBlock& b) {
+  if (b.threads == 1) return;
+#pragma omp barrier
+  Discs& d = discs;
+  for (int u = 0; u < b.t; ++u)  // earlier threads' reactions on this block, in their order
+    for (const Deferred& q : deferred_[u].value) {
+      if (q.j < b.i0 || q.j >= b.i1) continue;
+      d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
+      d.torque[q.j] -= q.tq;
+    }
 }
 
 bool World::adjacent(int k1, int k2) const {
@@ -142,11 +266,6 @@ void World::rebuild_lists() {
   p.resize(o);
 }
 
-void World::init() {
-  prepare();
-  force_pass(Then::nothing, 0.0);  // forces at the start (Verlet's first half kick uses them)
-}
-
 void World::drop_pair_forces() {
   pair_totals.clear();
   pair_forces_step = -1;
@@ -154,31 +273,35 @@ void World::drop_pair_forces() {
 
 void World::size_pair_forces(std::size_t count) { pair_totals.start(count, neighbors.pairs.size()); }
 
-bool World::force_pass(Then then, double h) {
-  // Verlet's rest measure: the |v dt| of the move, before the closing kick overwrites v (the
-  // force pass reads v, never writes it); parallel_sum's blocks, whatever the force blocks are.
-  if (then == Then::kick && measure_increments) measure_increment_sums();
-  const bool record = record_pair_forces;
-  // Totals recorded by an earlier pass are stale after this one (pair_forces_current is false):
-  // freed, so that they never sit beside a list build's scratch (one or the other at the peak).
-  if (!record && pair_totals.allocated()) drop_pair_forces();
-  const bool far = (this->*force_kernel_)(then, h);
-  if (record) pair_forces_step = steps + (then == Then::nothing ? 0 : 1);  // a step's pass: the step it ends
-  return far;
+void World::init() {
+  prepare();
+  forces_then_move(Move::none, 0.0);  // forces at the start (Verlet's first half kick uses them)
 }
 
-// Integration loops: each disc on its own, so any thread count gives the same bits. The kick
+// The move of the discs: each disc on its own, so any thread count gives the same bits. The kick
 // and the drift of a disc go in one pass over the arrays (the same operations, in the same order,
 // as a kick pass followed by a drift pass: one sweep of memory instead of two).
 namespace {
 
-// The loop of kick_drift_block, with every array a restrict parameter: GCC keeps restrict on
-// parameters, not on local pointers; without it, it checked the arrays' overlap at run time,
-// found more pairs to check than it will (10), and ran the loop one disc at a time. Now it runs
-// two discs a vector (four with AVX2, below): the same operations on each disc, the same bits.
-template <int D, bool ONE_KIND, bool PHI, bool FAR>  // D: 0 none, 1 eq. (18), 2 eq. (19)
+// The arrays of the move of discs [i0, i1) (World::move_block).
+struct MoveArrays {
+  int n;
+  double h, dt;
+  const double *fx, *fy, *tq;
+  const int* kind;
+  const double *inv_mass, *inv_inertia;
+  double *vx, *vy, *om, *ux, *uy, *up, *x, *y, *phi;
+  const float *x0, *y0;  // the skin/2 test: list positions, their origin and the limit
+  double ox, oy, lim2;
+};
+
+// The loop, with every array a restrict parameter: GCC keeps restrict on parameters, not on
+// local pointers; without it, it checked the arrays' overlap at run time, found more pairs to
+// check than it will (10), and ran the loop one disc at a time. With it, it runs two discs a
+// vector (four with AVX2, eight with AVX-512): the same operations on each disc, the same bits.
+template <int D, bool ONE_KIND, bool PHI, bool FAR>  // D: 0 kick alone, 1 eq. (18), 2 eq. (19)
 inline __attribute__((always_inline)) long kick_drift_kernel(
-    int n, double h, double step, const double* __restrict fx, const double* __restrict fy,
+    int n, double h, double dt, const double* __restrict fx, const double* __restrict fy,
     const double* __restrict tq, const int* __restrict kd, const double* __restrict im, const double* __restrict ii,
     double* __restrict vx, double* __restrict vy, double* __restrict om, double* __restrict ux,
     double* __restrict uy, double* __restrict up, double* __restrict x, double* __restrict y,
@@ -188,28 +311,22 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
   long far = 0;
   for (int i = 0; i < n; ++i) {
     const double mi = ONE_KIND ? im0 : im[kd[i]], ji = ONE_KIND ? ii0 : ii[kd[i]];
-    const double v = vx[i] + fx[i] * mi * h;  // (16), (17)
-    const double w = vy[i] + fy[i] * mi * h;
-    const double o = om[i] + tq[i] * ji * h;
+    const double v = kick(vx[i], fx[i] * mi, h);  // (16), (17)
+    const double w = kick(vy[i], fy[i] * mi, h);
+    const double o = kick(om[i], tq[i] * ji, h);
     vx[i] = v; vy[i] = w; om[i] = o;
     if constexpr (D == 0) continue;
-    double a, b, c;
-    if constexpr (D == 2) {  // (19): the mean of the last increment and v dt
-      a = 0.5 * (ux[i] + v * step);
-      b = 0.5 * (uy[i] + w * step);
-      c = 0.5 * (up[i] + o * step);
-    } else {  // (18)
-      a = v * step;
-      b = w * step;
-      c = o * step;
-    }
-    if constexpr (D == 2) { ux[i] = a; uy[i] = b; up[i] = c; }  // (18): v dt, read from v (increments())
+    constexpr bool EQ19 = D == 2;
+    const double a = move_increment<EQ19>(EQ19 ? ux[i] : 0.0, v, dt);  // (18) or (19)
+    const double b = move_increment<EQ19>(EQ19 ? uy[i] : 0.0, w, dt);
+    const double c = move_increment<EQ19>(EQ19 ? up[i] : 0.0, o, dt);
+    if constexpr (EQ19) { ux[i] = a; uy[i] = b; up[i] = c; }  // (18): v dt, read from v (increments())
     const double xn = x[i] + a, yn = y[i] + b;
     x[i] = xn;
     y[i] = yn;
     if constexpr (PHI) phi[i] += c;
     // The skin/2 test on the position just computed. A count, because an integer sum vectorises
-    // and an |= of comparisons does not; a NaN position counts as not far, as it always did.
+    // and an |= of comparisons does not; a NaN position counts as not far.
     if constexpr (FAR) {
       const double dx = (xn - ox) - x0[i], dy = (yn - oy) - y0[i];
       far += dx * dx + dy * dy > lim2 ? 1 : 0;
@@ -218,91 +335,86 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
   return far;
 }
 
-// Compiled three times, as the pair law: for any x86-64 and, chosen at run time by
-// World::vector_width, for AVX2 (four discs a vector; without AVX2 GCC does not vectorise the
-// count of far discs, whose floats widen to doubles and whose count is 64-bit) and AVX-512 (eight).
-#if defined(__x86_64__) && defined(__GNUC__)
-template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
-DEM_TARGET_AVX2 long kick_drift_kernel_avx2(A... a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
+#define DEM_MOVE_ARGS                                                                                           \
+  a.n, a.h, a.dt, a.fx, a.fy, a.tq, a.kind, a.inv_mass, a.inv_inertia, a.vx, a.vy, a.om, a.ux, a.uy, a.up, a.x, \
+      a.y, a.phi, a.x0, a.y0, a.ox, a.oy, a.lim2
+template <int D, bool ONE_KIND, bool PHI, bool FAR>
+long move_sse2(const MoveArrays& a) {
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(DEM_MOVE_ARGS);
 }
-template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
-DEM_TARGET_AVX512 long kick_drift_kernel_avx512(A... a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
+// Without AVX2 GCC does not vectorise the count of far discs (its floats widen to doubles, the
+// count is 64-bit).
+#if defined(__x86_64__) && defined(__GNUC__)
+template <int D, bool ONE_KIND, bool PHI, bool FAR>
+DEM_TARGET_AVX2 long move_avx2(const MoveArrays& a) {
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(DEM_MOVE_ARGS);
+}
+template <int D, bool ONE_KIND, bool PHI, bool FAR>
+DEM_TARGET_AVX512 long move_avx512(const MoveArrays& a) {
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(DEM_MOVE_ARGS);
 }
 #endif
-template <int D, bool ONE_KIND, bool PHI, bool FAR, class... A>
-long kick_drift_best(A... a) {
+#undef DEM_MOVE_ARGS
+
+// The move kernels (kernels.hpp): kMoves[width index][move], the move numbered
+// D * 8 + one kind * 4 + angle * 2 + skin/2 test, D as in kick_drift_kernel. A kick alone has
+// neither the angle nor the test (the kernel of its row without them).
+using MoveKernel = long (*)(const MoveArrays&);
+template <int W, std::size_t M>
+constexpr MoveKernel move_kernel() {
+  constexpr int D = static_cast<int>(M / 8);
+  constexpr bool ONE_KIND = M / 4 % 2 == 1, PHI = D != 0 && M / 2 % 2 == 1, FAR = D != 0 && M % 2 == 1;
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::vector_width >= 8) return kick_drift_kernel_avx512<D, ONE_KIND, PHI, FAR>(a...);
-  if (World::vector_width >= 4) return kick_drift_kernel_avx2<D, ONE_KIND, PHI, FAR>(a...);
+  if constexpr (W == 8) return &move_avx512<D, ONE_KIND, PHI, FAR>;
+  else if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR>;
+  else
 #endif
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(a...);
+  return &move_sse2<D, ONE_KIND, PHI, FAR>;
 }
+template <int W, std::size_t... M>
+constexpr std::array<MoveKernel, 24> move_kernels(std::index_sequence<M...>) {
+  return {move_kernel<W, M>()...};
+}
+constexpr std::array<MoveKernel, 24> kMoves[3] = {move_kernels<2>(std::make_index_sequence<24>{}),
+                                                  move_kernels<4>(std::make_index_sequence<24>{}),
+                                                  move_kernels<8>(std::make_index_sequence<24>{})};
 
 }  // namespace
 
-template <World::Drift D, bool ONE_KIND, bool PHI>
-bool World::kick_drift_block(double h, int i0, int i1) {
+// (16)-(19) for discs [i0, i1): whether some disc of them is now more than skin/2 from its list
+// position (or the lists are stale). A kick alone (Verlet's closing half) moves nothing.
+bool World::move_block(Move move, double h, int i0, int i1) {
+  if (move == Move::none) return false;
   Discs& d = discs;
-  const auto at = [i0](auto& v) { return v.empty() ? nullptr : v.data() + i0; };  // eq. 19's and the angle's may be empty
-  constexpr int k = D == Drift::none ? 0 : D == Drift::eq18 ? 1 : 2;
+  const int D = move == Move::kick ? 0 : move == Move::kick_drift_eq18 ? 1 : 2;
   // Stale lists (a restart, a wall removed): rebuilt before the next forces, nothing to test.
-  const bool stale = D != Drift::none && neighbors.stale(discs);
-  const auto run = [&](auto far) {
-    return kick_drift_best<k, ONE_KIND, PHI, decltype(far)::value>(
-        i1 - i0, h, dt, at(d.fx), at(d.fy), at(d.torque), at(d.kind), d.kinds.inv_mass.data(),
-        d.kinds.inv_inertia.data(), at(d.vx), at(d.vy), at(d.omega), at(d.dux), at(d.duy), at(d.dphi), at(d.x),
-        at(d.y), at(d.phi), far ? neighbors.reference_x().data() + i0 : nullptr,
-        far ? neighbors.reference_y().data() + i0 : nullptr, neighbors.origin_x(), neighbors.origin_y(),
-        neighbors.moved_far_limit2());
-  };
-  if (D == Drift::none || stale) {
-    run(std::false_type{});
-    return stale;
-  }
-  return run(std::true_type{}) != 0;
-}
-
-// kick_drift_block for this pass: one disc kind or several, the rotation angle kept or not.
-template <World::Drift D>
-bool World::kick_drift_for(double h, int i0, int i1) {
-  const bool phi = !discs.phi.empty();
-  if (one_kind()) {
-    return phi ? kick_drift_block<D, true, true>(h, i0, i1) : kick_drift_block<D, true, false>(h, i0, i1);
-  }
-  return phi ? kick_drift_block<D, false, true>(h, i0, i1) : kick_drift_block<D, false, false>(h, i0, i1);
-}
-
-bool World::then_block(Then then, double h, int i0, int i1) {
-  switch (then) {
-    case Then::nothing: return false;
-    case Then::kick:  // Verlet's closing half kick (its rest measure was taken before: force_pass)
-      kick_drift_for<Drift::none>(h, i0, i1);
-      return false;
-    case Then::kick_drift_eq18: return kick_drift_for<Drift::eq18>(h, i0, i1);
-    case Then::kick_drift_eq19: return kick_drift_for<Drift::eq19>(h, i0, i1);
-  }
-  return false;
+  const bool stale = D != 0 && neighbors.stale(d);
+  const bool test = D != 0 && !stale;
+  const auto at = [i0](auto& v) { return v.empty() ? nullptr : v.data() + i0; };  // eq. 19's and the angle's may be empty
+  const MoveArrays a{i1 - i0, h, dt, at(d.fx), at(d.fy), at(d.torque), at(d.kind), d.kinds.inv_mass.data(),
+                     d.kinds.inv_inertia.data(), at(d.vx), at(d.vy), at(d.omega), at(d.dux), at(d.duy), at(d.dphi),
+                     at(d.x), at(d.y), at(d.phi), test ? neighbors.reference_x().data() + i0 : nullptr,
+                     test ? neighbors.reference_y().data() + i0 : nullptr, neighbors.origin_x(),
+                     neighbors.origin_y(), neighbors.moved_far_limit2()};
+  const std::size_t m = D * 8 + (one_kind() ? 4 : 0) + (d.phi.empty() ? 0 : 2) + (test ? 1 : 0);
+  const long far = kMoves[width_index()][m](a);
+  return stale || far != 0;
 }
 
 // One parallel region: each thread an equal block of discs (block_start; the force pass balances
 // its blocks by work, force_blocks: here every disc costs the same).
-bool World::integrate(Then then, double h) {
+bool World::move_discs(Move move, double h) {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
-  if (nt <= 1) return then_block(then, h, 0, n);
+  if (nt <= 1) return move_block(move, h, 0, n);
   unsigned far = 0;
 #pragma omp parallel num_threads(nt) reduction(| : far)
   {
     const int t = omp_thread_index();
-    far |= then_block(then, h, block_start(n, nt, t), block_start(n, nt, t + 1)) ? 1u : 0u;
+    far |= move_block(move, h, block_start(n, nt, t), block_start(n, nt, t + 1)) ? 1u : 0u;
   }
   return far != 0;
 }
-
-bool World::kick_drift_eq18(double h) { return integrate(Then::kick_drift_eq18, h); }
-bool World::kick_drift_eq19(double h) { return integrate(Then::kick_drift_eq19, h); }
 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
 void World::start_resultants(int i0, int i1) {
@@ -339,17 +451,7 @@ std::size_t World::touching_pairs(std::size_t p0, std::size_t p1) const {
   return n;
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH>
-double World::pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                            PairTotals::Force* record) {
-  if (record)
-    return one_kind() ? pair_pass<NS, NT, FC, LA, SHEAR, DASH, true, true>(p0, p1, own_end, later, record)
-                     : pair_pass<NS, NT, FC, LA, SHEAR, DASH, true, false>(p0, p1, own_end, later, record);
-  return one_kind() ? pair_pass<NS, NT, FC, LA, SHEAR, DASH, false, true>(p0, p1, own_end, later, nullptr)
-                   : pair_pass<NS, NT, FC, LA, SHEAR, DASH, false, false>(p0, p1, own_end, later, nullptr);
-}
-
-// The law for n touching pairs of a block, in the block's arrays (pair_pass): no branch and no
+// The law for n touching pairs of a block, in the block's arrays (pair_contacts): no branch and no
 // store that a later pair reads, so the compiler runs it two pairs at a time (SSE2) and the
 // pairs' square roots and divisions overlap. The same operations, in the same order, as the
 // law applied pair by pair: the same bits. One kind of disc: r_i + r_j is `sum1` (not gathered
@@ -359,38 +461,38 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
                                                                  double inv_dt, double sum1) {
   for (int k = 0; k < n; ++k) {
     const double R = std::sqrt(b.R2[k]);
-    const double nx = b.dx[k] / R, ny = b.dy[k] / R;  // (4): cos(alpha), sin(alpha), from i to j
+    const UnitNormal nrm = unit_normal(b.dx[k], b.dy[k], R);  // (4)
     const double ddx = b.ddx[k], ddy = b.ddy[k];
-    const double du_n = ddx * nx + ddy * ny;                                          // (5a)
+    const double du_n = normal_increment(ddx, ddy, nrm);       // (5a)
     const double overlap = (ONE_KIND ? sum1 : b.sum[k]) - R;
     double du_s = 0;
     if constexpr (SHEAR && LA == LeverArm::contact_point) {
       // (5b) with the arms r - overlap/2 (one kind: sum1 / 2 is r exactly)
       const double ai = (ONE_KIND ? 0.5 * sum1 : b.arm_i[k]) - 0.5 * overlap;
       const double aj = (ONE_KIND ? 0.5 * sum1 : b.arm_j[k]) - 0.5 * overlap;
-      du_s = -ddx * ny + ddy * nx + ai * b.rot_i[k] + aj * b.rot_j[k];
+      du_s = shear_increment(ddx, ddy, nrm, ai * b.rot_i[k], aj * b.rot_j[k]);
       b.arm_i[k] = ai; b.arm_j[k] = aj;
     } else if constexpr (SHEAR) {
-      du_s = -ddx * ny + ddy * nx + b.rot_i[k] + b.rot_j[k];  // (5b)
+      du_s = shear_increment(ddx, ddy, nrm, b.rot_i[k], b.rot_j[k]);  // (5b)
     }
     double fn, fs;
     contact_law<NS, NT, FC, SHEAR, DASH>(props[ONE_KIND ? 0 : b.prop[k]], overlap, du_n, du_s, inv_dt, b.en[k],
                                          b.es[k], fn, fs);
-    double fx = -fn * nx, fy = -fn * ny;  // (15a), (15b) terms on i
-    if constexpr (SHEAR) {
-      fx += fs * ny;
-      fy -= fs * nx;
-    }
+    const ContactForce f = contact_force<SHEAR>(fn, fs, nrm);  // (15a), (15b): on i
     b.overlap[k] = overlap;  // (a max taken here instead would keep GCC, without -ffast-math, from vectorising the loop)
     b.fn[k] = fn; b.fs[k] = fs;
-    b.fx[k] = fx; b.fy[k] = fy;
+    b.fx[k] = f.x; b.fy[k] = f.y;
   }
 }
 
-// The block's law compiled three times: for any x86-64 (two pairs a vector) and, chosen at run
-// time by World::vector_width, for AVX2 (four) and AVX-512 (eight). IEEE operations give the
-// same bits at any width, and no contraction into FMA (-ffp-contract=off, and the AVX2 version
-// does not enable FMA).
+// The block's law compiled three times: for any x86-64 (two pairs a vector), for AVX2 (four) and
+// for AVX-512 (eight); the kernel table holds all three, a world runs its width's. IEEE
+// operations give the same bits at any width, and no contraction into FMA (-ffp-contract=off,
+// and the AVX2 version does not enable FMA).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
+static void pair_block_law_sse2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+}
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt,
@@ -403,26 +505,31 @@ DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const P
   pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
 }
 #endif
-template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
-static void pair_block_law_best(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
+// The block law at W doubles a vector (a row of the kernel table holds each width's).
+template <int W, NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
+constexpr auto pair_block_law_at() {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (World::vector_width >= 8) return pair_block_law_avx512<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
-  if (World::vector_width >= 4) return pair_block_law_avx2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  if constexpr (W == 8) return &pair_block_law_avx512<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
+  else if constexpr (W == 4) return &pair_block_law_avx2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
+  else
 #endif
-  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+  return &pair_block_law_sse2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
 }
 
-// Disc-disc contacts [p0, p1) of the sorted pair list, a block of touching pairs at a time: the
-// geometry of each pair is gathered (a pair found apart loses its history there), the law runs
-// on the block's arrays (pair_block_law), and the results are added to the discs in list order.
-// The i side of each pair is added at once; the j side too when j < own_end, otherwise (j belongs
-// to another thread's discs) it is kept in `later` and added after the parallel part, in a fixed
-// order. RECORD: the totals of the touching pairs are written from `record` on, room for
-// touching_pairs(p0, p1) of them, and each touching pair's bit set in pair_totals' bits over the
-// list. Returns the largest overlap.
+// The stage of the disc pairs: the block's pairs [p0, p1) of the sorted list, a block of touching
+// pairs at a time. The geometry of each pair is gathered (a pair found apart loses its history
+// there), the law runs on the block's arrays (pair_block_law: (4), (5), (6)-(14), (15a, b)), and
+// the results are added to the discs in list order, the sums of (15). The i side of each pair is
+// added at once; the j side too when j is the block's, otherwise it is kept in `later` and added
+// by j's block (add_deferred). RECORD: the totals of the touching pairs are written from
+// `record` on, and each touching pair's bit set in pair_totals' bits over the list.
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
-double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                        PairTotals::Force* record) {
+void World::pair_contacts(ForceBlock& blk) {
+  const std::size_t p0 = blk.p0, p1 = blk.p1;
+  const int own_end = blk.i1;
+  std::vector<Deferred>* later = blk.later;
+  PairTotals::Force* record = blk.record;
+  const PairLaw law = kernel_->pair_law[width_index()][ONE_KIND];
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
   PairContact* __restrict pc = neighbors.pairs.data();
@@ -465,21 +572,21 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       b.pair[n] = static_cast<int>(p - p0);
       b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
       if constexpr (!ONE_KIND) b.sum[n] = sum;
-      b.ddx[n] = ux[i] * uf - ux[j] * uf;  // the relative increment of (5)
+      b.ddx[n] = ux[i] * uf - ux[j] * uf;  // du_i - du_j of (5)
       b.ddy[n] = uy[i] * uf - uy[j] * uf;
       if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
         b.rot_i[n] = uphi[i] * uf;
         b.rot_j[n] = uphi[j] * uf;
         if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
       } else if constexpr (SHEAR) {
-        b.rot_i[n] = ri * (uphi[i] * uf);
+        b.rot_i[n] = ri * (uphi[i] * uf);  // r_i dphi_i of (5b)
         b.rot_j[n] = rj * (uphi[j] * uf);
       }
       if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
       b.en[n] = c.en; b.es[n] = c.es;
       ++n;
     }
-    pair_block_law_best<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, law_props, inv_dt, sum1);
+    law(b, n, law_props, inv_dt, sum1);
     // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
     // is never the current i): the same additions in the same order, without a store and a
     // reload of fx[i], fy[i], torque[i] between two pairs of one disc.
@@ -514,25 +621,30 @@ double World::pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector
       }
       ax += fx; ay += fy;
       constexpr bool CP = LA == LeverArm::contact_point;
-      if constexpr (SHEAR) at -= (CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]]) * fs;  // (15c); f_s is the same seen from j (5b is symmetric)
+      if constexpr (SHEAR) at -= contact_moment(CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]], fs);  // (15c)
       const double rj = CP ? b.arm_j[k] : kr[ONE_KIND ? 0 : kd[j]];
       if (j < own_end) {
         fxa[j] -= fx; fya[j] -= fy;
-        if constexpr (SHEAR) tq[j] -= rj * fs;
+        if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
       } else {
-        later->push_back(Deferred{j, fx, fy, SHEAR ? rj * fs : 0.0});
+        later->push_back(Deferred{j, fx, fy, SHEAR ? contact_moment(rj, fs) : 0.0});
       }
     }
     put_back();
   }
   if constexpr (RECORD) flush_bits();
-  return worst;
+  blk.pair_overlap = worst;
 }
 
-// Disc-obstacle contacts [w0, w1) of the wall list (whole groups of one disc), with the
-// per-thread scratch `slot`. Returns the largest overlap.
+// The stage of the discs on walls and points: the block's entries [w0, w1) of the wall list
+// (whole groups of one disc), with its thread's scratch. MOVING: the obstacles' motion enters
+// (5), and the reactions on them are summed for the plates' move.
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
-double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
+void World::wall_contacts(ForceBlock& blk) {
+  const std::size_t w0 = blk.w0, w1 = blk.w1;
+  const int slot = blk.t;
+  if constexpr (MOVING)  // one block (forces_then_move): every obstacle's sums start here
+    for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
   double worst = 0;
@@ -557,8 +669,9 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
       if (now[a - b]) {
         dist_scratch[a - b] = h.dist;
         c.px = h.px; c.py = h.py;
-        c.nx = (h.px - d.x[i]) / h.dist;
-        c.ny = (h.py - d.y[i]) / h.dist;
+        const UnitNormal nrm = unit_normal(h.px - d.x[i], h.py - d.y[i], h.dist);  // (4), j the obstacle
+        c.nx = nrm.x;
+        c.ny = nrm.y;
       }
     }
     for (std::size_t a = b; a < e; ++a) {
@@ -574,156 +687,133 @@ double World::wall_forces(std::size_t w0, std::size_t w1, int slot) {
       c.touching = now[a - b];
       if (!c.touching) { c.en = c.es = c.fn = c.fs = 0; continue; }
       const double dist = dist_scratch[a - b];
-      const double nx = c.nx, ny = c.ny;
+      const UnitNormal nrm{c.nx, c.ny};
       const double overlap = d.r(i) - dist;
       // The lever arm of (5b), (15c): r, or r - overlap/2 (the middle of the overlap). A moving
       // wall's own point stays the closest point (px, py) of its surface.
       const double arm = LA == LeverArm::contact_point ? d.r(i) - 0.5 * overlap : d.r(i);
-      double du_n, du_s;
-      if constexpr (MOVING) {
-        // The wall's material point at the contact moved too: (5) with j the wall.
+      double ddx = u.x[i] * u.factor, ddy = u.y[i] * u.factor;  // du_i - du_j of (5), j the obstacle:
+      if constexpr (MOVING) {  // a moving one's material point at the contact moved too
         const ObstacleMotion& m = moving.motion[c.k];
-        const double ddx = u.x[i] * u.factor - (m.dux - m.dtheta * (c.py - m.pivot_y));
-        const double ddy = u.y[i] * u.factor - (m.duy + m.dtheta * (c.px - m.pivot_x));
-        du_n = ddx * nx + ddy * ny;                                      // (5a)
-        du_s = -ddx * ny + ddy * nx + arm * (u.phi[i] * u.factor);       // (5b)
-      } else {
-        const double uxi = u.x[i] * u.factor, uyi = u.y[i] * u.factor;
-        du_n = uxi * nx + uyi * ny;                                      // (5a)
-        du_s = -uxi * ny + uyi * nx + arm * (u.phi[i] * u.factor);       // (5b)
+        ddx -= m.dux - m.dtheta * (c.py - m.pivot_y);
+        ddy -= m.duy + m.dtheta * (c.px - m.pivot_x);
       }
+      const double du_n = normal_increment(ddx, ddy, nrm);                            // (5a)
+      const double du_s = shear_increment(ddx, ddy, nrm, arm * (u.phi[i] * u.factor));  // (5b)
       worst = std::max(worst, overlap);
       const int km = c.k < n_walls ? geometry.walls[c.k].material
                                    : geometry.points[c.k - n_walls].material;
       contact_law<NS, NT, FC, SHEAR, DASH>(props[d.material(i) * n_mat + km], overlap, du_n, du_s, inv_dt,
                                            c.en, c.es, c.fn, c.fs);
-      d.fx[i] += -c.fn * nx + c.fs * ny;  // (15a)
-      d.fy[i] += -c.fn * ny - c.fs * nx;  // (15b)
-      d.torque[i] -= arm * c.fs;          // (15c)
-      if constexpr (MOVING) {  // the reaction on the obstacle
+      const ContactForce f = contact_force(c.fn, c.fs, nrm);  // (15)
+      d.fx[i] += f.x;
+      d.fy[i] += f.y;
+      d.torque[i] -= contact_moment(arm, c.fs);
+      if constexpr (MOVING) {  // the reaction on the obstacle: (15) of the opposite forces
         ObstacleMotion& m = moving.motion[c.k];
-        const double wx = c.fn * nx - c.fs * ny, wy = c.fn * ny + c.fs * nx;
-        m.fx += wx;
-        m.fy += wy;
-        m.moment += (c.px - m.pivot_x) * wy - (c.py - m.pivot_y) * wx;
+        const ContactForce w = contact_force(-c.fn, -c.fs, nrm);
+        m.fx += w.x;
+        m.fy += w.y;
+        m.moment += (c.px - m.pivot_x) * w.y - (c.py - m.pivot_y) * w.x;
       }
     }
     b = e;
   }
-  return worst;
+  blk.wall_overlap = worst;
 }
 
-template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
-bool World::compute_forces(Then then, double h) {
+// The stage of paper 2's bonds (one block of all discs: forces_then_move): each bond is a pair
+// of the law without its two conditions (bond_law), whatever the discs' distance.
+template <NormalSpring NS>
+void World::bond_contacts(ForceBlock& blk) {
   Discs& d = discs;
-  const int n = static_cast<int>(d.size());
   const double inv_dt = 1.0 / dt;
-  const int nt = (BONDS || MOVING) ? 1 : threads_for(n);
-  double worst = 0;
-  const bool record = record_pair_forces;
-  if (nt == 1) {
-    start_resultants(0, n);
-    const std::size_t np = neighbors.pairs.size();
-    if (record) size_pair_forces(touching_pairs(0, np));
-    worst = pair_pass_for<NS, NT, FC, LA, SHEAR, DASH>(0, np, n, nullptr, record ? pair_totals.forces() : nullptr);
-  } else {
-    // Threads own contiguous blocks of discs (force_blocks: of equal work, set every
-    // kRebalanceEvery steps); a pair is computed by the owner of its i. What a thread adds to a later block's
-    // discs is added by that block's owner once all are done, in thread order: a given thread
-    // count always sums in the same order (bit-identical runs). Then each thread integrates its
-    // own discs.
-    if (!blocks_fit()) balance_blocks();  // other threads or discs than at the last balance
-    std::vector<double>& part = thread_overlap_;
-    part.assign(nt, 0.0);
-    unsigned far = 0;
-    const auto& pairs = neighbors.pairs;
-    const auto& wl = neighbors.walls;
-#pragma omp parallel num_threads(nt) reduction(| : far)
-    {
-      const int t = omp_thread_index();
-      const int i0 = force_blocks[t], i1 = force_blocks[t + 1];
-      const auto by_i = [](const auto& c, int i) { return c.i < i; };
-      const std::size_t p0 = std::lower_bound(pairs.begin(), pairs.end(), i0, by_i) - pairs.begin();
-      const std::size_t p1 = std::lower_bound(pairs.begin(), pairs.end(), i1, by_i) - pairs.begin();
-      const std::size_t w0 = std::lower_bound(wl.begin(), wl.end(), i0, by_i) - wl.begin();
-      const std::size_t w1 = std::lower_bound(wl.begin(), wl.end(), i1, by_i) - wl.begin();
-      deferred_[t].value.clear();
-      start_resultants(i0, i1);
-      // A recorded pass: each thread writes its touching pairs' totals into its own slice of
-      // pair_totals, sized once to the exact count (the list's order; no growth, no copy).
-      PairTotals::Force* mine = nullptr;
-      if (record) {  // the same branch on every thread
-        touching_[t].value = touching_pairs(p0, p1);
-#pragma omp barrier
-        if (t == 0) {  // the main thread: its malloc arena, where the list is freed again
-          std::size_t total = 0;
-          for (int u = 0; u < nt; ++u) total += touching_[u].value;
-          size_pair_forces(total);
-        }
-#pragma omp barrier
-        std::size_t offset = 0;
-        for (int u = 0; u < t; ++u) offset += touching_[u].value;
-        mine = pair_totals.forces() + offset;
-      }
-      // Walls before pairs: the order (and the bits) that gcc gave the former
-      // std::max(pairs(), walls()), whose arguments it evaluates right to left; now explicit.
-      const double ww = wall_forces<NS, NT, FC, LA, false, SHEAR, DASH>(w0, w1, t);
-      const double pw = pair_pass_for<NS, NT, FC, LA, SHEAR, DASH>(p0, p1, i1, &deferred_[t].value, mine);
-      part[t] = std::max(pw, ww);
-#pragma omp barrier
-      for (int u = 0; u < t; ++u)  // earlier threads' reactions on this block, in their order
-        for (const Deferred& q : deferred_[u].value) {
-          if (q.j < i0 || q.j >= i1) continue;
-          d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
-          d.torque[q.j] -= q.tq;
-        }
-      far |= then_block(then, h, i0, i1) ? 1u : 0u;
-    }
-    for (int t = 0; t < nt; ++t) worst = std::max(worst, part[t]);
-    max_overlap = worst;
-    return far != 0;
+  const Increments u = increments();
+  for (Bond& b : bonds) {
+    const int i = b.i, j = b.j;
+    const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
+    const double R = std::sqrt(dx * dx + dy * dy);
+    const UnitNormal nrm = unit_normal(dx, dy, R);  // (4)
+    const double ddx = u.x[i] * u.factor - u.x[j] * u.factor, ddy = u.y[i] * u.factor - u.y[j] * u.factor;
+    const double du_n = normal_increment(ddx, ddy, nrm);  // (5a)
+    const double du_s = shear_increment(ddx, ddy, nrm, b.ai * (u.phi[i] * u.factor), b.aj * (u.phi[j] * u.factor));  // (5b)
+    bond_law<NS>(pair(d.material(i), d.material(j)), b.rest - R, du_n, du_s, inv_dt, b.en, b.es, b.fn, b.fs);
+    blk.pair_overlap = std::max(blk.pair_overlap, d.r(i) + d.r(j) - R);
+    const ContactForce f = contact_force(b.fn, b.fs, nrm);  // (15)
+    d.fx[i] += f.x; d.fy[i] += f.y;
+    d.fx[j] -= f.x; d.fy[j] -= f.y;
+    d.torque[i] -= contact_moment(b.ai, b.fs);
+    d.torque[j] -= contact_moment(b.aj, b.fs);
   }
-
-  if constexpr (BONDS) {
-    // Paper 2: inside a cluster both springs act in tension and without limit, with dashpots.
-    const Increments u = increments();
-    for (Bond& b : bonds) {
-      const int i = b.i, j = b.j;
-      const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i];
-      const double R = std::sqrt(dx * dx + dy * dy);
-      const double nx = dx / R, ny = dy / R;
-      const double ddx = u.x[i] * u.factor - u.x[j] * u.factor, ddy = u.y[i] * u.factor - u.y[j] * u.factor;
-      const double du_n = ddx * nx + ddy * ny;                                       // (5a)
-      const double du_s = -ddx * ny + ddy * nx + b.ai * (u.phi[i] * u.factor) + b.aj * (u.phi[j] * u.factor);  // (5b)
-      const PairProps& p = pair(d.material(i), d.material(j));
-      if constexpr (NS == NormalSpring::incremental)
-        b.en += p.kn * du_n;        // (7a), without (8): tension allowed
-      else
-        b.en = p.kn * (b.rest - R);  // the overlap option: measured from the bonded distance
-      b.es += p.ks * du_s;          // (11a), without (13): no cap
-      b.fn = b.en + p.eta_n * du_n * inv_dt;
-      b.fs = b.es + p.eta_s * du_s * inv_dt;
-      worst = std::max(worst, d.r(i) + d.r(j) - R);
-      const double fx = -b.fn * nx + b.fs * ny;
-      const double fy = -b.fn * ny - b.fs * nx;
-      d.fx[i] += fx; d.fy[i] += fy;
-      d.fx[j] -= fx; d.fy[j] -= fy;
-      d.torque[i] -= b.ai * b.fs;
-      d.torque[j] -= b.aj * b.fs;
-    }
-  }
-  if constexpr (MOVING)
-    for (ObstacleMotion& m : moving.motion) m.fx = m.fy = m.moment = 0;
-  worst = std::max(worst, wall_forces<NS, NT, FC, LA, MOVING, SHEAR, DASH>(0, neighbors.walls.size(), 0));
-  max_overlap = worst;
-  return then_block(then, h, 0, n);
 }
 
+
+// Row K of the kernel table (kernels.hpp): the stages of its law and features, and its pair law
+// at each vector width.
+template <std::size_t K>
+World::Kernel World::make_kernel() {
+  constexpr KernelKey key = kernel_key(K);
+  constexpr NormalSpring NS = key.law.normal_spring;
+  constexpr NoTension NT = key.law.no_tension;
+  constexpr FrictionCap FC = key.law.friction_cap;
+  constexpr LeverArm LA = key.features.lever_arm;
+  constexpr bool S = key.features.shear, D = key.features.dashpots, M = key.features.moving_walls;
+  Kernel k;
+  k.key = key;
+  k.name = dem::kernel_name(key);
+  k.pairs[0][0] = &World::pair_contacts<NS, NT, FC, LA, S, D, false, false>;
+  k.pairs[0][1] = &World::pair_contacts<NS, NT, FC, LA, S, D, false, true>;
+  k.pairs[1][0] = &World::pair_contacts<NS, NT, FC, LA, S, D, true, false>;
+  k.pairs[1][1] = &World::pair_contacts<NS, NT, FC, LA, S, D, true, true>;
+  k.walls = &World::wall_contacts<NS, NT, FC, LA, M, S, D>;
+  if constexpr (key.features.bonds) k.bonds = &World::bond_contacts<NS>;
+  k.pair_law[0][0] = pair_block_law_at<2, NS, NT, FC, LA, S, D, false>();
+  k.pair_law[0][1] = pair_block_law_at<2, NS, NT, FC, LA, S, D, true>();
+  k.pair_law[1][0] = pair_block_law_at<4, NS, NT, FC, LA, S, D, false>();
+  k.pair_law[1][1] = pair_block_law_at<4, NS, NT, FC, LA, S, D, true>();
+  k.pair_law[2][0] = pair_block_law_at<8, NS, NT, FC, LA, S, D, false>();
+  k.pair_law[2][1] = pair_block_law_at<8, NS, NT, FC, LA, S, D, true>();
+  return k;
+}
+
+namespace {
+template <class Kernel, class Make, std::size_t... K>
+std::vector<Kernel> make_table(Make make, std::index_sequence<K...>) {
+  return {make(std::integral_constant<std::size_t, K>{})...};
+}
+}  // namespace
+
+const std::vector<World::Kernel>& World::kernels() {
+  static const std::vector<Kernel> table = make_table<Kernel>(
+      [](auto k) { return make_kernel<decltype(k)::value>(); }, std::make_index_sequence<kKernelCount>{});
+  return table;
+}
+
+std::vector<std::string> World::kernel_names() {
+  std::vector<std::string> names;
+  for (const Kernel& k : kernels()) names.push_back(k.name);
+  return names;
+}
+
+const std::string& World::kernel_name() const {
+  static const std::string none = "none (prepare() selects it)";
+  return kernel_ ? kernel_->name : none;
+}
+
+std::string kernel_name(const KernelKey& key) {
+  const Law& l = key.law;
+  const Features& f = key.features;
+  std::string s = std::string(to_string(l.normal_spring)) + "/" + to_string(l.no_tension) + "/" + to_string(l.friction_cap) +
+                  " " + to_string(f.lever_arm);
+  if (f.shear) s += " shear";
+  if (f.dashpots) s += " dashpots";
+  if (f.bonds) s += " bonds";
+  if (f.moving_walls) s += " moving_walls";
+  return s;
+}
+
+// The one dispatcher: the row of the table for this scene's law and what it uses.
 void World::select_kernel() {
-  // Every option combination is its own compiled kernel (no branch per contact). Bonds and
-  // moving walls are compile-time flags too, and so are a scene without shear (every pair
-  // shear-free) and without dashpots: a scene pays only for what it uses. Bonds and moving walls
-  // come with the full law (shear and dashpots), which their scenes use.
   const bool has_bonds = !bonds.empty(), has_moving = !moving.empty();
   bool shear = false, dash = false;
   for (const PairProps& p : props) {
@@ -731,36 +821,20 @@ void World::select_kernel() {
     shear = shear || !shear_free;
     dash = dash || p.eta_n != 0 || p.eta_s != 0;
   }
-  if (has_bonds || has_moving) shear = dash = true;
+  if (has_bonds || has_moving) shear = dash = true;  // as the table compiles them
   kernel_shear = shear;
   kernel_dashpots = dash;
   // The lever arm matters only where there is shear: a shear-free scene runs the radius kernel
-  // (the same result). The contact-point arm comes with the kernels that have shear.
+  // (the same result).
   const LeverArm lever = shear ? options.lever_arm : LeverArm::radius;
-#define DEM_KB(NS, NT, FC, LA, B, M, S, D)                                                                 \
-  if (lever == LeverArm::LA && has_bonds == B && has_moving == M && shear == S && dash == D) {              \
-    force_kernel_ = &World::compute_forces<NormalSpring::NS, NoTension::NT, FrictionCap::FC, LeverArm::LA, B, M, S, D>; \
-    return;                                                                                                \
-  }
-#define DEM_K(NS, NT, FC)                                                                                          \
-  if (options.normal_spring == NormalSpring::NS && options.no_tension == NoTension::NT &&                             \
-      options.friction_cap == FrictionCap::FC) {                                                                    \
-    DEM_KB(NS, NT, FC, radius, false, false, true, true) DEM_KB(NS, NT, FC, radius, true, false, true, true)        \
-    DEM_KB(NS, NT, FC, radius, false, true, true, true) DEM_KB(NS, NT, FC, radius, true, true, true, true)          \
-    DEM_KB(NS, NT, FC, radius, false, false, false, true) DEM_KB(NS, NT, FC, radius, false, false, true, false)     \
-    DEM_KB(NS, NT, FC, radius, false, false, false, false)                                                          \
-    DEM_KB(NS, NT, FC, contact_point, false, false, true, true) DEM_KB(NS, NT, FC, contact_point, true, false, true, true) \
-    DEM_KB(NS, NT, FC, contact_point, false, true, true, true) DEM_KB(NS, NT, FC, contact_point, true, true, true, true)   \
-    DEM_KB(NS, NT, FC, contact_point, false, false, true, false)                                                    \
-  }
-#define DEM_K2(NS, NT) DEM_K(NS, NT, elastic) DEM_K(NS, NT, total)
-#define DEM_K3(NS) DEM_K2(NS, elastic) DEM_K2(NS, total) DEM_K2(NS, overlap)
-  DEM_K3(incremental)
-  DEM_K3(overlap)
-#undef DEM_K3
-#undef DEM_K2
-#undef DEM_K
-#undef DEM_KB
+  const KernelKey want{{options.normal_spring, options.no_tension, options.friction_cap},
+                       {lever, shear, dash, has_bonds, has_moving}};
+  for (const Kernel& k : kernels())
+    if (k.key == want) {
+      kernel_ = &k;
+      return;
+    }
+  throw std::logic_error("no compiled kernel for " + dem::kernel_name(want));
 }
 
 void World::remove_discs(const RemovedDiscs& removed) {
@@ -867,9 +941,11 @@ bool World::all_finite() const {
 
 const char* to_string(NormalSpring v) { return v == NormalSpring::incremental ? "incremental" : "overlap"; }
 const char* to_string(NoTension v) {
-  return v == NoTension::elastic ? "elastic" : v == NoTension::total ? "total" : "overlap";
+  return v == NoTension::elastic ? "elastic" : v == NoTension::total ? "total" : v == NoTension::overlap ? "overlap" : "none";
 }
-const char* to_string(FrictionCap v) { return v == FrictionCap::elastic ? "elastic" : "total"; }
+const char* to_string(FrictionCap v) {
+  return v == FrictionCap::elastic ? "elastic" : v == FrictionCap::total ? "total" : "none";
+}
 const char* to_string(LeverArm v) { return v == LeverArm::radius ? "radius" : "contact_point"; }
 const char* to_string(Scheme v) {
   return v == Scheme::paper_eq18 ? "paper_eq18" : v == Scheme::paper_eq19 ? "paper_eq19" : "velocity_verlet";

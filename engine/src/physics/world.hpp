@@ -8,6 +8,8 @@
 #include "physics/clusters.hpp"
 #include "physics/discs.hpp"
 #include "physics/geometry.hpp"
+#include "physics/integrator.hpp"
+#include "physics/kernels.hpp"
 #include "physics/model.hpp"
 #include "physics/moving_walls.hpp"
 #include "physics/neighbors.hpp"
@@ -15,7 +17,7 @@
 
 namespace dem {
 
-// A block of touching pairs on its way through the law (World::pair_pass): the gathered geometry
+// A block of touching pairs on its way through the law (World::pair_contacts): the gathered geometry
 // and history in, the forces out. 128 pairs: some 20 kB, on the stack of the thread that runs the
 // pass (hot in its own cache; one vector of blocks for all threads, on the heap, makes the second
 // thread's pass 1.8x slower than the first's).
@@ -56,10 +58,12 @@ class World {
   int threads = 1;
   static constexpr int kMinDiscsPerThread = 2048;
   // Doubles a vector in the pair law and the integration loops: 8 (AVX-512), 4 (AVX2) or 2
-  // (SSE2), the widest the processor has (cpu_vector_width); the same bits at every width. Tests
-  // and benchmarks may set a narrower one (never wider than cpu_vector_width()).
-  static int vector_width;
+  // (SSE2), the widest the processor has (cpu_vector_width), chosen once at start-up; the same
+  // bits at every width. Tests and benchmarks may run a world at a narrower one (set_vector_width).
+  static const int vector_width;
   static int cpu_vector_width();
+  void set_vector_width(int width);  // 2, 4 or 8, at most vector_width
+  int vector_width_used() const { return width_; }
   int threads_for(int n) const;  // the thread count used for n discs
   double gx = 0, gy = -980; // gravity [cm/s^2]
 
@@ -109,6 +113,12 @@ class World {
   std::vector<PairForce> recorded_pairs() const { return pair_totals.records(neighbors.pairs); }  // (tests)
 
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
+  // The force kernels compiled (kernels.hpp), by name in the table's order; and the one this
+  // world runs (select_kernel, at prepare()).
+  static std::vector<std::string> kernel_names();
+  const std::string& kernel_name() const;
+  // What the selected kernel computes (for the header and the skip benchmark).
+  bool kernel_shear = true, kernel_dashpots = true;
   // Selects the specialised force kernel and computes the first forces (call before step()).
   void init();
   // The same without computing forces: for a state restored with its forces and history. Without
@@ -116,15 +126,15 @@ class World {
   void prepare(bool build_lists = true);
   // Puts the moving walls where their restored angles and plate displacements say (state files).
   void place_moving_walls();
-  // One time step; the whole algorithm is here.
+  // One time step: the algorithm as a list of stages (world.cpp).
   void step();
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
-  void compute_forces_now() { force_pass(Then::nothing, 0.0); }
-  // The parts of step() (public for the kernel benchmarks, benchmarks/kernels.cpp): the kick
-  // v += a h of eq. 17 and a drift. They return whether some disc is now more than skin/2 from
-  // where the lists were built (the lists must be rebuilt before the next force pass).
-  bool kick_drift_eq18(double h);  // v += a h; du = v dt, eq. (18); x += du
-  bool kick_drift_eq19(double h);  // v += a h; du = (du + v dt) / 2, eq. (19); x += du
+  void compute_forces_now() { forces_then_move(Move::none, 0.0); }
+  // The move of the discs alone (public for the kernel benchmarks, benchmarks/kernels.cpp): the
+  // kick v += a h of eq. 17 and a drift. They return whether some disc is now more than skin/2
+  // from where the lists were built (the lists must be rebuilt before the next force pass).
+  bool kick_drift_eq18(double h) { return move_discs(Move::kick_drift_eq18, h); }  // du = v dt, eq. (18); x += du
+  bool kick_drift_eq19(double h) { return move_discs(Move::kick_drift_eq19, h); }  // du = (du + v dt) / 2, eq. (19)
 
   // Removes the discs of `removed` from every array (order kept; lists remapped).
   void remove_discs(const RemovedDiscs& removed);
@@ -151,28 +161,51 @@ class World {
   bool all_finite() const;
 
  private:
-  // What a force pass does next to each thread's discs, in the same parallel region.
-  enum class Then { nothing, kick, kick_drift_eq18, kick_drift_eq19 };
-  using ForceKernel = bool (World::*)(Then, double);
-  ForceKernel force_kernel_ = nullptr;
-  bool force_pass(Then then, double h);  // the selected kernel, and the bookkeeping of a recorded pass
- public:
-  // What the selected kernel skips (for the header and the skip benchmark).
-  bool kernel_shear = true, kernel_dashpots = true;
- private:
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool BONDS, bool MOVING, bool SHEAR, bool DASH>
-  bool compute_forces(Then then, double h);  // then's drift result
+  // A thread's share of a force pass (serial: one block of everything): its discs [i0, i1)
+  // (force_blocks), their pairs [p0, p1) and wall entries [w0, w1) of the lists.
+  struct ForceBlock;
   struct Deferred {  // a pair's reaction on a disc of another thread's block
     int j;
     double fx, fy, tq;
   };
+  // A stage of a force pass on one block, and the pair law on a block of pairs (PairBlock).
+  using Stage = void (World::*)(ForceBlock&);
+  using PairLaw = void (*)(PairBlock&, int n, const PairProps* props, double inv_dt, double sum1);
+  // A row of the kernel table: the stages compiled for one law and feature set (kernels.hpp).
+  struct Kernel {
+    KernelKey key;
+    std::string name;
+    Stage pairs[2][2] = {};       // [recorded pass][one kind of disc]
+    Stage walls = nullptr;
+    Stage bonds = nullptr;        // none without bonds
+    PairLaw pair_law[3][2] = {};  // [vector width 2, 4, 8][one kind of disc]: what pairs runs
+  };
+  static const std::vector<Kernel>& kernels();  // the table, kKernelCount rows in kernels.hpp's order
+  template <std::size_t K>
+  static Kernel make_kernel();
+  const Kernel* kernel_ = nullptr;  // this world's row (select_kernel)
+  int width_ = vector_width;        // this world's vector width
+  int width_index() const { return width_ == 8 ? 2 : width_ == 4 ? 1 : 0; }
+  void select_kernel();
+
+  // The stages of a step (world.cpp shows them in order).
+  void refresh_lists(bool far);  // the lists rebuilt where stale or where something moved skin/2
+  bool forces_then_move(Move move, double h);  // the force stages and the move, fused per block
+  template <class F>
+  bool each_block(int nt, F&& stages);  // stages(block) for each thread's block; whether some disc is far
+  void start_resultants(int i0, int i1);  // the m_i g of (15) and a zero torque
+  void start_recording(ForceBlock& b);    // where a recorded pass puts the block's pair totals
   template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
-  double pair_pass(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                   PairTotals::Force* record);
-  // pair_pass for this pass: recording or not (record null), one kind of disc or several.
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH>
-  double pair_pass_for(std::size_t p0, std::size_t p1, int own_end, std::vector<Deferred>* later,
-                       PairTotals::Force* record);
+  void pair_contacts(ForceBlock& b);      // disc pairs: (3)-(15)
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
+  void wall_contacts(ForceBlock& b);      // discs on walls and points: (3)-(15)
+  template <NormalSpring NS>
+  void bond_contacts(ForceBlock& b);      // paper 2's bonds: (4), (5), the bond law, (15)
+  void add_deferred(ForceBlock& b);       // the reactions on the block's discs from earlier blocks
+  bool move_block(Move move, double h, int i0, int i1);  // (16)-(19) for discs [i0, i1)
+  bool move_discs(Move move, double h);   // move_block on equal blocks, one parallel region
+  void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (moving_walls.cpp)
+
   // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).
   static bool apart(double R2, double sum) { return R2 > sum * sum; }
   std::size_t touching_pairs(std::size_t p0, std::size_t p1) const;  // pairs of [p0, p1) that touch now
@@ -182,27 +215,12 @@ class World {
   // Every disc of one kind: the kernels keep its constants in registers instead of reading them
   // through each disc's kind.
   bool one_kind() const { return discs.kinds.size() == 1; }
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
-  double wall_forces(std::size_t w0, std::size_t w1, int slot);
-  enum class Drift { none, eq18, eq19 };
-  bool integrate(Then then, double h);  // then_block for every thread's block, one parallel region
-  // Eq. 17 kick, then the drift D, for discs [i0, i1); with a drift, returns whether some disc
-  // of them is now more than skin/2 from its list position (or the lists are stale).
-  template <Drift D, bool ONE_KIND, bool PHI>
-  bool kick_drift_block(double h, int i0, int i1);
-  template <Drift D>
-  bool kick_drift_for(double h, int i0, int i1);  // kick_drift_block for this pass's kinds and angle
-  bool then_block(Then then, double h, int i0, int i1);  // a force pass's next part, for discs [i0, i1)
   void measure_increment_sums();  // Verlet: sums of |v dt| of parallel_sum's blocks, before the closing kick
   std::vector<Padded<std::array<double, 2>>> increment_sums_;  // by parallel_sum's blocks
   long increments_measured_step_ = -1;
-  void start_resultants(int i0, int i1);
   std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
-  void select_kernel();
   void rebuild_lists();       // neighbour lists without the bonded pairs
-  void kick_walls(double h);  // plates: v += F/M h (moving_walls.cpp)
-  void drift_walls(bool eq19);  // rotating walls and plates: increments and new positions
   bool walls_moved_far() const;  // some wall moved skin/2 since the lists were built
   void walls_listed();        // remember the wall positions of this list build
   bool adjacent(int k1, int k2) const;  // a wall and a point at its end
