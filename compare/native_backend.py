@@ -50,21 +50,28 @@ def version() -> str:
     return first.split(" - ")[0].strip()
 
 
+def law_doc(case: Case) -> dict:
+    """The tables every case's scene starts with: name, gravity, Verlet at the case's dt, the
+    contact options, the materials and the pairs' constants."""
+    r = case.resolved
+    return {"scene": {"name": case.name},
+            "physics": {"gravity": list(r["gravity"])},
+            "integrator": {"scheme": "velocity_verlet", "dt": case.dt},
+            "contact": dict(r["contact"]),
+            "materials": {m["name"]: ({"density": m["density"]} if m["density"] > 0 else {})
+                          for m in r["materials"]},
+            "pairs": [{"materials": list(p["materials"]), **{k: p[k] for k in ("kn", "ks", "eta_n", "eta_s", "mu")}}
+                      for p in r["pairs"]]}
+
+
 def scene_doc(case: Case, disc_file: str) -> tuple[dict, dict]:
     """The scene (dict) that makes ``dem run`` run the case (walls and points listed
     explicitly), and the comments of its lines."""
     r = case.resolved
     mat = case.disc_materials()[0]      # each disc's own is the packing's material column
-    doc = {"scene": {"name": case.name},
-           "physics": {"gravity": list(r["gravity"])},
-           "integrator": {"scheme": "velocity_verlet", "dt": case.dt},
-           "contact": dict(r["contact"]),
-           "materials": {m["name"]: ({"density": m["density"]} if m["density"] > 0 else {})
-                         for m in r["materials"]},
-           "pairs": [{"materials": list(p["materials"]), **{k: p[k] for k in ("kn", "ks", "eta_n", "eta_s", "mu")}}
-                     for p in r["pairs"]],
-           "walls": [{k: w[k] for k in ("name", "group", "from", "to", "material")} for w in r["walls"]],
-           "points": [{k: p[k] for k in ("name", "group", "at", "material")} for p in r["points"]]}
+    doc = dict(law_doc(case),
+               walls=[{k: w[k] for k in ("name", "group", "from", "to", "material")} for w in r["walls"]],
+               points=[{k: p[k] for k in ("name", "group", "at", "material")} for p in r["points"]])
     if not doc["walls"]:
         del doc["walls"]
     if not doc["points"]:
@@ -112,18 +119,11 @@ def shear_scene_doc(case: Case, disc_file: str) -> tuple[dict, dict]:
         raise CaseError(f"clusters: the engine's clusters are elastic bonds; {case.clusters!r} is YADE's alone")
     b = shear.box(r, case.discs)
     mat = case.disc_materials()[0]
-    doc = {"scene": {"name": case.name},
-           "physics": {"gravity": list(r["gravity"])},
-           "integrator": {"scheme": "velocity_verlet", "dt": case.dt},
-           "contact": dict(r["contact"]),
-           "materials": {m["name"]: ({"density": m["density"]} if m["density"] > 0 else {})
-                         for m in r["materials"]},
-           "pairs": [{"materials": list(p["materials"]), **{k: p[k] for k in ("kn", "ks", "eta_n", "eta_s", "mu")}}
-                     for p in r["pairs"]],
-           "shear_box": {k: b[k] for k in ("width", "height", "wall_length", "wall_material", "plate_material",
-                                           "plate_volume", "plate_density", "plate_gap", "plate_overhang",
-                                           "plate_horizontal")},
-           "shear": {k: r["shear"][k] for k in ("rate", "max_strain", "sample_strain", "snapshots")}}
+    doc = dict(law_doc(case),
+               shear_box={k: b[k] for k in ("width", "height", "wall_length", "wall_material", "plate_material",
+                                            "plate_volume", "plate_density", "plate_gap", "plate_overhang",
+                                            "plate_horizontal")},
+               shear={k: r["shear"][k] for k in ("rate", "max_strain", "sample_strain", "snapshots")})
     if "clusters" in r:
         c = r["clusters"]
         doc["clusters"] = {"bonds": c["bonds"], "touch_tolerance": c["touch_tolerance"], "members": c["members"]}
