@@ -84,7 +84,12 @@ def scene_toml(case: Case, disc_file: str) -> str:
     for w in r["walls"]:
         lines += ["[[walls]]", f"name = {_toml_value(w['name'])}", f"group = {_toml_value(w['group'])}",
                   f"from = {_toml_value(w['from'])}", f"to = {_toml_value(w['to'])}",
-                  f"material = {_toml_value(w['material'])}", ""]
+                  f"material = {_toml_value(w['material'])}"]
+        if w.get("motion"):   # a prescribed translation, from the run's start
+            m = w["motion"]
+            lines += [f"velocity = {_toml_value(m['velocity'])}", f"move_from = {_toml_value(m['from'])}",
+                      f"move_until = {_toml_value(m['until'])}"]
+        lines.append("")
     for p in r["points"]:
         lines += ["[[points]]", f"name = {_toml_value(p['name'])}", f"group = {_toml_value(p['group'])}",
                   f"at = {_toml_value(p['at'])}", f"material = {_toml_value(p['material'])}", ""]
