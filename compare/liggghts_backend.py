@@ -242,16 +242,17 @@ def _script(case: Case, meshes: list[tuple[str, int]], xlo: float, xhi: float, t
     if meshes:
         s.append(f"fix walls all wall/gran model hooke/stiffness tangential history mesh n_meshes {len(meshes)} "
                  f"meshes {' '.join(m for m, _t in meshes)} absolute_damping on limitForce on")
-    moving = [w for w in r["walls"] if w.get("active", True) and w.get("motion")]
-    if case.mode == "discharge" or moving:
-        s.append("variable zero equal 0.0")
     if case.mode == "discharge":
         s += [f"fix outlet all mesh/surface/planar file outlet.stl type {wall_type}",
               "fix mf all massflow/mesh mesh outlet vec_side 0 -1 0 count once delete_atoms yes "
               "file removals.txt writeTime screen no",
               # The gate jumps 200 cm down during the first step after settling (same run).
               f"variable gate_v equal (step=={settle_steps})*{-200.0 / dt!r}",
+              "variable zero equal 0.0",
               f"fix gate_move all move/mesh mesh {gate} linear/variable v_zero v_gate_v v_zero"]
+    moving = [w for w in r["walls"] if w.get("active", True) and w.get("motion")]
+    if moving and case.mode != "discharge":
+        s.append("variable zero equal 0.0")
     for w in moving:
         # The step that takes the run from (n - 1) dt to n dt has step == n: the window's steps
         # are from < step <= until (in steps).
