@@ -66,6 +66,9 @@ def _common(p) -> None:
                    help="also run deliberately wrong translations of each reference code; passes only when "
                         "the unmutated run passes and every mutant fails (9 mutants for each reference code, on "
                         "the scenes given: reference_inputs/agreement/mutants.list is the project's set)")
+    p.add_argument("--mutant", action="append", default=None, metavar="NAME",
+                   help="run only this mutant (a name of the --mutants table, e.g. mu_disc_wall_x0.8 for every "
+                        "reference code or liggghts_mu_disc_wall_x0.8 for one; repeatable; implies --mutants)")
     p.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
 
 
@@ -81,6 +84,13 @@ def main(argv=None) -> int:
         return 2
     codes = ("native",) + tuple(c for c in codes if c != "native")    # native, the reference, always runs
     base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout)
+    if a.mutant:
+        a.mutants = True
+        try:
+            mutants.mutations(codes, a.mutant)
+        except ValueError as e:
+            print(f"--mutant: {e}", file=sys.stderr)
+            return 2
     try:
         if a.cmd == "report":
             entries = plan.read_list(plan.default_list(base.profile), base)
@@ -107,7 +117,7 @@ def main(argv=None) -> int:
         from . import attribution
         rep["attribution"] = attribution.attribute(plans, rep, a.out, log)
     if a.mutants:
-        rep["mutants"] = run_mutants(plans, rep, a.out, codes, log)
+        rep["mutants"] = run_mutants(plans, rep, a.out, codes, log, a.mutant)
     report.write(rep, a.out)
     n_fail = sum(not m["pass"] for m in rep["metrics"])
     verdict = rep["passed"] and (not a.mutants or rep["mutants"]["all_caught"])
@@ -117,9 +127,9 @@ def main(argv=None) -> int:
     return 0 if verdict else 1
 
 
-def run_mutants(plans, baseline: dict, out: Path, codes, log) -> dict:
+def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dict:
     rows = []
-    for mu in mutants.mutations(codes):
+    for mu in mutants.mutations(codes, names):
         if not any(mu.applies(mu.code, plan.member_case(p, 0)) for p in plans if mu.code in plan.codes_of(p, codes)):
             rows.append({"mutant": mu.name, "code": mu.code, "applicable": False, "caught": False,
                          "caught_physically": False, "metrics": []})

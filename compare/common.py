@@ -113,6 +113,42 @@ def outlet_y(resolved: dict) -> float:
     return min(float(gate["from"][1]), float(gate["to"][1])) - float(resolved["discharge"]["outlet_depth"])
 
 
+def wall_displacement(wall: dict, t: float) -> np.ndarray:
+    """How far a wall has moved by time ``t`` [s] of a run: its prescribed translation
+    (``motion``: velocity, from, until; docs/scene.md walls[].velocity) over the part of
+    [from, until] before ``t``; zero for a wall that stays put."""
+    m = wall.get("motion")
+    if not m:
+        return np.zeros(2)
+    span = min(max(float(t) - float(m["from"]), 0.0), float(m["until"]) - float(m["from"]))
+    return np.array(m["velocity"], float) * span
+
+
+def moved_wall(wall: dict, t: float) -> dict:
+    """The wall where it is at time ``t`` (``from`` and ``to`` displaced)."""
+    d = wall_displacement(wall, t)
+    if not d.any():
+        return wall
+    return dict(wall, **{"from": (np.array(wall["from"], float) + d).tolist(),
+                         "to": (np.array(wall["to"], float) + d).tolist()})
+
+
+def motion_steps(wall: dict, dt: float) -> tuple[int, int]:
+    """The steps (from, until) of a wall's translation window: the steps n with from <= n dt and
+    (n + 1) dt <= until move it by v dt (the engine moves it over the part of a step inside the
+    window; the reference translations express windows of whole steps and refuse others)."""
+    m = wall["motion"]
+    out = []
+    for key in ("from", "until"):
+        n = float(m[key]) / dt
+        k = int(round(n))
+        if not (math.isfinite(n) and abs(n - k) <= 1e-6 * max(1.0, n)):
+            raise CaseError(f"walls: {wall['name']}.move_{key} = {m[key]!r} s is not a whole number of steps of "
+                            f"dt = {dt!r} s")
+        out.append(k)
+    return out[0], out[1]
+
+
 def inward_normal(wall: dict, centre: tuple[float, float]) -> np.ndarray:
     """Unit normal of a wall pointing to the side where ``centre`` (the discs) lies."""
     a, b = np.array(wall["from"], float), np.array(wall["to"], float)
@@ -187,6 +223,11 @@ class Case:
     def disc_materials(self) -> list[str]:
         """The case's disc material names, in the order of resolved["materials"]."""
         return material_names(self.resolved, sorted(set(self.material_index().tolist())))
+
+    @property
+    def end_time(self) -> float:
+        """[s] the run's simulated time: the duration, after the settling of a discharge."""
+        return self.settle + self.duration if self.mode == "discharge" else self.duration
 
     def to_json(self) -> dict:
         return {"name": self.name, "dt": self.dt, "duration": self.duration, "mode": self.mode,

@@ -7,12 +7,18 @@ fitted by least squares to a side-wall pressure profile (force per bin / bin len
 depth z below the top surface), leaving out the lowest ~W/2 near the floor corners. For a fixed
 lambda the model is linear in A = p_inf and B = -p_inf exp(z0 / lambda), so the fit is an exact
 1D minimisation over lambda (golden section on log lambda, bracketed by a grid).
+
+The ensemble test (``--kind janssen``, compare/pipeline.py ``janssen_column``) measures each
+member's run with ``member_record`` and fits the members' mean profile with ``ensemble_fit``
+(scipy's curve_fit, 95 % intervals from its covariance).
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+from .common import moved_wall
 
 
 def _linear(z, p, lam):
@@ -211,9 +217,12 @@ def derived_ci(f: dict, rho_b: float, rho_b_se: float, g: float, width: float, l
     return f
 
 
-def ensemble_fit(members: list[dict], merge: int = 2, sigma: str = "auto") -> dict:
+def ensemble_fit(members: list[dict], merge: int | None = None, sigma: str = "auto") -> dict:
     """The fit of the ensemble-averaged profile with derived K and mu_w,eff (rho_b from the
-    members' packing fractions: mean and standard error), and the per-member cross-checks."""
+    members' packing fractions: mean and standard error), and the per-member cross-checks.
+    ``merge``: profile bins joined per fitted bin (None: ``merge_for``, bins W/2 tall)."""
+    if merge is None:
+        merge = merge_for(members)
     prof = ensemble_profile(members, merge, sigma)
     f = fit_ci(prof["z"], prof["p"], prof["se"])
     phi = np.array([m["phi"] for m in members], float)
@@ -221,6 +230,7 @@ def ensemble_fit(members: list[dict], merge: int = 2, sigma: str = "auto") -> di
     derived_ci(f, rho_s * phi.mean(), rho_s * phi.std(ddof=1) / math.sqrt(len(phi)),
                float(members[0]["g"]), float(members[0]["width"]))
     f["profile"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in prof.items()}
+    f["bin_width"] = float(np.median(np.subtract(members[0]["y_hi"], members[0]["y_lo"]))) * merge
     f["checks"] = member_checks(members)
     return f
 
@@ -228,13 +238,19 @@ def ensemble_fit(members: list[dict], merge: int = 2, sigma: str = "auto") -> di
 def member_checks(members: list[dict], balance_tol: float = 0.01) -> dict:
     """Per member: global balance (floor force + wall friction - weight) / weight within
     ``balance_tol``; mobilised wall friction (signed shear over normal on the side walls) in the
-    upper half and overall, against the Coulomb coefficient mu_w."""
+    upper half and overall at the end, and overall before the floor is lowered (codes with a
+    wall-force series), to be read against the Coulomb coefficient mu_w."""
     bal = [m["balance"] for m in members]
     up = np.array([m["mobilised_upper"] for m in members], float)
+    al = np.array([m["mobilised_all"] for m in members], float)
+    bf = np.array([m.get("mobilised_before", float("nan")) for m in members], float)
+    se = lambda v: float(v.std(ddof=1) / math.sqrt(len(v))) if len(v) > 1 else float("nan")  # noqa: E731
     return {"balance": bal, "balance_ok": bool(all(abs(b) <= balance_tol for b in bal)),
             "mobilised_upper": up.tolist(), "mobilised_upper_mean": float(up.mean()),
-            "mobilised_upper_se": float(up.std(ddof=1) / math.sqrt(len(up))) if len(up) > 1 else float("nan"),
-            "mobilised_all_mean": float(np.mean([m["mobilised_all"] for m in members])),
+            "mobilised_upper_se": se(up),
+            "mobilised_all_mean": float(al.mean()), "mobilised_all_se": se(al),
+            "mobilised_before_mean": float(bf.mean()) if np.all(np.isfinite(bf)) else float("nan"),
+            "mobilised_before_se": se(bf) if np.all(np.isfinite(bf)) else float("nan"),
             "mu_w": float(members[0]["mu_w"]),
             "max_overlap_ratio": float(max(m["max_overlap_ratio"] for m in members))}
 
@@ -263,3 +279,112 @@ def band(f: dict, z, level_z: float = Z95) -> tuple[np.ndarray, np.ndarray, np.n
     s = np.sqrt(np.einsum("ij,jk,ik->i", J, cov, J))
     m = model(z, p_inf, lam, z0)
     return m, m - level_z * s, m + level_z * s
+
+
+# ---------------------------------------------------------------- one member's measurements
+
+UPPER = 0.5          # the upper part of the fill: its top half
+BIN_WIDTHS = 0.5     # the fitted bins are BIN_WIDTHS x W tall (W/2 = 10 cm in the column: docs/compare.md)
+
+
+def geometry(resolved: dict, t: float) -> dict:
+    """Width W between the side walls, the floor's height at time ``t`` of the run (the bottom
+    walls where their prescribed translation has taken them), the discs' density, |g| and the
+    disc-wall friction coefficient mu_w of the side walls."""
+    walls = resolved["walls"]
+    sides = [w for w in walls if w["group"].startswith("side")]
+    bottom = [moved_wall(w, t) for w in walls if not w["group"].startswith("side")]
+    xs = [c for w in sides for c in (w["from"][0], w["to"][0])]
+    rho = next(m["density"] for m in resolved["materials"] if m["density"] > 0)
+    mat = sides[0]["material"]
+    mu_w = next(p["mu"] for p in resolved["pairs"] if mat in p["materials"])
+    return {"width": max(xs) - min(xs), "floor": max(max(w["from"][1], w["to"][1]) for w in bottom),
+            "rho_s": rho, "g": float(np.linalg.norm(resolved["gravity"])), "mu_w": mu_w}
+
+
+def max_overlap_ratio(discs: np.ndarray, width: float, floor: float) -> float:
+    """Largest overlap (disc-disc or disc-wall) over the smaller radius."""
+    from scipy.spatial import cKDTree
+    d = np.asarray(discs, float)
+    x, y, r = d[:, 0], d[:, 1], d[:, 2]
+    worst = float(np.max(np.concatenate([(r - x) / r, (x + r - width) / r, (floor + r - y) / r])))
+    tree = cKDTree(d[:, :2])
+    pairs = tree.query_pairs(2 * r.max(), output_type="ndarray")
+    if len(pairs):
+        i, j = pairs[:, 0], pairs[:, 1]
+        gap = np.hypot(x[i] - x[j], y[i] - y[j]) - r[i] - r[j]
+        worst = max(worst, float(np.max(-gap / np.minimum(r[i], r[j]))))
+    return max(worst, 0.0)
+
+
+def _mobilised(sides: list, normal_of, shear_of, keep=None) -> float:
+    """Sum of the side walls' friction over the sum of their normal force, per bin given by
+    ``normal_of(wall)``, ``shear_of(wall)`` (signed: positive is friction holding the discs up;
+    the side walls run top -> bottom)."""
+    sh = np.sum([np.asarray(shear_of(s), float) for s in sides], axis=0)
+    nn = np.sum([np.asarray(normal_of(s), float) for s in sides], axis=0)
+    if keep is not None:
+        sh, nn = sh[keep], nn[keep]
+    return float(sh.sum() / nn.sum()) if nn.sum() > 0 else float("nan")
+
+
+def lowering_start(resolved: dict) -> float | None:
+    """[s] when the first prescribed wall translation starts (None without one)."""
+    t = [float(w["motion"]["from"]) for w in resolved["walls"] if w.get("motion")]
+    return min(t) if t else None
+
+
+def member_record(resolved: dict, res, code: str, member: int, end_time: float) -> dict:
+    """The Janssen quantities of one member's run (``res``: the common Result; ``end_time``: the
+    run's simulated time): the side-wall pressure per bin (mean of both walls) against height,
+    the packing fraction and surface, the weight, floor force and wall friction (global
+    balance), the mobilised wall friction (sum of shear over sum of normal force on the side
+    walls, a fraction of mu_w once divided by it) in the top half of the fill and overall, and
+    overall just before the floor is lowered when the code records a wall-force series, the
+    largest overlap relative to the radius and the code's wall time."""
+    geo = geometry(resolved, end_time)
+    W, floor = geo["width"], geo["floor"]
+    d = np.array(res.discs_end, float)
+    surf = surface_height(d, W)
+    phi = packing_fraction(d, W, floor, surf)
+    by_name = {w["name"]: w for w in resolved["walls"]}
+    sides = [w["name"] for w in resolved["walls"] if w["group"].startswith("side")]
+    lo = np.array(res.profiles[sides[0]]["s_lo"])
+    hi = np.array(res.profiles[sides[0]]["s_hi"])
+    top = by_name[sides[0]]["from"][1]
+    normal = np.mean([np.array(res.profiles[s]["normal"]) for s in sides], axis=0)
+    y_lo, y_hi = top - hi, top - lo
+    upper = y_lo >= surf - UPPER * (surf - floor)
+    prof = lambda key: (lambda s: res.profiles[s][key])  # noqa: E731
+    weight = float(np.sum(geo["rho_s"] * math.pi * d[:, 2] ** 2) * geo["g"])
+    bottom = [w["name"] for w in resolved["walls"] if not w["group"].startswith("side")]
+    floor_force = float(sum(np.sum(res.profiles[b]["normal"]) for b in bottom))
+    friction = float(sum(np.sum(res.profiles[s]["shear"]) for s in sides))
+    before = float("nan")
+    t0 = lowering_start(resolved)
+    ser = res.series or {}
+    if t0 is not None and ser.get("t"):
+        ts = np.array(ser["t"], float)
+        k = np.flatnonzero(ts <= t0 + 1e-9)
+        if len(k):
+            i = int(k[-1])
+            w = ser["walls"]
+            before = _mobilised(sides, lambda s: w[s]["normal"][i], lambda s: w[s]["shear"][i])
+    return {"code": code, "member": member, "status": res.status, "reason": res.reason,
+            "wall_time_s": res.wall_time_s, "n_discs": int(len(d)), "width": W, "floor": floor,
+            "rho_s": geo["rho_s"], "g": geo["g"], "mu_w": geo["mu_w"],
+            "surface": surf, "phi": phi, "weight": weight, "floor_force": floor_force,
+            "wall_friction": friction, "balance": (floor_force + friction - weight) / weight,
+            "mobilised_upper": _mobilised(sides, prof("normal"), prof("shear"), upper),
+            "mobilised_all": _mobilised(sides, prof("normal"), prof("shear")),
+            "mobilised_before": before,
+            "max_overlap_ratio": max_overlap_ratio(d, W, floor),
+            "kinetic_energy_end": res.kinetic_energy_end,
+            "y_lo": y_lo.tolist(), "y_hi": y_hi.tolist(), "p": (normal / (hi - lo)).tolist()}
+
+
+def merge_for(members: list[dict], widths: float = BIN_WIDTHS) -> int:
+    """How many of the members' profile bins make one fitted bin of ``widths`` x W."""
+    m = members[0]
+    dy = float(np.median(np.subtract(m["y_hi"], m["y_lo"])))
+    return max(1, int(round(widths * float(m["width"]) / dy)))

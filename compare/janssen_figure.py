@@ -26,7 +26,8 @@ def plot_ensemble_fits(fits: dict, png: Path, title: str = "") -> Path:
         pr = f["profile"]
         ax.errorbar(np.array(pr["p"]) / 1e3, pr["z"], xerr=janssen.Z95 * np.array(pr["se"]) / 1e3, fmt="o",
                     ms=3, color=c, capsize=2,
-                    label=f"{code}: mean of {pr['members']} members (95 % error bars)")
+                    label=f"{code}: mean of {pr['members']} members, bins {f.get('bin_width', float('nan')):g} cm "
+                          f"(95 % error bars)")
         m, lo, hi = janssen.band(f, zz)
         ax.plot(m / 1e3, zz, "-", color=c,
                 label=(f"{code} fit: r$^2$ = {f['r2']:.3f}, K = {f['K']:.2f}$\\pm${f['ci']['K']:.2f}, "

@@ -27,6 +27,9 @@ What the translation does (see ../shared/docs/reference-codes.md for the measure
 - particle snapshots (``Case.snapshot_interval``): ``dump custom/vtk`` to ``snap_STEP.vtu``
   (XML UnstructuredGrid, read with meshio in ``read_snapshots``); its points are Float32, so the
   positions are also dumped as per-atom variables (Float64 point data);
+- moving walls (a scene's walls[].velocity): ``fix move/mesh linear/variable`` moves the wall's
+  mesh at the prescribed velocity during the steps of its window (whole steps of dt:
+  common.motion_steps); the wall/gran contacts see the mesh's velocity and keep their history;
 - discharge: the gate mesh jumps 200 cm down in one step at the opening (same run: a new
   ``run`` would recompute forces without history updates); discs crossing the outlet plane
   ``outlet_depth`` below the gate (common.outlet_y, the engine's rule) are deleted by
@@ -52,6 +55,7 @@ import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio r
 import numpy as np
 
 from .common import (outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
+                     motion_steps, moved_wall,
                      inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
 
 NAME = "liggghts"
@@ -168,8 +172,12 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     if d.ndim != 2 or d.shape[1] != 6 or not np.all(np.isfinite(d)) or np.any(d[:, 2] <= 0):
         raise CaseError("discs: need finite rows x, y, r > 0, vx, vy, omega")
     walls = [w for w in r["walls"] if w.get("active", True)]
-    xs = [c for w in walls for c in (w["from"][0], w["to"][0])] + [p["at"][0] for p in r["points"]]
-    ys = [c for w in walls for c in (w["from"][1], w["to"][1])] + [p["at"][1] for p in r["points"]]
+    for w in walls:
+        if w.get("motion"):
+            motion_steps(w, case.dt)       # refuses a window that is not whole steps
+    reach = walls + [moved_wall(w, case.end_time) for w in walls if w.get("motion")]   # where they end up too
+    xs = [c for w in reach for c in (w["from"][0], w["to"][0])] + [p["at"][0] for p in r["points"]]
+    ys = [c for w in reach for c in (w["from"][1], w["to"][1])] + [p["at"][1] for p in r["points"]]
     types = atom_types(case)
     rho = {m["name"]: float(m["density"]) for m in r["materials"]}
     rmax = float(d[:, 2].max())
@@ -245,6 +253,18 @@ def _script(case: Case, meshes: list[tuple[str, int]], xlo: float, xhi: float, t
               f"variable gate_v equal (step=={settle_steps})*{-200.0 / dt!r}",
               "variable zero equal 0.0",
               f"fix gate_move all move/mesh mesh {gate} linear/variable v_zero v_gate_v v_zero"]
+    moving = [w for w in r["walls"] if w.get("active", True) and w.get("motion")]
+    if moving and case.mode != "discharge":
+        s.append("variable zero equal 0.0")
+    for w in moving:
+        # The step that takes the run from (n - 1) dt to n dt has step == n: the window's steps
+        # are from < step <= until (in steps).
+        mid = _mesh_id(w["name"])
+        k0, k1 = motion_steps(w, dt)
+        vx, vy = (float(v) for v in w["motion"]["velocity"])
+        s += [f"variable {mid}_vx equal (step>{k0})*(step<={k1})*{vx!r}",
+              f"variable {mid}_vy equal (step>{k0})*(step<={k1})*{vy!r}",
+              f"fix {mid}_move all move/mesh mesh {mid} linear/variable v_{mid}_vx v_{mid}_vy v_zero"]
     s += ["fix integr all nve/sphere", "fix e2d all enforce2d",
           "compute rke all erotate/sphere",
           "thermo_style custom step time atoms ke c_rke",
@@ -416,8 +436,9 @@ def read(case: Case, out_dir: Path) -> Result:
     walls = [w for w in case.resolved["walls"] if w.get("active", True)]
     # Blow-up: a disc outside the walls' box (closed container) or kinetic energy growth.
     if len(rows) and case.mode != "discharge":
-        xs = [c for w in walls for c in (w["from"][0], w["to"][0])]
-        ys = [c for w in walls for c in (w["from"][1], w["to"][1])]
+        reach = walls + [moved_wall(w, case.end_time) for w in walls if w.get("motion")]
+        xs = [c for w in reach for c in (w["from"][0], w["to"][0])]
+        ys = [c for w in reach for c in (w["from"][1], w["to"][1])]
         pad = 2 * float(np.max(rows[:, 2]))
         if walls and (np.any(rows[:, 0] < min(xs) - pad) or np.any(rows[:, 0] > max(xs) + pad)
                       or np.any(rows[:, 1] < min(ys) - pad)):
@@ -436,7 +457,7 @@ def read(case: Case, out_dir: Path) -> Result:
             if step < settle_steps:
                 continue
             cen, force = _read_mesh_vtk(f)
-            edges, nrm, shr = _bin_forces(w, case, cen, force)
+            edges, nrm, shr = _bin_forces(moved_wall(w, step * dt), case, cen, force)   # where it was then
             series[w["name"]]["normal"].append(nrm.tolist())
             series[w["name"]]["shear"].append(shr.tolist())
             steps.append(step)

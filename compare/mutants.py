@@ -29,6 +29,10 @@ SPECS = [
     ("gravity_x1.01", "gravity", "", 1.01, "all"),
     ("bonds_touching_only", "bonds", "", 1.0, "all"),
 ]
+# Run only when named (--mutant NAME): the Janssen column's power check (docs/compare.md).
+EXTRA_SPECS = [
+    ("mu_disc_wall_x0.8", "mu", "disc-wall", 0.8, "all"),
+]
 
 
 @dataclasses.dataclass
@@ -75,13 +79,26 @@ class Mutation:
         return f"{self.code}: {self.name}"
 
 
-def mutations(codes) -> list[Mutation]:
-    """Every mutant of SPECS for every reference code among ``codes``."""
+def mutations(codes, names=None) -> list[Mutation]:
+    """Every mutant of SPECS for every reference code among ``codes``; with ``names``, only those
+    (a spec name of SPECS or EXTRA_SPECS for every reference code, or CODE_SPEC for one code;
+    ValueError for a name that is neither)."""
     out = []
-    for name, what, pairs, factor, scope in SPECS:
+    for name, what, pairs, factor, scope in SPECS + EXTRA_SPECS:
         for c in codes:
-            if c != "native":
-                out.append(Mutation(f"{c}_{name}", c, what, pairs, factor, scope))
+            if c == "native":
+                continue
+            m = Mutation(f"{c}_{name}", c, what, pairs, factor, scope)
+            if names is None and (name, what, pairs, factor, scope) in SPECS:
+                out.append(m)
+            elif names is not None and (name in names or m.name in names):
+                out.append(m)
+    if names is not None:
+        known = {n for n, *_ in SPECS + EXTRA_SPECS} | {f"{c}_{n}" for n, *_ in SPECS + EXTRA_SPECS for c in codes
+                                                           if c != "native"}
+        bad = [n for n in names if n not in known]
+        if bad:
+            raise ValueError(f"unknown mutant {', '.join(bad)} (known: {', '.join(sorted(known))})")
     return out
 
 

@@ -64,13 +64,22 @@ def law_doc(case: Case) -> dict:
                       for p in r["pairs"]]}
 
 
+def wall_entry(w: dict) -> dict:
+    """A resolved wall as a scene's [[walls]] entry, with its prescribed translation if it has one."""
+    e = {k: w[k] for k in ("name", "group", "from", "to", "material")}
+    if w.get("motion"):   # a prescribed translation, from the run's start
+        m = w["motion"]
+        e.update(velocity=list(m["velocity"]), move_from=m["from"], move_until=m["until"])
+    return e
+
+
 def scene_doc(case: Case, disc_file: str) -> tuple[dict, dict]:
     """The scene (dict) that makes ``dem run`` run the case (walls and points listed
     explicitly), and the comments of its lines."""
     r = case.resolved
     mat = case.disc_materials()[0]      # each disc's own is the packing's material column
     doc = dict(law_doc(case),
-               walls=[{k: w[k] for k in ("name", "group", "from", "to", "material")} for w in r["walls"]],
+               walls=[wall_entry(w) for w in r["walls"]],
                points=[{k: p[k] for k in ("name", "group", "at", "material")} for p in r["points"]])
     if not doc["walls"]:
         del doc["walls"]

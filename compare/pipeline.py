@@ -26,7 +26,7 @@ import numpy as np
 from . import collision_judge
 from . import janssen, stats, study
 from .common import Case, Result, scene_material_index
-from .plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
+from .plan import Entry, Plan, PlanError, codes_of, make_plan, member_case, refusals, start_discs
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -271,35 +271,30 @@ def _stat_metric(name, scene, t, a, b, code) -> dict:
     return _metric(name, scene, vals, tol, t["pass"], note, "statistical")
 
 
+JANSSEN_SERIES = 0.05   # [s] wall-force samples of a Janssen member (the mobilisation before the lowering)
+JANSSEN_MIN_POINTS = 8  # a fit counts only with this many points over the column's depth
+
+
 def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
-    """Members of a tall column in every code, each in two stages in that code (compare/
-    janssen_column.py): the jittered start falls and settles for --settle s; the floor layer is
-    taken away and the column settles onto the next one for --duration s, its discs sliding down
-    the walls. The ensemble-averaged side-wall pressure of each code is fitted with Janssen's law
-    (95 % intervals); each code's fit is compared with the native one (both r^2 >= 0.95, every
-    parameter within the combined interval); each member's floor force + wall friction = weight."""
-    from . import janssen_column as jc
+    """Members of a tall column in every code, each the jittered scene start run in one piece for
+    the plan's duration (the scene's end.time unless --duration): the discs fall and settle, then
+    the floor is lowered slowly by the scene's prescribed translation (walls[].velocity: a
+    fraction of a disc diameter), so that the column slides down along the side walls and their
+    friction is mobilised upward, and the column rests. The ensemble-averaged side-wall pressure
+    of each code (bins W/2 tall) is fitted with Janssen's law (scipy curve_fit, 95 % intervals);
+    a fit counts with r^2 >= 0.95 and at least 8 points; each code's fit is compared with the
+    native one (p_inf, lambda, z0, K, mu_w,eff within the combined intervals); each member's floor
+    force + wall friction = weight."""
     from . import janssen_figure
-    floor = jc.geometry(plan.shared)["floor"]
     records = {c: [] for c in codes}
     for k in range(plan.members):
-        start = jittered(start_discs(plan.shared), k, plan.options.perturb)
-        fill = Case(name=f"{plan.name}_m{k}_fill", resolved=plan.shared, discs=start, dt=plan.dt,
-                    duration=plan.settle, seed=k)
-        first = run_all(codes, fill, plan, out / f"m{k}" / "fill", mutation)
+        case = member_case(plan, k)
+        case.series_interval = JANSSEN_SERIES
+        res = run_all(codes, case, plan, out / f"m{k}", mutation)
         for c in codes:
-            r1 = first[c]
-            if not r1.ok:
-                records[c].append({"status": "failed", "reason": f"fill: {r1.reason}"})
-                continue
-            cut = jc.cut_floor_layer(np.array(r1.discs_end, float), floor)
-            case2 = Case(name=f"{plan.name}_m{k}", resolved=plan.shared, discs=cut, dt=plan.dt,
-                         duration=plan.duration, seed=k)
-            r2 = run_one(c, case2, plan, out / f"m{k}" / "settle", mutation)
-            if not r2.ok:
-                records[c].append({"status": "failed", "reason": f"settle: {r2.reason}"})
-                continue
-            records[c].append(jc.member_record(plan.shared, r2, c, k, r1.wall_time_s + r2.wall_time_s))
+            r = res[c]
+            records[c].append(janssen.member_record(plan.shared, r, c, k, case.end_time) if r.ok else
+                              {"status": "failed", "reason": r.reason})
     fits, metrics, table = {}, [], []
     for c in codes:
         ok = [m for m in records[c] if m.get("status") == "ok"]
@@ -308,38 +303,65 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
             metrics.append(_metric(f"Janssen fit ({c})", plan.name, {}, "", False,
                                    "failed members: " + "; ".join(fails[:2]) if fails else "fewer than 2 members"))
             continue
-        fits[c] = janssen.ensemble_fit(ok, jc.MERGE)
-        chk = fits[c]["checks"]
+        fits[c] = f = janssen.ensemble_fit(ok)
+        chk = f["checks"]
         bal = max(abs(b) for b in chk["balance"])
         metrics.append(_metric(f"Janssen column: floor force + wall friction = weight, every member ({c})",
                                plan.name, {"max_rel": bal}, 0.01, chk["balance_ok"]))
+        good = f["r2"] >= janssen.R2_MIN and f["n_points"] >= JANSSEN_MIN_POINTS
+        metrics.append(_metric(f"Janssen fit of the {len(ok)}-member mean profile: r^2 >= {janssen.R2_MIN} with "
+                               f">= {JANSSEN_MIN_POINTS} points ({c})", plan.name,
+                               {"r2": f["r2"], "n_points": f["n_points"], "bin_width": f["bin_width"]},
+                               f"r^2 >= {janssen.R2_MIN}", good,
+                               "" if good else f"r^2 {f['r2']:.3f} with {f['n_points']} points of "
+                                               f"{f['bin_width']:g} cm"))
     if "native" in fits:
         for c, f in fits.items():
             if c == "native":
                 continue
             cmp = janssen.compare_fits(fits["native"], f)
-            worst = max(abs(v["diff"]) / v["tol"] if v["tol"] > 0 else math.inf for v in cmp["params"].values())
-            note = "" if cmp["r2_ok"] else (f"r^2 {cmp['r2'][0]:.3f} (native), {cmp['r2'][1]:.3f} ({c}): a fit counts "
-                                            f"only with r^2 >= {janssen.R2_MIN}; more members or wider bins")
+            worst_key = max(cmp["params"], key=lambda k: abs(cmp["params"][k]["diff"]) / cmp["params"][k]["tol"]
+                            if cmp["params"][k]["tol"] > 0 else math.inf)
+            v = cmp["params"][worst_key]
+            worst = abs(v["diff"]) / v["tol"] if v["tol"] > 0 else math.inf
+            off = [k for k, q in cmp["params"].items() if not q["agree"]]
+            note = "; ".join(x for x in (
+                "" if cmp["r2_ok"] else (f"r^2 {cmp['r2'][0]:.3f} (native), {cmp['r2'][1]:.3f} ({c}): a fit counts "
+                                         f"only with r^2 >= {janssen.R2_MIN}"),
+                "outside the combined interval: " + ", ".join(
+                    f"{k} {cmp['params'][k]['a']:.4g} vs {cmp['params'][k]['b']:.4g} (+- {cmp['params'][k]['tol']:.2g})"
+                    for k in off) if off else "") if x)
             metrics.append(_metric(f"Janssen p_inf, lambda, z0, K, mu_w,eff within the combined 95 % intervals, "
                                    f"both fits r^2 >= {janssen.R2_MIN} ({c} vs native)", plan.name,
-                                   {"max_diff_over_interval": worst, "r2": cmp["r2"]}, "combined 95 % interval",
-                                   cmp["agree"], note, "statistical"))
-    table += ["| code | members | r² | p_inf | lambda [cm] | K | mu_w,eff | mobilised F_t/F_n (top half) | "
-              "balance (max) |", "|---|---|---|---|---|---|---|---|---|"]
+                                   {"max_diff_over_interval": worst, "worst": worst_key, "outside": off,
+                                    "r2": cmp["r2"]}, "combined 95 % interval", cmp["agree"], note, "statistical"))
+    table += ["| code | members | bin [cm] | points | r² | p_inf | lambda [cm] | K | mu_w,eff | "
+              "mobilised F_t/(mu_w F_n): before lowering, after (all; top half) | balance (max) | wall time / member [s] |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for c, f in fits.items():
-        ci = {k: 1.959963984540054 * f["se"][k] for k in janssen.FIT_KEYS}
+        ci = f["ci"]
         chk = f["checks"]
-        table.append(f"| {c} | {len([m for m in records[c] if m.get('status') == 'ok'])} | {f['r2']:.3f} | "
+        mu = chk["mu_w"]
+        ok = [m for m in records[c] if m.get("status") == "ok"]
+        before = chk["mobilised_before_mean"]
+        btxt = f"{before / mu:.2f} ± {1.96 * chk['mobilised_before_se'] / mu:.2f}" if math.isfinite(before) else "n/a"
+        table.append(f"| {c} | {len(ok)} | {f['bin_width']:g} | {f['n_points']} | {f['r2']:.3f} | "
                      f"{f['p_inf']:.4g} ± {ci['p_inf']:.2g} | {f['lambda']:.3g} ± {ci['lambda']:.2g} | "
                      f"{f['K']:.3g} ± {ci['K']:.2g} | {f['mu_w_eff']:.3g} ± {ci['mu_w_eff']:.2g} | "
-                     f"{chk['mobilised_upper_mean']:.3f} (mu_w {chk['mu_w']:g}) | {max(abs(b) for b in chk['balance']):.2g} |")
+                     f"{btxt}; {chk['mobilised_all_mean'] / mu:.2f} ± {1.96 * chk['mobilised_all_se'] / mu:.2f}; "
+                     f"{chk['mobilised_upper_mean'] / mu:.2f} (mu_w {mu:g}) | "
+                     f"{max(abs(b) for b in chk['balance']):.2g} | "
+                     f"{np.mean([m['wall_time_s'] for m in ok]):.0f} |")
+    table += ["", "± are 95 % intervals (fit: scipy curve_fit covariance; mobilised: over the members)."]
     png = None
     if fits and mutation is None:
         png = f"janssen_{plan.name}.png"
         janssen_figure.plot_ensemble_fits(fits, out.parent.parent / png,
                                           f"{plan.name}: ensemble-averaged side-wall pressure, Janssen fits, 95 % bands")
-    return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png}
+    summary = {c: {**{k: f[k] for k in janssen.FIT_KEYS}, "ci": f["ci"], "r2": f["r2"], "n_points": f["n_points"],
+                   "bin_width": f["bin_width"], "chi2_red": f["chi2_red"], "checks": f["checks"]}
+               for c, f in fits.items()}
+    return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png, "fits": summary}
 
 
 def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:

@@ -12,7 +12,8 @@ Kinds (``--kind``, default from the scene):
   engine fill the scene with the shared law, zeroes the velocities, and every code rests from that
   same packing for ``--duration``; ``--start scene --members N`` runs every code from the scene's
   own start, each member jittered by ``--perturb`` (independent dynamics, judged statistically);
-- ``janssen``: a tall column run as ``static --start scene`` members, the side-wall profiles
+- ``janssen``: a tall column run as ``static --start scene`` members for the scene's end.time (or
+  ``--duration``), its floor lowered by the scene's prescribed translation, the side-wall profiles
   averaged over the members and fitted with Janssen's law (compare/janssen.py);
 - ``discharge`` (a scene with ``[discharge]``): members jittered by ``--perturb``, each settles
   for ``--settle`` then the gate opens for the scene's ``discharge.time`` (or ``--duration``).
@@ -61,7 +62,7 @@ class Options:
     start: str = "frozen"        # static: "frozen" | "scene"
     members: int = 0             # 0 = the profile's default (ensembles)
     dt: float = 0.0              # [s] 0 = the scene's integrator.dt
-    duration: float = 0.0        # [s] 0 = static: the profile's; discharge: discharge.time; collision: end.time
+    duration: float = 0.0        # [s] 0 = static: the profile's; discharge: discharge.time; collision, janssen: end.time
     settle: float = 0.0          # [s] 0 = the profile's (discharge: before the gate opens; frozen: the fill)
     perturb: float = 1e-3        # [cm] members' uniform jitter of x and y
     native_law: str = "shared"   # "shared" | "scene": the native side runs the scene's own law
@@ -83,7 +84,7 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--dt", type=float, default=0.0, help="time step [s] of every code (default: the scene's)")
     ap.add_argument("--duration", type=float, default=0.0,
                     help="simulated time [s]: static rest after the start (default quick 0.3, full 0.6), "
-                         "discharge after the opening (default: discharge.time), collision (default: end.time)")
+                         "discharge after the opening (default: discharge.time), collision and janssen (default: end.time)")
     ap.add_argument("--settle", type=float, default=0.0,
                     help="[s] discharge: settling before the opening; static frozen: the native fill (default 1)")
     ap.add_argument("--perturb", type=float, default=1e-3, help="[cm] members' jitter of x and y (default 1e-3)")
@@ -219,12 +220,17 @@ def make_plan(entry: Entry) -> Plan:
         duration = shear.shear_time(shared)
         members = o.resolved_members()
         return Plan(entry, entry.scene.stem, kind, r, shared, dt, duration, settle, members)
-    if kind == "collision":
+    if kind in ("collision", "janssen"):
         duration = o.duration or float(r["end"]["time"])
     elif kind == "discharge":
         duration = o.duration or float(r["discharge"]["time"])
     else:
         duration = o.duration or prof["static_duration"]
+    if kind == "janssen":
+        late = [w["name"] for w in r["walls"] if w.get("motion") and float(w["motion"]["until"]) > duration + 1e-12]
+        if late:
+            raise PlanError(f"{entry.scene}: walls: {', '.join(late)} still move at the run's end ({duration:g} s, "
+                            "--duration or end.time): a Janssen member must rest after its floor is lowered")
     members = 1
     if kind in ("discharge", "janssen") or (kind == "static" and o.start == "scene"):
         members = o.resolved_members()

@@ -31,6 +31,9 @@ What the translation does (measured facts: ../shared/docs/reference-codes.md):
   ``series_interval`` and at the end; the contact point reported is the disc centre's projection
   on the segment clamped to its ends (the engine's contact point: a vertex contact counts in the
   end bin of its wall). The per-wall sum is checked against YADE's own wall force;
+- moving walls (a scene's walls[].velocity): the wall's facet gets the prescribed velocity during
+  the steps of its window (whole steps of dt: common.motion_steps) and NewtonIntegrator moves
+  it; the contacts see its velocity and keep their history;
 - discharge: settle, erase the gate body, run on; discs whose centre is below outlet_depth under
   the gate (common.outlet_y, the engine's rule) are
   erased at the start of the step in which they are found (per-step check while any disc is
@@ -88,8 +91,8 @@ import meshio  # VTKRecorder snapshots (VTU)
 import numpy as np
 
 from .common import outlet_y as common_outlet_y
-from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, pair,
-                     profiles_from_contacts, write_text_atomic)
+from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, motion_steps,
+                     moved_wall, pair, profiles_from_contacts, write_text_atomic)
 
 NAME = "yade"
 TEMPLATE = Path(__file__).resolve().parent / "yade_template.py"
@@ -327,6 +330,11 @@ def case_data(case: Case) -> dict:
     for w in walls:
         if math.hypot(w["to"][0] - w["from"][0], w["to"][1] - w["from"][1]) <= 0:
             raise CaseError(f"walls: {w['name']} has zero length")
+    for w, src in zip(walls, [w for w in r["walls"] if w.get("active", True)]):
+        if src.get("motion"):   # a prescribed translation: velocity during the steps [i_from, i_until)
+            k0, k1 = motion_steps(src, dt)
+            w["motion"] = {"velocity": [float(v) for v in src["motion"]["velocity"]], "i_from": k0, "i_until": k1}
+    reach = walls + [moved_wall(w, case.end_time) for w in r["walls"] if w.get("active", True) and w.get("motion")]
     points = _points(r, walls)
     g = [float(v) for v in r["gravity"]]
     n_settle = _steps(case.settle, dt, "settle") if case.mode == "discharge" else 0
@@ -345,8 +353,8 @@ def case_data(case: Case) -> dict:
         outlet_y = common_outlet_y(r)
     finite = np.all(np.isfinite(d))
     rmax = float(np.nanmax(d[:, 2])) if np.any(np.isfinite(d[:, 2])) else 1.0
-    xs = [c for w in walls for c in (w["from"][0], w["to"][0])]
-    ys = [c for w in walls for c in (w["from"][1], w["to"][1])]
+    xs = [c for w in reach for c in (w["from"][0], w["to"][0])]
+    ys = [c for w in reach for c in (w["from"][1], w["to"][1])]
     if finite:
         xs_all, ys_all = xs + list(d[:, 0]), ys + list(d[:, 1])
     else:
@@ -533,7 +541,8 @@ def _read(case: Case, out_dir: Path) -> Result:
     final = [(c[0], float(c[1]), float(c[2]), float(c[3]), float(c[4])) for c in res["final_contacts"]]
     if not all(math.isfinite(v) for c in final for v in c[1:]):
         return _fail(case, out_dir, "NaN or inf in the final wall contact forces", **common)
-    profiles = profiles_from_contacts(walls, pb, centre, final)
+    # a moving wall's bins run along it where it is (the contact points are on the moved facet)
+    profiles = profiles_from_contacts([moved_wall(w, case.end_time) for w in walls], pb, centre, final)
 
     # Series: per-contact rows grouped by sample time, binned like the profiles.
     by_t: dict[float, list] = {float(t): [] for t in res["series_t"]}
@@ -545,7 +554,8 @@ def _read(case: Case, out_dir: Path) -> Result:
     ts = sorted(by_t)
     series = {"t": ts, "walls": {w["name"]: {"normal": [], "shear": []} for w in walls}}
     for t in ts:
-        prof = profiles_from_contacts(walls, pb, centre, by_t[t])
+        t_run = t + (case.settle if case.mode == "discharge" else 0.0)
+        prof = profiles_from_contacts([moved_wall(w, t_run) for w in walls], pb, centre, by_t[t])
         for name, p in prof.items():
             series["walls"][name]["normal"].append(p["normal"])
             series["walls"][name]["shear"].append(p["shear"])

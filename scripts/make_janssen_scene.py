@@ -2,8 +2,8 @@
 """Writes the Janssen validation scenes (seeded, reproducible):
 
 - reference_inputs/scenes/janssen_column.toml and its loose start janssen_column_loose.csv: the
-  tall column of the ensemble Janssen test (compare/janssen_column.py), described above
-  COLUMN_HEADER;
+  tall column of the ensemble Janssen test (dem compare --kind janssen, compare/pipeline.py
+  janssen_column), described above COLUMN_HEADER;
 - reference_inputs/scenes/janssen_w15.toml and janssen_w15_loose.csv: the single-packing bin of
   the comparison report (compare/study.py), described below.
 
@@ -46,8 +46,10 @@ COMMENTS = {
 }
 
 
-def scene(name: str, description: str, width: float, wall_height: float, n: int, end: float) -> dict:
-    """A Janssen bin: side walls wall_height tall, width apart, a floor, n discs from NAME_loose.csv."""
+def scene(name: str, description: str, width: float, wall_height: float, n: int, end: float,
+          side_end: float = 0.0, floor_motion: dict | None = None) -> dict:
+    """A Janssen bin: side walls from wall_height down to side_end, width apart, a floor (with its
+    prescribed translation floor_motion, if any), n discs from NAME_loose.csv."""
     def wall(wname, a, b):
         return {"name": wname, "group": wname if wname == "bottom" else f"side_{wname}", "from": a, "to": b,
                 "material": "wall"}
@@ -61,8 +63,9 @@ def scene(name: str, description: str, width: float, wall_height: float, n: int,
                    "eta_n_rho_g": 7.65, "eta_s_rho_g": 3.825, "mu": 0.5},
                   {"materials": ["sand", "wall"], "kn_rho_g": 7.28e4, "ks_rho_g": 1.82e4,
                    "eta_n_rho_g": 15.3, "eta_s_rho_g": 7.65, "mu": 0.5}],
-        "walls": [wall("left", [0.0, wall_height], [0.0, 0.0]), wall("right", [width, wall_height], [width, 0.0]),
-                  wall("bottom", [0.0, 0.0], [width, 0.0])],
+        "walls": [wall("left", [0.0, wall_height], [0.0, side_end]),
+                  wall("right", [width, wall_height], [width, side_end]),
+                  dict(wall("bottom", [0.0, 0.0], [width, 0.0]), **(floor_motion or {}))],
         "fill": {"type": "file", "file": f"{name}_loose.csv", "material": "sand", "count": n},
         "end": {"time": end, "stop_at_rest": True, "rest_factor": 1e-4},
         "output": {"profile_bin": 2.0},
@@ -93,17 +96,40 @@ def packing() -> str:
 # The column: W = 20 cm = 20 mean diameters, 2600 discs with radii uniform in [0.4, 0.6] cm
 # (0.8-1.2 x the mean 0.5 cm), mu = mu_w = 0.5, on a square grid of pitch 1.3 cm (gaps of at
 # least 0.1 cm, so that each member's jitter of +-0.04 cm keeps every disc apart). The grid is
-# 15 columns by 174 rows (226 cm); it falls and settles into a random packing about 125 cm
-# (6.2 W) deep. Same springs and dashpots as janssen_w15 (the paper's Table 2 springs), dt 2e-5 s.
+# 15 columns by 174 rows (226 cm); it falls and settles into a random packing about 130 cm
+# (6.5 W) deep by 1.2 s. Same springs and dashpots as janssen_w15 (the paper's Table 2 springs),
+# dt 2e-5 s.
+#
+# The wall friction is mobilised by lowering the floor, as in the classic Janssen experiments
+# (the floor or piston drawn down slowly): from 1.2 s to 1.7 s the floor moves down 0.25 cm (a
+# quarter of the mean diameter) at 0.5 cm/s, about a thousandth of the speed of a free fall over
+# a diameter (sqrt(2 g d) = 44 cm/s), so the column follows it quasi-statically and slides down
+# along the side walls, turning their friction upward everywhere; from 1.7 s to 2.0 s it rests.
+# A filled column without the lowering keeps the friction its dynamic settling left, about a
+# fifth of mu_w and of either sign contact by contact; dropping the floor suddenly by the same
+# distance gives about 0.3 mu_w (the impact's rebound turns part of it back). The side walls
+# reach 1 cm below the floor's start, so the lowered floor's ends stay on them.
 C_W, C_H_WALL = 20.0, 240.0      # cm
 C_PITCH = 1.3                    # cm
 C_N = 2600
 C_SEED = 20261125
+C_SIDE_END = -1.0                # cm: the side walls' lower ends, below the lowered floor
+C_LOWER_FROM, C_LOWER_UNTIL = 1.2, 1.7   # s
+C_LOWER_SPEED = 0.5              # cm/s: 0.25 cm in 0.5 s
+C_END = 2.0                      # s
 
 COLUMN_HEADER = f"""Janssen column: a 2D bin W = {C_W} cm (20 mean disc diameters) wide, mu = mu_w = 0.5, {C_N}
-discs (radii {R_MIN}-{R_MAX} cm) on a loose grid that fall and settle to a fill about 6 W deep.
-Each ensemble member jitters this start (compare/janssen_column.py).
+discs (radii {R_MIN}-{R_MAX} cm) on a loose grid that fall and settle to a fill about 6.5 W deep;
+then the floor is lowered slowly by a quarter of a diameter, so that the column slides down the
+side walls and mobilises their friction, and the column rests. Each ensemble member of
+dem compare --kind janssen jitters this start.
 {GENERATED}"""
+COLUMN_COMMENTS = dict(COMMENTS, **{
+    "walls[2].velocity": f"cm/s: the floor is lowered {C_LOWER_SPEED * (C_LOWER_UNTIL - C_LOWER_FROM):g} cm ...",
+    "walls[2].move_from": "s: ... after the fill has settled ...",
+    "walls[2].move_until": "s: ... then rests until end.time",
+    "end.time": "s: the fall and the settling, the lowering, the rest",
+})
 
 
 def column_packing() -> str:
@@ -129,10 +155,12 @@ def files() -> dict:
     assert ctop + R_MAX + 0.1 < C_H_WALL, "the column's loose start must lie inside the walls"
     w15 = scene("janssen_w15", "Janssen bin W = 15 cm, random packing, mu = mu_w = 0.5", W, H_WALL, N, 3.5)
     column = scene("janssen_column", "Janssen column W = 20 cm, fill about 6 W, random packing, mu = mu_w = 0.5",
-                   C_W, C_H_WALL, C_N, 2.0)
+                   C_W, C_H_WALL, C_N, C_END, side_end=C_SIDE_END,
+                   floor_motion={"velocity": [0.0, -C_LOWER_SPEED], "move_from": C_LOWER_FROM,
+                                 "move_until": C_LOWER_UNTIL})
     return {OUT / "janssen_w15.toml": scene_toml.dumps(w15, header=HEADER, comments=COMMENTS),
             OUT / "janssen_w15_loose.csv": text,
-            OUT / "janssen_column.toml": scene_toml.dumps(column, header=COLUMN_HEADER, comments=COMMENTS),
+            OUT / "janssen_column.toml": scene_toml.dumps(column, header=COLUMN_HEADER, comments=COLUMN_COMMENTS),
             OUT / "janssen_column_loose.csv": col}
 
 

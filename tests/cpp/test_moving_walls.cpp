@@ -146,3 +146,70 @@ TEST(MovingWalls, PlateFollowingTheWalls) {
   EXPECT_NEAR(w.moving.plates[0].x, -12 * std::tan(th), 1e-12);
   EXPECT_NEAR(w.moving.plates[0].y, 0, 1e-15);
 }
+
+namespace {
+// A floor from (-5, 0) to (5, 0) lowered at v from t_from to t_until (a scene's walls[].velocity).
+void add_lowered_floor(World& w, double v, double t_from, double t_until) {
+  w.geometry.walls.push_back({"floor", "bottom", -5, 0, 5, 0, 1});
+  TranslatingWall q;
+  q.wall = static_cast<int>(w.geometry.walls.size()) - 1;
+  q.vy = -v;
+  q.t_from = t_from;
+  q.t_until = t_until;
+  q.ax0 = -5; q.ay0 = 0; q.bx0 = 5; q.by0 = 0;
+  w.moving.translating.push_back(q);
+  w.moving.motion.assign(w.geometry.obstacle_count(), ObstacleMotion{});
+}
+}  // namespace
+
+// A prescribed translation moves the wall by v x (the part of each step inside the window),
+// whatever the scheme: nothing before move_from, exactly v (t_until - t_from) after move_until,
+// and the last step's displacement is what the contact law sees.
+TEST(MovingWalls, PrescribedTranslationIsExact) {
+  for (Scheme scheme : dem::testing::kSchemes) {
+    const double dt = 1e-4;
+    World w = make_world(props(), {}, scheme, dt, 0.0);
+    w.discs.add(0, 5, 1, 2.65, 0);  // far from the floor
+    add_lowered_floor(w, 2.0, 0.01, 0.03);   // steps 100 .. 300
+    w.init();
+    for (int k = 0; k < 100; ++k) w.step();
+    EXPECT_EQ(w.geometry.walls[0].ay, 0) << to_string(scheme);
+    w.step();
+    EXPECT_NEAR(w.moving.motion[0].duy, -2.0 * dt, 1e-15) << to_string(scheme);
+    for (int k = 0; k < 399; ++k) w.step();
+    EXPECT_NEAR(w.geometry.walls[0].ay, -2.0 * 0.02, 1e-12) << to_string(scheme);
+    EXPECT_NEAR(w.geometry.walls[0].by, -2.0 * 0.02, 1e-12) << to_string(scheme);
+    EXPECT_EQ(w.geometry.walls[0].ax, -5);
+    EXPECT_EQ(w.moving.motion[0].duy, 0) << to_string(scheme);  // stopped: no increment
+    EXPECT_EQ(w.moving.translations_end(), 0.03);
+  }
+}
+
+// A disc settling on a floor that is lowered slowly follows it down and comes to rest on it
+// again: its centre ends v (t_until - t_from) lower than where it would rest on the unmoved
+// floor, with the overlap m g / kn of its weight.
+TEST(MovingWalls, DiscFollowsALoweredFloor) {
+  const double dt = 1e-5, g = 980;
+  World w = make_world(props(), {}, Scheme::velocity_verlet, dt, -g);
+  const double m = 2.65 * M_PI;                 // r = 1
+  const double rest = 1 - m * g / props().kn;   // touching at the start, then the weight's overlap
+  w.discs.add(0, 1, 1, 2.65, 0);
+  add_lowered_floor(w, 0.5, 0.02, 0.06);        // 0.02 cm down at 0.5 cm/s
+  w.init();
+  for (int k = 0; k < 20000; ++k) w.step();     // 0.2 s: the floor stopped 0.14 s ago
+  EXPECT_NEAR(w.geometry.walls[0].ay, -0.02, 1e-12);
+  EXPECT_NEAR(w.discs.y[0], rest - 0.02, 1e-6);
+  EXPECT_NEAR(w.discs.vy[0], 0, 1e-4);
+}
+
+// A state saved mid-way restores the translating wall where the clock says.
+TEST(MovingWalls, TranslatingWallIsPlacedByTheClock) {
+  World w = make_world(props(), {}, Scheme::velocity_verlet, 1e-4, 0.0);
+  w.discs.add(0, 5, 1, 2.65, 0);
+  add_lowered_floor(w, 1.0, 0.0, 1.0);
+  w.init();
+  w.steps = 250;
+  w.place_moving_walls();
+  EXPECT_NEAR(w.geometry.walls[0].ay, -0.025, 1e-15);
+  EXPECT_NEAR(w.moving.translating[0].y, -0.025, 1e-15);
+}

@@ -166,53 +166,194 @@ def test_small_ensembles_use_the_pooled_scatter_and_still_cover_the_truth():
 
 # ------------------------------------------------------------------ the column's members
 
+SCENE = ROOT / "reference_inputs" / "scenes" / "janssen_column.toml"
+
+
 @pytest.fixture
 def column(dem_binary, monkeypatch):
     monkeypatch.setenv("DEM_BINARY", str(dem_binary))
-    from compare import janssen_column
-    return janssen_column, janssen_column.resolved_scene()
+    from compare.common import SHARED_VARIANT, resolve
+    r = resolve(SCENE)
+    r["contact"] = dict(SHARED_VARIANT)
+    return r
 
 
-def test_member_starts_are_seeded_jittered_and_apart(column):
-    jc, r = column
-    base = np.array(r["discs"], float)
-    a, a2, b = jc.member_start(r, 0), jc.member_start(r, 0), jc.member_start(r, 1)
-    assert np.array_equal(a, a2) and not np.array_equal(a, b)
-    assert np.max(np.abs(a[:, :2] - base[:, :2])) <= jc.JITTER
-    assert np.max(np.abs(a[:, :2] - base[:, :2])) > 0.9 * jc.JITTER
-    geo = jc.geometry(r)
-    assert jc.max_overlap_ratio(a, geo["width"], geo["floor"]) == 0.0   # every disc apart
+def test_the_column_lowers_its_floor_slowly_by_a_fraction_of_a_diameter(column):
+    """The scene mobilises the wall friction by lowering the floor after the fill has settled:
+    by a fraction of the mean diameter, slowly against a free fall over a diameter, then it rests."""
+    floor = next(w for w in column["walls"] if w["group"] == "bottom")
+    m = floor["motion"]
+    d_mean = 2 * np.mean(np.array(column["discs"])[:, 2])
+    depth = -m["velocity"][1] * (m["until"] - m["from"])
+    assert m["velocity"][0] == 0 and 0.1 * d_mean <= depth <= 0.5 * d_mean
+    assert -m["velocity"][1] < 0.02 * math.sqrt(2 * G * d_mean)
+    assert m["from"] >= 1.0 and column["end"]["time"] - m["until"] >= 0.25
+    # the side walls reach below the lowered floor: its ends stay on them
+    assert all(min(w["from"][1], w["to"][1]) < -depth for w in column["walls"] if w["group"].startswith("side"))
+    geo = janssen.geometry(column, column["end"]["time"])
+    assert geo["floor"] == pytest.approx(-depth, abs=1e-12) and geo["width"] == W and geo["mu_w"] == 0.5
+    assert janssen.geometry(column, 0.0)["floor"] == 0.0
 
 
-def test_max_overlap_ratio_and_floor_cut(column):
-    jc, _ = column
+def test_max_overlap_ratio():
     d = np.array([[5.0, 5.0, 0.5, 0, 0, 0], [5.99, 5.0, 0.5, 0, 0, 0], [10.0, 0.395, 0.4, 0, 0, 0]])
     # pair: overlap 0.01 cm over r 0.5 = 0.02; floor: 0.005 cm over r 0.4 = 0.0125
-    assert jc.max_overlap_ratio(d, 20.0, 0.0) == pytest.approx(0.02, abs=1e-12)
-    assert jc.max_overlap_ratio(d[2:], 20.0, 0.0) == pytest.approx(0.0125, abs=1e-12)
-    cut = jc.cut_floor_layer(np.vstack([d, [[3.0, 1.2, 0.5, 1, 1, 1]]]), 0.0)
-    assert len(cut) == 3 and np.all(cut[:, 3:] == 0)        # the disc touching the floor is taken away
-    assert 0.395 not in cut[:, 1] and 1.2 in cut[:, 1]      # one resting 0.2 cm above it is kept
+    assert janssen.max_overlap_ratio(d, 20.0, 0.0) == pytest.approx(0.02, abs=1e-12)
+    assert janssen.max_overlap_ratio(d[2:], 20.0, 0.0) == pytest.approx(0.0125, abs=1e-12)
+    assert janssen.max_overlap_ratio(d[2:], 20.0, -0.25) == 0.0     # the lowered floor
 
 
 def test_member_record_balance_and_mobilised_friction(column):
     from compare.common import Result
-    jc, r = column
-    geo = jc.geometry(r)
+    r = column
+    t_end = r["end"]["time"]
+    geo = janssen.geometry(r, t_end)
     discs = np.array([[10.0, 50.0 + k, 0.5, 0, 0, 0] for k in range(40)])
     weight = float(np.sum(geo["rho_s"] * math.pi * discs[:, 2] ** 2) * geo["g"])
-    n_bins = 120
-    prof = lambda normal, shear: {"s_lo": list(np.arange(n_bins) * 2.0), "s_hi": list(np.arange(1, n_bins + 1) * 2.0),
+    n_bins = 121                                           # 241 cm of side wall in 2 cm bins
+    edges = np.minimum(np.arange(n_bins + 1) * 2.0, 241.0)
+    prof = lambda normal, shear: {"s_lo": list(edges[:-1]), "s_hi": list(edges[1:]),  # noqa: E731
                                   "normal": list(normal), "shear": list(shear)}
     normal = np.full(n_bins, 1000.0)
     shear = 0.3 * normal                                   # every bin at 0.3 of its normal force
     friction = 2 * shear.sum()
-    good = Result(code="x", case="c", discs_end=discs.tolist(),
+    t0 = r["walls"][2]["motion"]["from"]
+    series = {"t": [0.0, t0, t0 + 0.05],                   # before the lowering: 0.1 of the normal force
+              "walls": {w: {"normal": [list(normal)] * 3, "shear": [list(0.1 * normal), list(0.1 * normal),
+                                                                    list(shear)]} for w in ("left", "right")}}
+    good = Result(code="x", case="c", discs_end=discs.tolist(), series=series,
                   profiles={"left": prof(normal, shear), "right": prof(normal, shear),
                             "bottom": {"s_lo": [0.0], "s_hi": [20.0], "normal": [weight - friction], "shear": [0.0]}})
-    rec = jc.member_record(r, good, "x", 0, 1.0)
+    rec = janssen.member_record(r, good, "x", 0, t_end)
     assert rec["balance"] == pytest.approx(0.0, abs=1e-12)
     assert rec["mobilised_upper"] == pytest.approx(0.3) and rec["mobilised_all"] == pytest.approx(0.3)
-    assert rec["p"][0] == pytest.approx(500.0)            # mean of both walls per cm of wall
+    assert rec["mobilised_before"] == pytest.approx(0.1)
+    assert rec["floor"] == pytest.approx(-0.25) and rec["p"][0] == pytest.approx(500.0)   # per cm of wall
+    assert rec["p"][-1] == pytest.approx(1000.0)           # the last bin is 1 cm long
     good.profiles["bottom"]["normal"] = [weight - 0.5 * friction]   # half the friction missing
-    assert jc.member_record(r, good, "x", 0, 1.0)["balance"] == pytest.approx(0.5 * friction / weight)
+    assert janssen.member_record(r, good, "x", 0, t_end)["balance"] == pytest.approx(0.5 * friction / weight)
+    good.series = {}                                        # a code without a series (the engine's static runs)
+    assert math.isnan(janssen.member_record(r, good, "x", 0, t_end)["mobilised_before"])
+
+
+def test_fitted_bins_are_half_the_width_tall_and_enough_over_the_depth():
+    """The fit's bins: W/2 (10 cm in the column), at least 8 of them between W/2 above the floor
+    and the surface of a fill 6.5 W deep."""
+    ms = synthetic_members(janssen_truth(), surface=130.0)
+    assert janssen.merge_for(ms) == 5
+    f = janssen.ensemble_fit(ms)
+    assert f["bin_width"] == pytest.approx(W / 2) and f["n_points"] >= 8
+    assert np.all(np.diff(f["profile"]["z"]) == pytest.approx(W / 2))
+
+
+def test_the_plan_refuses_a_run_that_ends_while_the_floor_moves(dem_binary, monkeypatch):
+    monkeypatch.setenv("DEM_BINARY", str(dem_binary))
+    from compare.plan import Entry, Options, PlanError, make_plan
+    p = make_plan(Entry(SCENE, Options(kind="janssen", members=8)))
+    assert p.duration == 2.0 and p.members == 8                       # the scene's end.time
+    with pytest.raises(PlanError, match="bottom still move at the run's end"):
+        make_plan(Entry(SCENE, Options(kind="janssen", duration=1.5)))
+
+
+def test_the_power_check_mutant_is_run_by_name():
+    from compare import mutants
+    assert len(mutants.mutations(("native", "liggghts", "yade"))) == 16        # the default set: 8 per code
+    sel = mutants.mutations(("native", "liggghts", "yade"), ["liggghts_mu_disc_wall_x0.8"])
+    assert [m.name for m in sel] == ["liggghts_mu_disc_wall_x0.8"] and sel[0].factor == 0.8
+    assert len(mutants.mutations(("native", "liggghts", "yade"), ["mu_disc_wall_x0.8"])) == 2
+    with pytest.raises(ValueError, match="unknown mutant"):
+        mutants.mutations(("native", "liggghts"), ["mu_x0.8"])
+
+
+LOWERED = """[scene]
+name = "lowered_floor"
+[physics]
+gravity = [0.0, -980.0]
+[integrator]
+scheme = "velocity_verlet"
+dt = 2e-5
+[materials.sand]
+density = 2.65
+[materials.wall]
+[[pairs]]
+materials = ["sand", "sand"]
+kn_rho_g = 3.64e4
+ks_rho_g = 0.91e4
+eta_n_rho_g = 7.65
+eta_s_rho_g = 3.825
+mu = 0.5
+[[pairs]]
+materials = ["sand", "wall"]
+kn_rho_g = 7.28e4
+ks_rho_g = 1.82e4
+eta_n_rho_g = 15.3
+eta_s_rho_g = 7.65
+mu = 0.5
+[[walls]]
+name = "left"
+group = "side_left"
+from = [0.0, 30.0]
+to = [0.0, -1.0]
+material = "wall"
+[[walls]]
+name = "right"
+group = "side_right"
+from = [3.0, 30.0]
+to = [3.0, -1.0]
+material = "wall"
+[[walls]]
+name = "bottom"
+group = "bottom"
+from = [0.0, 0.0]
+to = [3.0, 0.0]
+material = "wall"
+velocity = [0.0, -1.0]
+move_from = 0.3
+move_until = 0.5
+[fill]
+type = "list"
+material = "sand"
+count = 12
+discs = [[0.75, 0.6, 0.5], [2.25, 0.6, 0.5], [0.75, 1.8, 0.5], [2.25, 1.8, 0.5], [0.75, 3.0, 0.5],
+         [2.25, 3.0, 0.5], [0.75, 4.2, 0.5], [2.25, 4.2, 0.5], [0.75, 5.4, 0.5], [2.25, 5.4, 0.5],
+         [1.5, 6.6, 0.5], [1.5, 7.8, 0.5]]
+[end]
+time = 0.7
+[output]
+profile_bin = 1.0
+"""
+
+
+def _codes_here():
+    import shutil
+    return ["native"] + [c for c in ("liggghts", "yade") if shutil.which(c)]
+
+
+@pytest.mark.parametrize("code", _codes_here())
+def test_a_lowered_floor_in_every_code(dem_binary, monkeypatch, tmp_path, code):
+    """Twelve discs settle in a narrow box whose floor is then lowered 0.2 cm at 1 cm/s (the
+    scene's walls[].velocity, translated by each code's backend): the bottom discs end 0.2 cm
+    lower, the walls carry the weight, and the side walls' friction holds the discs up."""
+    monkeypatch.setenv("DEM_BINARY", str(dem_binary))
+    from importlib import import_module
+    from compare.common import SHARED_VARIANT, Case, resolve
+    from compare.plan import start_discs
+    (tmp_path / "s.toml").write_text(LOWERED)
+    r = resolve(tmp_path / "s.toml")
+    r["contact"] = dict(SHARED_VARIANT)
+    assert r["walls"][2]["motion"] == {"velocity": [0.0, -1.0], "from": 0.3, "until": 0.5}
+    case = Case(name="lowered", resolved=r, discs=start_discs(r), dt=2e-5, duration=0.7, series_interval=0.05)
+    res = import_module(f"compare.{code}_backend").run(case, tmp_path / code, 600)
+    assert res.ok, res.reason
+    d = np.array(res.discs_end)
+    weight = float(np.sum(2.65 * math.pi * d[:, 2] ** 2) * 980)
+    # the two bottom discs (r = 0.5) rest on the floor at -0.2 with overlaps of about 1e-4 cm
+    assert np.all((d[:2, 1] < 0.3) & (d[:2, 1] > 0.3 - 1e-3)), d[:2, 1]
+    tot = {w: (sum(p["normal"]), sum(p["shear"])) for w, p in res.profiles.items()}
+    friction = tot["left"][1] + tot["right"][1]
+    assert tot["bottom"][0] + friction == pytest.approx(weight, rel=1e-3)
+    assert 0.03 * weight < friction < 0.2 * weight
+    rec = janssen.member_record(r, res, code, 0, 0.7)
+    assert rec["floor"] == pytest.approx(-0.2) and rec["mobilised_all"] > 0
+    if code != "native":                                   # a series: the mobilisation before the lowering
+        assert math.isfinite(rec["mobilised_before"])

@@ -12,7 +12,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '5'};  // 2: pair totals out of the pair list; 3: disc kinds; 4: the threads' blocks; 5: bonds and moving walls
+constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '6'};  // the format's version: a state file loads only in its own
 
 // The wall contacts in their memory layout with the padding after `touching` zeroed, so that
 // equal states give equal files.
@@ -50,6 +50,12 @@ void write_paper2(BinaryOut& o, const World& w) {
     o.put(p.wall); o.put(p.mass); o.put(p.ax0); o.put(p.ay0); o.put(p.bx0); o.put(p.by0); o.put(p.follow);
     o.put(p.x_free); o.put(p.x); o.put(p.y); o.put(p.vx); o.put(p.vy); o.put(p.dux); o.put(p.duy);
     o.put(p.x_listed); o.put(p.y_listed);
+  }
+  // Prescribed translations: their place follows the clock; the place at the last list build does not.
+  o.put<std::uint64_t>(m.translating.size());
+  for (const TranslatingWall& q : m.translating) {
+    o.put(q.wall); o.put(q.vx); o.put(q.vy); o.put(q.t_from); o.put(q.t_until);
+    o.put(q.x_listed); o.put(q.y_listed);
   }
   o.vec(m.motion);  // the last increments (contact law 5a, 5b) and forces (the plate's next kick)
 }
@@ -91,6 +97,15 @@ void read_paper2(BinaryIn& r, World& w) {
     p.x_free = r.get<double>(); p.x = r.get<double>(); p.y = r.get<double>();
     p.vx = r.get<double>(); p.vy = r.get<double>(); p.dux = r.get<double>(); p.duy = r.get<double>();
     p.x_listed = r.get<double>(); p.y_listed = r.get<double>();
+  }
+  fits(r.count(1u << 20) == m.translating.size(), "another number of translating walls");
+  for (TranslatingWall& q : m.translating) {
+    const int wall = r.get<int>();
+    double fixed[4];
+    for (double& v : fixed) v = r.get<double>();
+    fits(wall == q.wall && fixed[0] == q.vx && fixed[1] == q.vy && fixed[2] == q.t_from && fixed[3] == q.t_until,
+         "another wall translation (walls[].velocity, move_from, move_until)");
+    q.x_listed = r.get<double>(); q.y_listed = r.get<double>();
   }
   std::vector<ObstacleMotion> motion;
   r.vec(motion, 1u << 20);

@@ -13,6 +13,10 @@ struct Wall {
   double ax, ay, bx, by;  // from (a) -> to (b); shear on the wall is reported along a -> b
   int material;
   bool active = true;     // false once removed (the slit's gate after opening)
+  // A prescribed translation (walls[].velocity, move_from, move_until): the wall moves by
+  // (move_vx, move_vy) per second while move_from <= t <= move_until, else stays put.
+  double move_vx = 0, move_vy = 0, move_from = 0, move_until = 0;
+  bool moves() const { return (move_vx != 0 || move_vy != 0) && move_until > move_from; }
 };
 
 struct Point {

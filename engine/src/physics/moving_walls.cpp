@@ -1,4 +1,5 @@
-// World's moving obstacles: prescribed wall rotations and rigid plates (moving_walls.hpp).
+// World's moving obstacles: prescribed wall rotations, rigid plates and prescribed wall
+// translations (moving_walls.hpp).
 #include <algorithm>
 #include <cmath>
 
@@ -22,6 +23,11 @@ void place_rotated(Wall& w, const RotatingWall& r) {
 void place_plate(Wall& w, const RigidPlate& p) {
   w.ax = p.ax0 + p.x; w.ay = p.ay0 + p.y;
   w.bx = p.bx0 + p.x; w.by = p.by0 + p.y;
+}
+
+void place_translated(Wall& w, const TranslatingWall& q) {
+  w.ax = q.ax0 + q.x; w.ay = q.ay0 + q.y;
+  w.bx = q.bx0 + q.x; w.by = q.by0 + q.y;
 }
 
 // Horizontal displacement of a following plate: the rotating wall's offset at the plate's height.
@@ -70,11 +76,31 @@ void World::move_walls(Move move, double h) {
     m.duy = p.duy;
     m.dtheta = 0;
   }
+  // Prescribed translations: this step runs from steps dt to (steps + 1) dt (the clock counted in
+  // steps, so that a window given in whole steps moves the wall in exactly those steps).
+  const double t1 = static_cast<double>(steps + 1) * dt;
+  for (TranslatingWall& q : moving.translating) {
+    const double s1 = q.moved(t1);
+    const double x1 = q.vx * s1, y1 = q.vy * s1;
+    ObstacleMotion& m = moving.motion[q.wall];
+    m.dux = x1 - q.x;
+    m.duy = y1 - q.y;
+    m.dtheta = 0;
+    q.x = x1;
+    q.y = y1;
+    place_translated(geometry.walls[q.wall], q);
+  }
 }
 
 void World::place_moving_walls() {
   for (const RotatingWall& r : moving.rotating) place_rotated(geometry.walls[r.wall], r);
   for (const RigidPlate& p : moving.plates) place_plate(geometry.walls[p.wall], p);
+  for (TranslatingWall& q : moving.translating) {  // where the clock says
+    const double s = q.moved(static_cast<double>(steps) * dt);
+    q.x = q.vx * s;
+    q.y = q.vy * s;
+    place_translated(geometry.walls[q.wall], q);
+  }
 }
 
 bool World::walls_moved_far() const {
@@ -83,6 +109,8 @@ bool World::walls_moved_far() const {
     if (std::abs(r.theta - r.theta_listed) * r.reach > lim) return true;
   for (const RigidPlate& p : moving.plates)
     if (std::hypot(p.x - p.x_listed, p.y - p.y_listed) > lim) return true;
+  for (const TranslatingWall& q : moving.translating)
+    if (std::hypot(q.x - q.x_listed, q.y - q.y_listed) > lim) return true;
   return false;
 }
 
@@ -91,6 +119,10 @@ void World::walls_listed() {
   for (RigidPlate& p : moving.plates) {
     p.x_listed = p.x;
     p.y_listed = p.y;
+  }
+  for (TranslatingWall& q : moving.translating) {
+    q.x_listed = q.x;
+    q.y_listed = q.y;
   }
 }
 

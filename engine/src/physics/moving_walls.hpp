@@ -1,10 +1,13 @@
 // Moving obstacles: walls rotating about a pivot at a prescribed rate (the shear box's side
-// walls) and rigid plates with their own weight (its top plate), integrated with the discs'
-// scheme. A wall's motion over the last step enters the contact increments (5a), (5b) through
-// the displacement of the wall's material point at the contact. The kernel table has a feature
-// for moving walls (kernels.hpp): a scene whose walls stay put runs a kernel without it.
+// walls), rigid plates with their own weight (its top plate), integrated with the discs'
+// scheme, and walls translating at a prescribed velocity during a time window (a scene's
+// walls[].velocity: a floor lowered under a column). A wall's motion over the last step enters
+// the contact increments (5a), (5b) through the displacement of the wall's material point at the
+// contact. The kernel table has a feature for moving walls (kernels.hpp): a scene whose walls
+// stay put runs a kernel without it.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 namespace dem {
@@ -44,11 +47,31 @@ struct RigidPlate {
   double x_listed = 0, y_listed = 0;    // displacement at the last neighbour-list build
 };
 
+// A wall translating at a prescribed velocity (vx, vy) while t_from <= t <= t_until: at time t
+// it is displaced by (vx, vy) x clamp(t - t_from, 0, t_until - t_from) from its scene position,
+// so a step covering part of the window moves it by that part only.
+struct TranslatingWall {
+  int wall = 0;
+  double vx = 0, vy = 0;                // [cm/s]
+  double t_from = 0, t_until = 0;       // [s]
+  double ax0 = 0, ay0 = 0, bx0 = 0, by0 = 0;  // endpoints at zero displacement (the scene's)
+  double x = 0, y = 0;                  // displacement [cm]
+  double x_listed = 0, y_listed = 0;    // displacement at the last neighbour-list build
+  double moved(double t) const { return std::clamp(t - t_from, 0.0, t_until - t_from); }  // [s] of motion by t
+};
+
 struct MovingWalls {
   std::vector<ObstacleMotion> motion;   // one per obstacle (walls, then points); empty: nothing moves
   std::vector<RotatingWall> rotating;
   std::vector<RigidPlate> plates;
-  bool empty() const { return rotating.empty() && plates.empty(); }
+  std::vector<TranslatingWall> translating;
+  bool empty() const { return rotating.empty() && plates.empty() && translating.empty(); }
+  // The time after which no prescribed translation moves a wall (0 without any).
+  double translations_end() const {
+    double t = 0;
+    for (const TranslatingWall& q : translating) t = q.t_until > t ? q.t_until : t;
+    return t;
+  }
 };
 
 }  // namespace dem

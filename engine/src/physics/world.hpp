@@ -124,7 +124,8 @@ class World {
   // The same without computing forces: for a state restored with its forces and history. Without
   // build_lists the contact lists are taken as they are (a checkpoint restores them exactly).
   void prepare(bool build_lists = true);
-  // Puts the moving walls where their restored angles and plate displacements say (state files).
+  // Puts the moving walls where their restored angles and plate displacements say (state files),
+  // and the translating walls where the clock (steps dt) says.
   void place_moving_walls();
   // One time step: the algorithm as a list of stages (world.cpp).
   void step();

@@ -28,7 +28,9 @@ void FillPhase::before_step(World& w, bool stopping) {
 Status FillPhase::after_step(World& w) {
   if (w.steps % kCheckEvery == 0) {
     w.mean_abs_increment(rest.mean_abs_du, rest.mean_abs_dv);
-    if (rest.mean_abs_du < rest.threshold && rest.mean_abs_dv < rest.threshold && !rest.reached) {
+    // Rest counts once no prescribed translation is still to come (a floor lowered later).
+    if (rest.mean_abs_du < rest.threshold && rest.mean_abs_dv < rest.threshold && !rest.reached &&
+        w.time >= w.moving.translations_end()) {
       rest.reached = true;
       rest.time = w.time;
       if (spec_.stop_at_rest) return Status::rest;

@@ -34,9 +34,12 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
       }
   j["pairs"] = pairs;
   json walls = json::array();
-  for (const Wall& w : s.geometry.walls)
+  for (const Wall& w : s.geometry.walls) {
     walls.push_back({{"name", w.name}, {"group", w.group}, {"from", {w.ax, w.ay}}, {"to", {w.bx, w.by}},
                      {"material", s.material_names[w.material]}, {"active", w.active}});
+    if (w.moves())  // a prescribed translation (walls[].velocity), only where there is one
+      walls.back()["motion"] = {{"velocity", {w.move_vx, w.move_vy}}, {"from", w.move_from}, {"until", w.move_until}};
+  }
   j["walls"] = walls;
   json points = json::array();
   for (const Point& p : s.geometry.points)

@@ -141,6 +141,18 @@ void read_walls(SceneSpec& s, Tab& root) {
       if (std::hypot(w.bx - w.ax, w.by - w.ay) <= 0) t.fail("to", "", "the wall has zero length (from == to)");
       w.material = material_index(s, t, "material");
       w.group = t.str("group", w.name);
+      // A prescribed translation: velocity [cm/s] while move_from <= t <= move_until [s].
+      if (t.has("velocity") || t.has("move_from") || t.has("move_until")) {
+        t.vec2("velocity", w.move_vx, w.move_vy);
+        w.move_from = t.non_negative("move_from", 0.0);
+        w.move_until = t.positive("move_until");
+        if (!(w.move_until > w.move_from))
+          t.fail("move_until", show(w.move_until), "must be later than move_from = " + show(w.move_from));
+        const double span = w.move_until - w.move_from;
+        for (double v : {w.move_vx * span, w.move_vy * span}) check_coordinate(t, "velocity", show(v) + " cm of travel", v);
+        for (double v : {w.ax + w.move_vx * span, w.ay + w.move_vy * span, w.bx + w.move_vx * span, w.by + w.move_vy * span})
+          check_coordinate(t, "velocity", "an end at " + show(v) + " cm", v);
+      }
       t.finish();
       s.geometry.walls.push_back(w);
     }
@@ -715,6 +727,17 @@ StabilityReport set_up_world(const SceneSpec& s, World& w) {
     w.discs.omega.back() = d.omega;
   }
   build_shear_world(s, w);  // bonds, rotating walls, plate (paper 2); nothing for other scenes
+  for (std::size_t k = 0; k < w.geometry.walls.size(); ++k) {  // walls[].velocity
+    const Wall& wl = w.geometry.walls[k];
+    if (!wl.moves()) continue;
+    if (w.moving.motion.empty()) w.moving.motion.assign(w.geometry.obstacle_count(), ObstacleMotion{});
+    TranslatingWall q;
+    q.wall = static_cast<int>(k);
+    q.vx = wl.move_vx; q.vy = wl.move_vy;
+    q.t_from = wl.move_from; q.t_until = wl.move_until;
+    q.ax0 = wl.ax; q.ay0 = wl.ay; q.bx0 = wl.bx; q.by0 = wl.by;
+    w.moving.translating.push_back(q);
+  }
   w.neighbors.skin = s.skin;
   w.neighbors.min_cell = s.cell;
   const StabilityReport rep = stability_report(w, s.material_names);

@@ -16,6 +16,8 @@
 #   contact forces (normal + elastic shear + viscous shear as the law applied them);
 # - scanner (every scan_every steps, same place): checks (non-finite state, discs outside the
 #   container, energy above the initial budget) and the candidate discs of guard and remover;
+# - moving walls: a mover (every step, last before the integrator) gives a wall's facet its
+#   prescribed velocity during the steps of its window, and NewtonIntegrator moves it;
 # - discharge: settle n_settle steps, erase the gate, run n_run steps; a remover erases discs
 #   whose centre is below outlet_y and logs the step;
 # - final (one step at the end, before the integrator): contacts, discs with velocities
@@ -85,6 +87,9 @@ def setup():
         wid = O.bodies.append(f)
         walls.append({"name": w["name"], "id": wid, "ax": ax, "ay": ay, "bx": bx, "by": by,
                       "present": True})
+        if w.get("motion"):   # a prescribed translation (the mover)
+            m = w["motion"]
+            walls[-1]["motion"] = (m["velocity"][0], m["velocity"][1], m["i_from"], m["i_until"], ax, ay, bx, by)
     S["walls"] = walls
     S["wall_by_id"] = {w["id"]: w for w in walls}
 
@@ -141,6 +146,8 @@ def setup():
         O.engines = O.engines + [VTKRecorder(fileName="snapshots/discs_", recorders=["spheres", "velocity", "id"],
                                              iterPeriod=C["snapshot_every"], initRun=True, multiblock=False,
                                              ascii=False, dead=C["n_settle"] > 0, label="snap_engine")]
+    if any(w.get("motion") for w in walls):
+        O.engines = O.engines + [PyRunner(command="mover()", iterPeriod=1, label="mover_engine")]
     O.engines = O.engines + [NewtonIntegrator(damping=0.0, gravity=(g[0], g[1], 0.0))]
     _update_guarded_ends()
 
@@ -206,6 +213,32 @@ def guard():
                         I.isActive = legit
     except Exception:
         _fail("guard: " + traceback.format_exc(limit=3))
+
+
+# ---------------------------------------------------------------------------------------------
+def mover():
+    """Last engine before the integrator: a moving wall's facet gets its velocity for the step the
+    integrator is about to take (iteration n moves from n dt to (n + 1) dt; the window's steps are
+    i_from <= n < i_until, as in the engine), and its bookkeeping ends (guard, contact points)
+    are put where that step takes it."""
+    try:
+        it = O.iter
+        dt = S["case"]["dt"]
+        busy = False
+        for w in S["walls"]:
+            if not w.get("motion") or not w["present"]:
+                continue
+            vx, vy, k0, k1, ax, ay, bx, by = w["motion"]
+            on = k0 <= it < k1
+            O.bodies[w["id"]].state.vel = Vector3(vx, vy, 0.0) if on else Vector3(0.0, 0.0, 0.0)
+            steps = min(max(it + (1 if on else 0), k0), k1) - k0
+            w["ax"], w["ay"] = ax + vx * steps * dt, ay + vy * steps * dt
+            w["bx"], w["by"] = bx + vx * steps * dt, by + vy * steps * dt
+            busy = busy or it < k1
+        if not busy:
+            mover_engine.dead = True
+    except Exception:
+        _fail("mover: " + traceback.format_exc(limit=3))
 
 
 # ---------------------------------------------------------------------------------------------
