@@ -20,6 +20,7 @@ REPO = Path(__file__).resolve().parents[2]
 SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
 DISCHARGE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
 SHEAR = REPO / "reference_inputs" / "scenes" / "shear_a50_clusters.toml"
+JANSSEN = REPO / "reference_inputs" / "scenes" / "janssen_column.toml"
 # Files a run writes that must be equal bit for bit (summary.json: all but the wall-clock timing).
 FILL_FILES = ["discs.csv", "contacts.csv", "wall_profiles.csv", "discs.vtu", "contacts.vtu"]
 DISCHARGE_FILES = FILL_FILES + ["removals.csv", "flow_series.csv", "wall_series.csv", "wall_totals_series.csv",
@@ -70,12 +71,19 @@ def stop(proc, sig):
     return proc.returncode
 
 
+def lowered_floor(folder):
+    """The Janssen column with its floor lowered through the whole (short) run, so that every kill
+    falls while the wall translates: its place must come back from the checkpoint."""
+    return scene_toml.edit(JANSSEN, {"walls[2].move_from": 0.01, "walls[2].move_until": 0.5, "end.time": 0.08,
+                                     "end.stop_at_rest": False}, Path(folder) / "floor.toml")
+
+
 @pytest.fixture(scope="module")
 def full_runs(tmp_path_factory, dem_binary):
     """The uninterrupted runs (no checkpoints), their final states and wall times."""
     tmp = tmp_path_factory.mktemp("full")
     wall = {}
-    for name, scene in (("silo", SILO), ("discharge", DISCHARGE), ("shear", SHEAR)):
+    for name, scene in (("silo", SILO), ("discharge", DISCHARGE), ("shear", SHEAR), ("floor", lowered_floor(tmp))):
         t0 = time.monotonic()
         p = dem(dem_binary, "run", scene, "--out", tmp / name, "--quiet", "--save-state", tmp / f"{name}.state")
         wall[name] = time.monotonic() - t0
@@ -87,10 +95,12 @@ def full_runs(tmp_path_factory, dem_binary):
     ("silo", SILO, FILL_FILES, 0.002),
     ("discharge", DISCHARGE, DISCHARGE_FILES, 0.005),
     ("shear", SHEAR, SHEAR_FILES, 0.02),
+    ("floor", None, FILL_FILES, 0.005),
 ])
 def test_killed_and_resumed_run_is_bit_identical(tmp_path, dem_binary, full_runs, case, scene, files, every):
     """SIGKILL at random times (a fraction of the uninterrupted run's wall time), resume, compare."""
     full, wall = full_runs
+    scene = scene or full / "floor.toml"
     rng = random.Random(7)
     killed = attempts = 0
     while killed < 3 and attempts < 12:
