@@ -12,7 +12,9 @@ DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m compare translate --check
 ctest --test-dir build --output-on-failure -j "$(nproc)"
 
 # The same tests on an AddressSanitizer + UndefinedBehaviorSanitizer build (any report fails).
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDEM_SANITIZE=ON -DDEM_PYTHON=/usr/bin/python3 >/dev/null
+# -O1 -g1 (line tables for the reports' stack traces) compiles in half the time of -O2 -g.
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+  -DDEM_SANITIZE=ON -DDEM_PYTHON=/usr/bin/python3 >/dev/null
 cmake --build build-asan -j "$(nproc)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
