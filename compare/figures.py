@@ -116,6 +116,44 @@ def scene_name(summary):
     return str(scene.get("name", "?")) if isinstance(scene, dict) else "?"
 
 
+# The contact law's options (docs/scene.md) at the paper's values, and LIGGGHTS' and YADE's.
+PAPER_LAW = {"normal_spring": "incremental", "no_tension": "elastic", "friction_cap": "elastic",
+             "lever_arm": "radius"}
+SHARED_LAW = {"normal_spring": "overlap", "no_tension": "total", "friction_cap": "total",
+              "lever_arm": "contact_point"}
+
+
+def law_name(options):
+    """'the paper's law', 'the shared law (LIGGGHTS, YADE)' or the options that differ from the
+    paper's, from summary.json's options."""
+    law = {k: options.get(k) for k in PAPER_LAW if k in options}
+    if not law:
+        return "law ?"
+    if all(law[k] == v for k, v in PAPER_LAW.items() if k in law):
+        return "the paper's law"
+    if all(law[k] == v for k, v in SHARED_LAW.items() if k in law):
+        return "the shared law (LIGGGHTS, YADE)"
+    return "law: " + ", ".join(f"{k} {v}" for k, v in law.items() if PAPER_LAW[k] != v)
+
+
+def run_caption(summary, with_scene=True):
+    """'scene, scheme, dt = .. s, law' of a run, for figure titles (every figure says what ran)."""
+    o = summary.get("options") or {}
+    dt = o.get("dt")
+    parts = [scene_name(summary)] if with_scene else []
+    parts += [str(o.get("scheme", "scheme ?")), f"dt = {dt:g} s" if isinstance(dt, (int, float)) else "dt ?",
+              law_name(o)]
+    return ", ".join(parts)
+
+
+def common_caption(summaries):
+    """The caption of several runs when scheme, dt and law agree (else each differing part is
+    named as 'mixed')."""
+    caps = [run_caption(s, with_scene=False).split(", ", 2) for s in summaries]
+    return ", ".join(c[0] if all(x[i] == c[0] for x in caps) else "mixed " + ("scheme", "dt", "law")[i]
+                     for i, c in enumerate(zip(*caps))) if caps else ""
+
+
 # --------------------------------------------------------------------------- pure maths
 
 
@@ -399,7 +437,7 @@ def plot_network(run_dir, out_png, title=None):
     draw_network(ax, run)
     ax.set_xlabel("X [cm]")
     ax.set_ylabel("Y [cm]")
-    head = title or (f"{scene_name(summary)}: {len(discs['r'])} discs, "
+    head = title or (f"{run_caption(summary)}: {len(discs['r'])} discs, "
                      f"t = {float(summary.get('time', float('nan'))):.4g} s")
     ax.set_title(f"{head}\ncontact forces e_n n + e_s t: "
                  f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights",
@@ -445,7 +483,8 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
         rest = _rest_text(run["summary"])
         ax.set_title(f"{label}: {rest}", fontsize=9,
                      color="black" if rest == "at rest" else "firebrick")
-    fig.suptitle("Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1982, Fig. 6): "
+    fig.suptitle(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1982, Fig. 6), "
+                 f"{common_caption([r['summary'] for r in runs])}\n"
                  f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; "
                  "X, Y in cm", fontsize=11)
     fig.tight_layout()
@@ -474,15 +513,18 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
         raise SystemExit(f"compare.figures: per must be 'contact' or 'bin', found {per!r}")
     fig, (axn, axs) = plt.subplots(1, 2, sharey=True, figsize=(11, 7))
     colours = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(run_dirs), 1)))
-    split_drawn, unpaired = set(), []
+    split_drawn, unpaired, summaries = set(), [], []
     for k, run_dir in enumerate(run_dirs):
         run = load_run(run_dir, parts=("contacts",))
+        summaries.append(run["summary"])
         weight = run["summary"]["disc_weight"]
         prof = side_wall_contacts(run["summary"], run["contacts"])
         if prof is None:
             _fail(os.path.join(run_dir, "contacts.csv"),
                   "no dw contact with a wall whose group starts with 'side'")
         label = labels[k] if labels else scene_name(run["summary"])
+        if _rest_text(run["summary"]) != "at rest":      # drawn, but never silently
+            label += f" ({_rest_text(run['summary'])})"
         if not prof["paired"]:
             unpaired.append(label)
         for ax, q in ((axn, "normal"), (axs, "friction")):
@@ -521,8 +563,8 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
             "the paper's Fig. 7 shows P_y per contact")
     if unpaired:
         note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
-    fig.suptitle("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7)\n" + note,
-                 fontsize=11)
+    fig.suptitle("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
+                 f"{common_caption(summaries)}\n" + note, fontsize=11)
     fig.tight_layout()
     return _save(fig, out_png)
 
@@ -546,9 +588,10 @@ def _plot_side_bins(run_dirs, out_png, labels):
     """
     fig, (axn, axs) = plt.subplots(1, 2, sharey=True, figsize=(11, 7))
     colours = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(run_dirs), 1)))
-    widths, split_drawn = set(), set()
+    widths, split_drawn, summaries = set(), set(), []
     for k, run_dir in enumerate(run_dirs):
         run = load_run(run_dir, parts=("profiles",))
+        summaries.append(run["summary"])
         weight = run["summary"]["disc_weight"]
         prof = side_profile(run["profiles"])
         if prof is None:
@@ -556,6 +599,8 @@ def _plot_side_bins(run_dirs, out_png, labels):
                   "no wall whose group starts with 'side'")
         widths.add(round(prof["bin_width"], 6))
         label = labels[k] if labels else scene_name(run["summary"])
+        if _rest_text(run["summary"]) != "at rest":
+            label += f" ({_rest_text(run['summary'])})"
         scale = np.nanmax(np.abs(prof["normal"])) if len(prof["depth"]) else 0.0
         for ax, q in ((axn, "normal"), (axs, "shear")):
             ax.plot(prof[q] / weight, prof["depth"], "-o", color=colours[k], markersize=3,
@@ -578,7 +623,7 @@ def _plot_side_bins(run_dirs, out_png, labels):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8))
         names.append(f"{g} alone")
     axn.legend(handles, names, fontsize=8, loc="upper right")
-    fig.suptitle("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7)")
+    fig.suptitle(f"Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), {common_caption(summaries)}")
     fig.tight_layout()
     return _save(fig, out_png)
 
@@ -607,7 +652,7 @@ def plot_bottom_profile(run_dir, out_png):
     total = f"total {normal.sum():.4g} disc weights"
     if isinstance(summary.get("weight"), (int, float)):
         total += f" (fill weighs {summary['weight'] / weight:.4g})"
-    ax.set_title(f"{scene_name(summary)}: bottom-wall normal force, {total}", fontsize=10)
+    ax.set_title(f"{run_caption(summary)}\nbottom-wall normal force, {total}", fontsize=10)
     fig.tight_layout()
     return _save(fig, out_png)
 
@@ -738,9 +783,9 @@ def _fmt(value, spec=".3g"):
 
 
 def _discharge_head(summary):
-    """'scene: pattern flow, status S' for discharge figure titles."""
+    """'scene, scheme, dt, law: pattern flow, status S' for discharge figure titles."""
     info = summary.get("discharge") or {}
-    return (f"{scene_name(summary)}: {info.get('pattern', '?')} flow, "
+    return (f"{run_caption(summary)}: {info.get('pattern', '?')} flow, "
             f"status {summary.get('status', '?')}")
 
 

@@ -15,7 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare import figures
+from compare import figures, paper_claims
 from compare.common import write_text_atomic
 from compare.run_dir import RunDir, RunDirError
 
@@ -119,24 +119,39 @@ def write_report(out_root, records, dem):
     lines += ["", "## Checks at rest (paper's scheme and the reference scheme)", "",
               "| case | arrangement | weight balance residual | left/right asymmetry | wall friction (disc weights, + down) | bottom normal |",
               "|---|---|---|---|---|---|"]
+    left_out = []
     for scheme, dt in (PAPER, REFERENCE):
         for s in ARRANGEMENTS:
             r = by.get((scheme, dt, s))
-            if r and r["status"] != "error":
+            if r and verdict(r) == "rest":
                 lines.append(f"| {scheme} {dt:g} | {label(s)} | {r['balance']:.1e} | {r['asymmetry']:.1e} | "
                              f"{r['side_friction']:.2f} | {r['bottom']:.1f} |")
+            elif r:
+                left_out.append(f"{scheme} {dt:g} {label(s)} ({verdict(r)})")
+    if left_out:
+        lines += ["", "Left out of this table, the Fig. 7 analogues and the checks of the paper's statements "
+                  "(not at rest): " + ", ".join(left_out) + "."]
     lines += ["", "## Pictures", "",
               "Contact-force networks (Fig. 6 analogue: segment = elastic contact force, disc diameter = 50/pi disc weights):", ""]
     for f in sorted(out_root.glob("network_*.png")):
         lines.append(f"![{f.stem}]({f.name})")
-    lines += ["", "Side-wall normal force and friction per contact against depth (Fig. 7 analogue):", ""]
+    lines += ["", "Side-wall normal force and friction per contact against depth (Fig. 7 analogue, runs at rest):", ""]
     for f in sorted(out_root.glob("fig7_*.png")):
         lines.append(f"![{f.stem}]({f.name})")
-    lines += ["", "## What the paper reports, and what to compare", "",
-              "- Force chains most horizontal in 11/12, most vertical in 18/19 (networks above).",
-              "- Side-wall normal force largest for 11/12 and falling as s grows (table above).",
-              "- P_y grows with depth and levels off, dropping near the bottom; small negative wall friction near",
-              "  the bottom corners (Fig. 7 analogue, right panel).", ""]
+    lines += ["", "## The paper's statements against these runs", "",
+              "Each statement of section 5(1) (../shared/docs/model.md) measured on the runs at rest "
+              "(`compare/paper_claims.py` says how).", ""]
+    for scheme, dt in (PAPER, REFERENCE):
+        rested = [by[(scheme, dt, s)] for s in ARRANGEMENTS
+                  if (scheme, dt, s) in by and verdict(by[(scheme, dt, s)]) == "rest"]
+        if not rested:
+            lines += [f"{scheme} at dt = {dt:g} s: no run came to rest.", ""]
+            continue
+        runs = {r["arrangement"]: out_root / r["dir"] for r in rested}
+        lines += [f"**{scheme}, dt = {dt:g} s** ({len(rested)} of {len(ARRANGEMENTS)} arrangements at rest)", ""]
+        lines += paper_claims.table([paper_claims.chains(runs), paper_claims.side_force(rested),
+                                     paper_claims.depth(runs), paper_claims.corner_friction(runs)])
+        lines.append("")
     write_text_atomic(out_root / "report.md", "\n".join(lines) + "\n")
 
 
@@ -163,13 +178,14 @@ def main(argv=None):
     write_text_atomic(out_root / "study.json", json.dumps(records, indent=1) + "\n")
     for scheme, dt in (PAPER, REFERENCE):
         tag = f"{scheme}_dt{dt:g}"
-        dirs = [out_root / r["dir"] for r in records if (r["scheme"], r["dt"]) == (scheme, dt) and r["status"] != "unstable"
-                and r["status"] != "error"]
-        labels = [f"{r['arrangement']}" for r in records if (r["scheme"], r["dt"]) == (scheme, dt)
-                  and r["status"] not in ("unstable", "error")]
-        if dirs:
-            figures.plot_network_grid(dirs, out_root / f"network_{tag}.png", labels=labels)
-            figures.plot_side_profiles(dirs, out_root / f"fig7_{tag}.png", labels=labels)
+        mine = [r for r in records if (r["scheme"], r["dt"]) == (scheme, dt) and r["status"] not in ("unstable", "error")]
+        if mine:   # networks of every run that ended (the grid marks those not at rest)
+            figures.plot_network_grid([out_root / r["dir"] for r in mine], out_root / f"network_{tag}.png",
+                                      labels=[r["arrangement"] for r in mine])
+        rested = [r for r in mine if verdict(r) == "rest"]
+        if rested:  # Fig. 7: runs at rest only (a moving fill's wall forces are no static profile)
+            figures.plot_side_profiles([out_root / r["dir"] for r in rested], out_root / f"fig7_{tag}.png",
+                                       labels=[r["arrangement"] for r in rested])
     write_report(out_root, records, args.dem)
     print(f"report: {out_root / 'report.md'}")
     return 0
