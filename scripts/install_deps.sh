@@ -10,6 +10,12 @@ for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if [ "${#missing[@]}" -gt 0 ] || [ "${CI:-}" = "true" ]; then
   SUDO=""
   [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  if [ "${#missing[@]}" -gt 0 ]; then
+    echo "install_deps: installing ${missing[*]} from Debian's archive (a few minutes on a fresh machine)" >&2
+  else
+    echo "install_deps: checking ${#PKGS[@]} packages with apt-get (CI)" >&2
+  fi
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${PKGS[@]}" >/dev/null
+  echo "install_deps: done" >&2
 fi
