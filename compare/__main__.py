@@ -25,8 +25,8 @@ members settle, the gate opens; means by Welch tests, jams by Fisher's exact tes
 smallest difference it detects), shear (paper 2's shear box, bonded clusters or free discs:
 jittered members compressed to rest and sheared; sigma0, the peak tau/sigma, its mean in strain
 bands and the dilation by Welch tests; native and YADE, LIGGGHTS and LAMMPS refuse it). LAMMPS runs
-when named (--codes lammps): collisions and static scenes; it refuses a discharge (no point contact,
-infinite plane walls) and caps the total tangential force where the others cap the spring alone.
+when named (--codes lammps): collisions, static scenes and discharges; it refuses a hopper (no
+inclined finite walls) and caps the total tangential force where the others cap the spring alone.
 
 Every code runs the law all three share (overlap spring, total-force no-tension, Coulomb cap on
 the total normal force) with velocity Verlet at the same dt; --native-law scene runs the native

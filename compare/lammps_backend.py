@@ -12,20 +12,26 @@ What the translation does:
   with a plain dashpot coefficient (``damping velocity``), the total normal force clamped >= 0
   (``limit_damping``: no_tension = total), the Coulomb cap on the total normal force; the
   tangential dashpot is x eta_n, so x = eta_s / eta_n;
-- walls: the active walls lying on one line with the discs on one side are one infinite plane,
-  ``region ... plane`` with ``fix wall/gran/region`` (same model keywords, the disc-wall pair's
-  constants), one fix per plane and disc material (a wall fix has one set of constants for every
-  atom of its group); ``contacts`` stores each disc's wall force and contact point, dumped every
-  sample and binned onto the scene's wall segments as the engine bins them.
+- walls, static and collision cases: the active walls lying on one line with the discs on one side
+  are one infinite plane, ``region ... plane`` with ``fix wall/gran/region`` (same model words,
+  the disc-wall pair's constants), one fix per plane and disc material (a wall fix has one set of
+  constants for every atom of its group); ``contacts`` stores each disc's wall force and contact
+  point, dumped every sample and binned onto the scene's wall segments as the engine bins them;
+- walls, discharge: each wall a block region BLOCK thick on its outer side (``side out``), so that
+  its ends are corners acting as point contacts, the slit ends L and R once the gate is open; the
+  gate block drops GATE_DROP cm in the first step after settling (``move`` with a step variable,
+  the same run: no setup in between); ``fix evaporate`` removes each disc whose centre is below
+  ``common.outlet_y``, and ``fix print`` writes the count every step (the removal times).
 
 What LAMMPS cannot express, refused before any run (CaseError naming the field):
-- walls whose union on one line has a gap (an opened slit), walls of different materials on one
-  line, and a disc of the case beyond the end of its plane's walls (the plane would act there);
-- a point (slit end) that can act, i.e. one that is not the joint of two walls on one line (LAMMPS
-  has no point contact: a frozen atom would add its radius to the overlap); hence no discharge;
+- static and collision cases: walls whose union on one line has a gap, walls of different
+  materials on one line, a disc of the case beyond the end of its plane's walls (the plane would
+  act there), and a point that can act (not the joint of two walls on one line: LAMMPS has no
+  point contact but a block's corner);
+- discharge: a wall neither horizontal nor vertical (a block's faces are axis-aligned; the hopper),
+  a point that is not the end of walls of its material;
 - a tangential dashpot without a normal one (x eta_n cannot be eta_s > 0 when eta_n = 0);
-- the shear box (paper 2's bonds and the free plate), several disc materials in one wall fix
-  (expressed: one fix per disc material), any contact variant but the shared one.
+- the shear box (paper 2's bonds and the free plate), any contact variant but the shared one.
 
 Where the run differs from the shared law (measured by the calibration collisions, docs/compare.md):
 - the Coulomb cap holds the TOTAL tangential force (spring + dashpot) at mu F_n, and while capped
@@ -50,12 +56,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (SHARED_VARIANT, Case, CaseError, Result, failed, inward_normal, kinetic_energy, pair,
+from .common import (SHARED_VARIANT, Case, CaseError, Result, failed, inward_normal, kinetic_energy, outlet_y, pair,
                      profiles_from_contacts, tangent, write_text_atomic)
 
 NAME = "lammps"
 Z_HALF = 2.0          # [cm] half thickness of the periodic z slab
 ON_LINE = 1e-9        # [cm] two walls are on one line (and a point at a joint) within this
+BLOCK = 1e-6          # [cm] thickness of a discharge's wall blocks (their corners: the slit ends)
+GATE_DROP = 200.0     # [cm] the gate block jumps this far down in the first step after settling
 
 
 def available() -> bool:
@@ -109,6 +117,41 @@ def planes(case: Case, centre=None) -> list[dict]:
                                 "(fix wall/gran/region, region plane), so the gap cannot be expressed")
             hi = max(hi, h)
         p["lo"], p["hi"] = p["walls"][0][1], hi
+        p["region"] = (f"plane {p['point'][0]!r} {p['point'][1]!r} 0.0 {p['n'][0]!r} {p['n'][1]!r} 0.0 side in")
+    return out
+
+
+def blocks(case: Case) -> list[dict]:
+    """A discharge's walls, each finite: a block region BLOCK thick on the side away from the discs
+    (``side out``: the discs interact with its surface), so that a wall's end is a corner that acts
+    as a point contact, as the engine's slit ends L and R do once the gate is open. Each block:
+    id, its wall (extent 0..length along the wall's from -> to), point (the ``from`` end), n, t,
+    material, region words, and whether it is the gate. CaseError for a wall that is neither
+    horizontal nor vertical (a block has axis-aligned faces)."""
+    r = case.resolved
+    gate = r.get("discharge", {}).get("gate")
+    out = []
+    for k, w in enumerate(w for w in r["walls"] if w.get("active", True)):
+        a, b = np.array(w["from"], float), np.array(w["to"], float)
+        t = tangent(w)
+        if min(abs(t[0]), abs(t[1])) > 1e-12:
+            raise CaseError(f"walls: {w['name']!r} from {w['from']} to {w['to']} is neither horizontal nor vertical; "
+                            "a finite LAMMPS wall (what a discharge needs: its slit) is a block region, with "
+                            "axis-aligned faces")
+        n = inward_normal(w, case.centre) + 0.0
+        corners = np.array([a, b, a - BLOCK * n, b - BLOCK * n])
+        lo, hi = corners.min(axis=0), corners.max(axis=0)
+        out.append({"id": f"b{k}", "walls": [(w, 0.0, float(np.linalg.norm(b - a)))], "point": a, "n": n, "t": t + 0.0,
+                    "material": w["material"], "lo": 0.0, "hi": float(np.linalg.norm(b - a)),
+                    "region": f"block {lo[0]!r} {hi[0]!r} {lo[1]!r} {hi[1]!r} INF INF side out",
+                    "gate": w["name"] == gate})
+    for pt in r["points"]:
+        at = np.array(pt["at"], float)
+        ends = [u["walls"][0][0] for u in out
+                if any(np.linalg.norm(np.array(u["walls"][0][0][e], float) - at) <= ON_LINE for e in ("from", "to"))]
+        if not ends or any(w["material"] != pt["material"] for w in ends):
+            raise CaseError(f"points: {pt['name']} at {pt['at']} is not the end of walls of its material "
+                            f"({pt['material']}); LAMMPS makes a point contact only as a block wall's corner")
     return out
 
 
@@ -144,10 +187,9 @@ def _check_case(case: Case) -> None:
     if case.mode == "shear" or "clusters" in case.resolved:
         raise CaseError("shear_box: the LAMMPS backend does not translate paper 2's shear box (its bonds with shear "
                         "springs and the free plate); compare it with --codes native,yade")
-    if case.mode == "discharge":
-        raise CaseError("discharge.gate: opening the slit leaves a gap between collinear walls and makes the slit "
-                        "ends L, R act as point contacts; LAMMPS's walls are infinite planes (fix wall/gran/region) "
-                        "and it has no point contact")
+    if case.mode == "discharge" and not any(w["name"] == case.resolved["discharge"]["gate"]
+                                            for w in case.resolved["walls"] if w.get("active", True)):
+        raise CaseError(f"discharge.gate: {case.resolved['discharge']['gate']!r} is not an active wall")
     c = case.resolved["contact"]
     if c != SHARED_VARIANT:
         raise CaseError(f"contact: the LAMMPS translation runs only {SHARED_VARIANT}, the case asks for {c}")
@@ -178,11 +220,14 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1, wall_rows: dict | 
     d = np.asarray(case.discs, float)
     if d.ndim != 2 or d.shape[1] != 6 or not np.all(np.isfinite(d)) or np.any(d[:, 2] <= 0):
         raise CaseError("discs: need finite rows x, y, r > 0, vx, vy, omega")
-    pls = planes(case, centre)
-    _check_points(case, pls)
+    if case.mode == "discharge":
+        pls = blocks(case)
+    else:
+        pls = planes(case, centre)
+        _check_points(case, pls)
     if wall_rows is not None:     # by plane
         wall_rows = {p["id"]: [k for w, _lo, _hi in p["walls"] for k in wall_rows.get(w["name"], [])] for p in pls}
-    else:
+    elif case.mode != "discharge":
         _check_reach(case, pls, d)
     mats = case.disc_materials()
     types = {m: k + 1 for k, m in enumerate(mats)}
@@ -192,6 +237,8 @@ def write_inputs(case: Case, out_dir: Path, threads: int = 1, wall_rows: dict | 
     walls = [w for w in r["walls"] if w.get("active", True)]
     xs = [c for w in walls for c in (w["from"][0], w["to"][0])] + list(d[:, 0])
     ys = [c for w in walls for c in (w["from"][1], w["to"][1])] + list(d[:, 1])
+    if case.mode == "discharge":       # removed at outlet_y: the box holds every disc until then
+        ys.append(outlet_y(r))
     pad = 4 * float(d[:, 2].max())
     lines = ["LAMMPS data file written by compare/lammps_backend.py", "",
              f"{len(d)} atoms", f"{len(mats)} atom types", "",
@@ -216,7 +263,8 @@ def _script(case: Case, pls: list[dict], types: dict, wall_rows: dict | None) ->
     gmag = float(np.linalg.norm(g))
     dt = case.dt
     sample = max(1, int(round(case.series_interval / dt)))
-    total = int(round(case.duration / dt))
+    settle_steps = int(round(case.settle / dt)) if case.mode == "discharge" else 0
+    total = settle_steps + int(round(case.duration / dt))
     skin = float(r["neighbor"]["skin"]) or 0.2
     mats = sorted(types, key=types.get)
     s = [f"# LAMMPS input for the comparison case {case.name}; generated by compare/lammps_backend.py.",
@@ -234,9 +282,11 @@ def _script(case: Case, pls: list[dict], types: dict, wall_rows: dict | None) ->
     for m in mats:
         s.append(f"group d_{types[m]} type {types[m]}")
     fixes = []
+    if case.mode == "discharge":     # the gate drops out of reach in the first step after settling (same run)
+        s += ["variable zero equal 0.0", f"variable gate_dy equal (step>{settle_steps})*{-GATE_DROP!r}"]
     for p in pls:
-        s.append(f"region r_{p['id']} plane {p['point'][0]!r} {p['point'][1]!r} 0.0 {p['n'][0]!r} {p['n'][1]!r} 0.0 "
-                 "side in")
+        move = " move v_zero v_gate_dy NULL" if p.get("gate") else ""
+        s.append(f"region r_{p['id']} {p['region']}{move}")
         for m in mats:
             grp = f"d_{types[m]}"
             if wall_rows is not None:       # the probe: this plane acts on its own probe discs only
@@ -250,6 +300,11 @@ def _script(case: Case, pls: list[dict], types: dict, wall_rows: dict | None) ->
             s.append(f"fix {fid} {grp} wall/gran/region granular {_coeffs(pair(r, m, p['material']), wname)} "
                      f"region r_{p['id']} contacts")
             fixes.append((fid, grp))
+    if case.mode == "discharge":     # removed once the centre is below outlet_y; the count every step
+        s += [f"region outlet block INF INF INF {outlet_y(r)!r} INF INF",
+              f"fix outlet all evaporate 1 {len(case.discs) + 1} outlet 4242",
+              "variable st equal step", "variable nout equal f_outlet",
+              'fix removals all print 1 "${st} ${nout}" file removals.txt screen no']
     s += ["fix integr all nve/sphere disc", "fix e2d all enforce2d",
           "thermo_style custom step time atoms ke",
           "thermo_modify lost error norm no flush yes", f"thermo {sample}"]
@@ -350,20 +405,30 @@ def read(case: Case, out_dir: Path) -> Result:
     res.discs_end = rows.tolist()
     res.n_final = len(rows)
     res.kinetic_energy_end = kinetic_energy(case.resolved, rows, case.material_index()[ids - 1])
-    if res.n_final != res.n_initial:
-        return failed(NAME, case.name, f"lost discs: {res.n_initial} at the start, {res.n_final} at the end",
-                      out_dir=str(out_dir))
-    pls = planes(case)
-    try:
-        _check_reach(case, pls, rows)
-    except CaseError as e:
-        return failed(NAME, case.name, f"at the end: {e}", out_dir=str(out_dir))
+    settle_steps = int(round(case.settle / case.dt)) if case.mode == "discharge" else 0
+    if case.mode == "discharge":
+        pls = blocks(case)
+        res.removals = _removals(out_dir / "removals.txt", settle_steps, case.dt)
+        if res.n_final + len(res.removals) != res.n_initial:
+            return failed(NAME, case.name, f"lost discs: {res.n_initial} at the start, {len(res.removals)} removed, "
+                          f"{res.n_final} at the end", out_dir=str(out_dir))
+    else:
+        if res.n_final != res.n_initial:
+            return failed(NAME, case.name, f"lost discs: {res.n_initial} at the start, {res.n_final} at the end",
+                          out_dir=str(out_dir))
+        pls = planes(case)
+        try:
+            _check_reach(case, pls, rows)
+        except CaseError as e:
+            return failed(NAME, case.name, f"at the end: {e}", out_dir=str(out_dir))
     walls = [w for w in case.resolved["walls"] if w.get("active", True)]
     mats = case.disc_materials()
     per_step: dict[int, list] = {}
     for p in pls:
         for m in mats:
             for step, f in _steps(str(out_dir / f"wall_{_fix_id(p, m)}_*.dump")):
+                if step < settle_steps:
+                    continue
                 per_step.setdefault(step, [])
                 for _id, _flag, fx, fy, px, py in _read_rows(f, 6):
                     s = float(np.dot(np.array([px, py]) - p["point"], p["t"]))
@@ -382,12 +447,26 @@ def read(case: Case, out_dir: Path) -> Result:
             series[w["name"]]["normal"].append(prof[w["name"]]["normal"])
             series[w["name"]]["shear"].append(prof[w["name"]]["shear"])
     res.profiles = {k: {q: v[q] for q in ("s_lo", "s_hi", "normal", "shear")} for k, v in prof.items()}
-    res.series = {"t": [st * case.dt for st in steps], "walls": series}
+    res.series = {"t": [(st - settle_steps) * case.dt for st in steps], "walls": series}
     ke = [t[3] for t in thermo]
     res.extra["ke_max_second_half"] = float(np.max(ke[len(ke) // 2:]))
     return res
 
 
+def _removals(path: Path, settle_steps: int, dt: float) -> list[float]:
+    """Times (since the opening) of the discs the outlet removed, from the count printed every step."""
+    out, last = [], 0
+    if path.exists():
+        for line in path.read_text().splitlines():
+            f = line.split()
+            if len(f) != 2 or line.startswith("#"):
+                continue
+            step, count = int(f[0]), int(float(f[1]))
+            out += [(step - settle_steps) * dt] * (count - last)
+            last = count
+    return out
+
+
 def read_snapshots(case: Case, out_dir: Path) -> list:
-    """No particle snapshots: the LAMMPS runs are static and collisions (discharge is refused)."""
+    """No particle snapshots (the runs write the final discs and the wall contacts only)."""
     return []

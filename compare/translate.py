@@ -1,6 +1,5 @@
 """The paper's scenes translated for LIGGGHTS, YADE and LAMMPS, committed under reference_inputs/
-(``python3 -m compare translate``; ``--check`` in CI fails when they are stale). LAMMPS gets the
-static silos only: it refuses the discharges (compare/lammps_backend.py).
+(``python3 -m compare translate``; ``--check`` in CI fails when they are stale).
 
 Each scene becomes the case the agreement study runs from the scene's own lattice: static
 (silo_*) or discharge (discharge_*, settle 1 s then open), with the shared contact law and the
@@ -46,8 +45,7 @@ def write_all(root: Path) -> None:
     for case in cases():
         liggghts_backend.write_inputs(case, root / "liggghts" / case.name)
         yade_backend.write_inputs(case, root / "yade" / case.name)
-        if case.mode != "discharge":
-            lammps_backend.write_inputs(case, root / "lammps" / case.name)
+        lammps_backend.write_inputs(case, root / "lammps" / case.name)
 
 
 def _same(a: Path, b: Path) -> list[str]:

@@ -83,7 +83,12 @@ def test_planes_merge_collinear_walls_and_refuse_a_gap(silo):
 
 
 @pytest.mark.parametrize("edit, match", [
-    (lambda r: r.update(discharge={"gate": "gate", "outlet_depth": 2.0}), r"discharge\.gate: .*point contact"),
+    (lambda r: r.update(discharge={"gate": "nosuch", "outlet_depth": 2.0}), r"discharge\.gate: 'nosuch' is not"),
+    (lambda r: (r.update(discharge={"gate": "gate", "outlet_depth": 2.0}),
+                r["walls"][0].update({"from": [0.0, 40.0], "to": [1.0, 0.0]})),
+     r"walls: 'left' .* neither horizontal nor vertical"),
+    (lambda r: (r.update(discharge={"gate": "gate", "outlet_depth": 2.0}), r["points"][0].update(at=[17.0, 0.0])),
+     r"points: L .* not the end of walls"),
     (lambda r: r["points"].append({"name": "P", "at": [10.0, 20.0], "material": "wall", "group": "P"}),
      r"points: P .*can act"),
     (lambda r: _pair(r, "sand", "sand").update(eta_n=0.0), r"pairs\[sand,sand\]\.eta_s: .*x eta_n"),
@@ -105,7 +110,8 @@ def test_a_disc_beyond_a_walls_end_is_refused(silo, tmp_path):
         lb.write_inputs(case, tmp_path)
 
 
-def test_dem_compare_refuses_a_discharge_for_lammps_before_any_run(tmp_path):
+def test_dem_compare_refuses_the_hopper_for_lammps_before_any_run(tmp_path):
+    """The hopper's slit needs finite walls (blocks), and its walls are inclined."""
     try:
         dem = dem_binary()
     except FileNotFoundError as e:
@@ -114,8 +120,23 @@ def test_dem_compare_refuses_a_discharge_for_lammps_before_any_run(tmp_path):
                         "--codes", "lammps", "--out", str(tmp_path / "out")], capture_output=True, text=True,
                        timeout=120)
     assert p.returncode == 2, p.stderr
-    assert "lammps cannot express it: discharge.gate" in p.stderr
+    assert "lammps cannot express it: walls: 'hopper_left'" in p.stderr
     assert not (tmp_path / "out" / "report.md").exists()
+
+
+def test_discharge_deck_has_block_walls_a_dropping_gate_and_the_outlet(silo, tmp_path):
+    r = copy.deepcopy(silo)
+    r["discharge"] = {"gate": "gate", "outlet_depth": 4.0, "jam_time": 0.3}
+    case = silo_case(r, mode="discharge", settle=0.05, duration=0.01)
+    script = lb.write_inputs(case, tmp_path).read_text().splitlines()
+    regions = {l.split()[1]: l.split()[2:] for l in script if l.startswith("region ")}
+    blocks = [v for v in regions.values() if v[0] == "block" and "side" in v]
+    assert len(blocks) == 5 and all(v[-1] == "out" or v[-4:] == ["move", "v_zero", "v_gate_dy", "NULL"] for v in blocks)
+    gate = next(v for v in blocks if "move" in v)
+    assert [float(x) for x in gate[1:5]] == [16.0, 24.0, -lb.BLOCK, 0.0]       # the slit, BLOCK thick below
+    assert f"variable gate_dy equal (step>{round(0.05 / 5e-5)})*{-lb.GATE_DROP!r}" in script
+    assert regions["outlet"][:5] == ["block", "INF", "INF", "INF", repr(-4.0)]
+    assert any(l.startswith("fix outlet all evaporate 1 ") for l in script)
 
 
 # --------------------------------------------------------------------------- real runs of lmp
@@ -178,3 +199,23 @@ def test_runner_reports_a_broken_input_clearly(silo, tmp_path, monkeypatch):
 @needs_lmp
 def test_version_names_lammps():
     assert re.match(r"LAMMPS \d+ \w+ \d{4}", lb.version()), lb.version()
+
+
+@needs_lmp
+def test_discharge_block_walls_carry_what_the_planes_carry_and_discs_leave(silo, tmp_path):
+    """Before the opening the five block walls of a discharge give the forces of the three planes of
+    the static translation (the same contacts: round-off apart); after it discs fall out, every disc
+    is either removed or still in, and the dropped gate carries nothing."""
+    settle = 0.05
+    static = lb.run(silo_case(silo, duration=settle, series_interval=settle), tmp_path / "static", timeout=300)
+    r = copy.deepcopy(silo)
+    r["discharge"] = {"gate": "gate", "outlet_depth": 4.0, "jam_time": 0.3}
+    dis = lb.run(silo_case(r, mode="discharge", settle=settle, duration=0.2), tmp_path / "discharge", timeout=300)
+    assert static.ok and dis.ok, (static.reason, dis.reason)
+    for w, prof in static.profiles.items():
+        at_opening = np.array(dis.series["walls"][w]["normal"][0])
+        assert np.allclose(at_opening, prof["normal"], rtol=1e-9, atol=1e-9 * max(prof["normal"])), w
+    assert dis.series["t"][0] == 0.0
+    assert len(dis.removals) >= 1 and min(dis.removals) > 0
+    assert dis.n_final + len(dis.removals) == len(silo["discs"])
+    assert all(sum(row) == 0.0 for row in dis.series["walls"]["gate"]["normal"][1:])
