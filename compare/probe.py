@@ -32,6 +32,9 @@ material, one free disc. How each code is read:
   spin pair's one-step velocity change under the dumped forces, m = dt (F_0 + F_1) / (2 dv);
   inertia from its spin change, I = dt (T_0 + T_1) / (2 d omega); gravity from the free disc's
   velocity change over one step; dt from ``thermo`` time at step 1.
+- LAMMPS: as LIGGGHTS (``probe_lammps``), with LAMMPS's slip (the full radii) and the sticking
+  pairs kept below its cap on spring + dashpot; the probe case is static, so its walls are the
+  backend's planes (a discharge's blocks carry the same model words).
 - native: the scene the native backend writes is resolved again by ``dem resolve`` (pairs,
   density, gravity, dt); the engine is the reference, so its masses are rho pi r^2 and its
   inertias m r^2 / 2 by definition (the engine prints neither).
