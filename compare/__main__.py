@@ -24,7 +24,9 @@ tall column's ensemble-averaged side-wall profile fitted with Janssen's law), di
 members settle, the gate opens; means by Welch tests, jams by Fisher's exact test, each with the
 smallest difference it detects), shear (paper 2's shear box, bonded clusters or free discs:
 jittered members compressed to rest and sheared; sigma0, the peak tau/sigma, its mean in strain
-bands and the dilation by Welch tests; native and YADE, LIGGGHTS refuses it).
+bands and the dilation by Welch tests; native and YADE, LIGGGHTS and LAMMPS refuse it). LAMMPS runs
+when named (--codes lammps): collisions, static scenes and discharges; it refuses a hopper (no
+inclined finite walls) and caps the total tangential force where the others cap the spring alone.
 
 Every code runs the law all three share (overlap spring, total-force no-tension, Coulomb cap on
 the total normal force) with velocity Verlet at the same dt; --native-law scene runs the native
@@ -43,22 +45,22 @@ def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python3 -m compare")
     sub = ap.add_subparsers(dest="cmd", required=True)
     s = sub.add_parser("scene", prog="dem compare", help="compare scenes (or list files) across codes",
-                       description="Runs scenes in the native engine, LIGGGHTS and YADE and judges whether "
-                                   "they agree.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description="Runs scenes in the native engine and the reference codes (LIGGGHTS, YADE, "
+                                   "LAMMPS) and judges whether they agree.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     s.add_argument("scenes", nargs="+", type=Path, help="scene TOML files and/or .list files")
     _common(s)
     plan.add_arguments(s)
     r = sub.add_parser("report", help="the project's agreement study (quick.list, or full.list with --full)")
     _common(r)
-    t = sub.add_parser("translate", help="write reference_inputs/liggghts/ and reference_inputs/yade/ for the paper's scenes")
+    t = sub.add_parser("translate", help="write reference_inputs/liggghts/, yade/ and lammps/ for the paper's scenes")
     t.add_argument("--check", action="store_true", help="exit 1 when the committed inputs differ from the generator's")
     return ap
 
 
 def _common(p) -> None:
     p.add_argument("--out", required=True, type=Path, help="output folder (report.md, agreement.json, PNGs)")
-    p.add_argument("--codes", default="native,liggghts,yade", help="native plus any of liggghts,yade (native, the reference, "
-                   "runs whether named or not: --codes yade is native and YADE)")
+    p.add_argument("--codes", default="native,liggghts,yade", help="native plus any of liggghts,yade,lammps (native, the reference, "
+                   "runs whether named or not: --codes yade is native and YADE; LAMMPS runs only when named)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--quick", action="store_true", help="quick profile (default): 4 members, 0.3 s static rests")
     g.add_argument("--full", action="store_true", help="full profile: 8 members, 0.6 s static rests")
@@ -80,7 +82,7 @@ def main(argv=None) -> int:
     codes = tuple(c.strip() for c in a.codes.split(",") if c.strip())
     bad = [c for c in codes if c not in CODES]
     if bad or not codes:
-        print(f"--codes: unknown {bad}" if bad else "--codes: name native and any of liggghts,yade", file=sys.stderr)
+        print(f"--codes: unknown {bad}" if bad else "--codes: name native and any of liggghts,yade,lammps", file=sys.stderr)
         return 2
     codes = ("native",) + tuple(c for c in codes if c != "native")    # native, the reference, always runs
     base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout)

@@ -46,8 +46,8 @@ every code is within it on every scene here at dt = 1e-5 s (the measured ratio i
 0.7 of the tolerance), while a 10 % error in mu or k_n moves t_roll or t_c beyond it.
 Between codes that run the same discrete law the tolerance is CODE_REL = 1e-4 of the scale.
 
-``python3 -m compare.calibration --out DIR [--codes native,liggghts,yade]`` runs every scene in
-each code and writes DIR/calibration.md and DIR/calibration.json; exit 1 when a code is outside a
+``python3 -m compare.calibration --out DIR [--codes native,liggghts,yade[,lammps]]`` runs every
+scene in each code and writes DIR/calibration.md and DIR/calibration.json; exit 1 when a code is outside a
 tolerance, differs from another code, or fails to run.
 """
 from __future__ import annotations

@@ -43,7 +43,7 @@ import numpy as np
 from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
 KINDS = ("collision", "static", "janssen", "discharge", "shear")
-REFERENCE_CODES = ("liggghts", "yade")
+REFERENCE_CODES = ("liggghts", "yade", "lammps")
 # Defaults per profile (a scene's own values win where it has them: dt, discharge.time).
 PROFILE_DEFAULTS = {
     "quick": {"members": 4, "static_duration": 0.3, "settle": 1.0},
@@ -118,7 +118,7 @@ def read_list(path: Path, base: Options) -> list[Entry]:
     ap = argparse.ArgumentParser(prog=str(path), add_help=False, exit_on_error=False)
     ap.add_argument("scene")
     ap.add_argument("--codes", default="", help="the codes this line runs (native, always, and any of "
-                    "liggghts,yade): a scene a reference code cannot express names the others; default: the "
+                    "liggghts,yade,lammps): a scene a reference code cannot express names the others; default: the "
                     "command's --codes")
     add_arguments(ap)
     out = []

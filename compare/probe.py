@@ -32,6 +32,9 @@ material, one free disc. How each code is read:
   spin pair's one-step velocity change under the dumped forces, m = dt (F_0 + F_1) / (2 dv);
   inertia from its spin change, I = dt (T_0 + T_1) / (2 d omega); gravity from the free disc's
   velocity change over one step; dt from ``thermo`` time at step 1.
+- LAMMPS: as LIGGGHTS (``probe_lammps``), with LAMMPS's slip (the full radii) and the sticking
+  pairs kept below its cap on spring + dashpot; the probe case is static, so its walls are the
+  backend's planes (a discharge's blocks carry the same model words).
 - native: the scene the native backend writes is resolved again by ``dem resolve`` (pairs,
   density, gravity, dt); the engine is the reference, so its masses are rho pi r^2 and its
   inertias m r^2 / 2 by definition (the engine prints neither).
@@ -50,11 +53,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import liggghts_backend, native_backend, yade_backend
+from . import lammps_backend, liggghts_backend, native_backend, yade_backend
 from .common import (Case, CaseError, disc_material, inward_normal, material_names, pair, resolve,
                      write_text_atomic)
 
-CODES = ("native", "liggghts", "yade")
+CODES = ("native", "liggghts", "yade", "lammps")
 FIELDS = ("kn", "ks", "eta_n", "eta_s", "mu")
 MAX_RADII = 16          # distinct radii probed for mass and inertia (evenly spaced, min and max kept)
 OVERLAP = 2e-3          # probe overlap / radius
@@ -493,27 +496,9 @@ def _kinematics(xi, vi, wi, ri, other) -> dict:
     return {"en": en, "delta": delta, "vn": vn, "vtr": vtr}
 
 
-def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
-    out_dir = Path(out_dir)
-    lay = layout(case)
-    pc = _probe_case(case, lay)
-    script = liggghts_backend.write_inputs(pc, out_dir)
-    probe_in = out_dir / "in.probe"
-    write_text_atomic(probe_in, liggghts_script(script.read_text()))
-    for old in out_dir.glob(LIGGGHTS_DUMP):
-        old.unlink()
-    rc, log = _run(liggghts_backend.command(probe_in), out_dir, timeout, out_dir / "liggghts_probe.log")
-    if rc != 0 or "ERROR" in log:
-        err = next((l for l in log.splitlines() if "ERROR" in l), f"exit code {rc}")
-        return _result("liggghts", {}, {}, "failed", f"liggghts probe failed: {err.strip()}")
-    dumps = {int(re.findall(r"(\d+)", p.name)[-1]): p for p in out_dir.glob(LIGGGHTS_DUMP)}
-    if set(dumps) != {0, 1}:
-        return _result("liggghts", {}, {}, "failed", f"probe dumps at steps {sorted(dumps)}, expected 0 and 1")
-    s0, s1 = _read_probe_dump(dumps[0]), _read_probe_dump(dumps[1])
-    times = [float(m.group(1)) for m in re.finditer(r"^\s*1\s+(\S+)\s+\d+\s*$", log, re.M)]
-    if not times:
-        return _result("liggghts", {}, {}, "failed", "no thermo line at step 1 in the probe log")
-    dt = times[-1]
+def _solve_one_step(case: Case, lay: Layout, s0: dict, s1: dict, dt: float, kinematics) -> tuple[dict, dict]:
+    """The constants from the step-0 and step-1 dumps of a probe (``probe_liggghts``'s equations);
+    ``kinematics``: the code's relative velocity at the contact (its rotational arm)."""
     dtf = 0.5 * dt
     r = case.resolved
 
@@ -564,7 +549,7 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
 
     def solve(role_rows, other_of):
         """role_rows: role -> disc row; other_of(row, step) -> the other body for _kinematics."""
-        k0 = {role: _kinematics(*state(s0, i)[:4], other_of(i, 0)) for role, i in role_rows.items()}
+        k0 = {role: kinematics(*state(s0, i)[:4], other_of(i, 0)) for role, i in role_rows.items()}
         fn = {role: float(np.dot(contact_force(s0, i), k0[role]["en"])) for role, i in role_rows.items()}
         # F_n = k_n delta - eta_n v_n (rest and closing discs)
         A = np.array([[k0[q]["delta"], -k0[q]["vn"]] for q in ("rest", "closing")])
@@ -574,7 +559,7 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
         vt0 = k0["rest"]["vtr"]
         eta_t = -float(np.dot(ft0, vt0)) / float(np.dot(vt0, vt0))
         x1, vh, wh, rad = half_step(i)
-        k1 = _kinematics(x1, vh, wh, rad, other_of(i, 1))
+        k1 = kinematics(x1, vh, wh, rad, other_of(i, 1))
         shear = k1["vtr"] * dt
         shear = shear - float(np.dot(shear, k1["en"])) * k1["en"]
         fc1 = contact_force(s1, i)
@@ -582,7 +567,7 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
         kt = -float(np.dot(ft1 + eta_t * k1["vtr"], shear)) / float(np.dot(shear, shear))
         j = role_rows["sliding"]
         x1, _v, _w, rad = state(s1, j)
-        ks_ = _kinematics(x1, np.zeros(2), 0.0, rad, other_of(j, 1))
+        ks_ = kinematics(x1, np.zeros(2), 0.0, rad, other_of(j, 1))
         fc = contact_force(s1, j)
         fnl = float(np.dot(fc, ks_["en"]))
         if not fnl > 0:
@@ -605,6 +590,30 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     consts = {"pairs": pairs, "mass": mass, "inertia": inertia, "gravity": [float(g) for g in gravity], "dt": dt}
     checks = {f"mass[{_radius_key(m, rad)}]": s0[i]["mass"] for m, by in lay.spins.items()
               for rad, (i, _j) in by.items()}
+    return consts, checks
+
+
+def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
+    out_dir = Path(out_dir)
+    lay = layout(case)
+    pc = _probe_case(case, lay)
+    script = liggghts_backend.write_inputs(pc, out_dir)
+    probe_in = out_dir / "in.probe"
+    write_text_atomic(probe_in, liggghts_script(script.read_text()))
+    for old in out_dir.glob(LIGGGHTS_DUMP):
+        old.unlink()
+    rc, log = _run(liggghts_backend.command(probe_in), out_dir, timeout, out_dir / "liggghts_probe.log")
+    if rc != 0 or "ERROR" in log:
+        err = next((l for l in log.splitlines() if "ERROR" in l), f"exit code {rc}")
+        return _result("liggghts", {}, {}, "failed", f"liggghts probe failed: {err.strip()}")
+    dumps = {int(re.findall(r"(\d+)", p.name)[-1]): p for p in out_dir.glob(LIGGGHTS_DUMP)}
+    if set(dumps) != {0, 1}:
+        return _result("liggghts", {}, {}, "failed", f"probe dumps at steps {sorted(dumps)}, expected 0 and 1")
+    s0, s1 = _read_probe_dump(dumps[0]), _read_probe_dump(dumps[1])
+    times = [float(m.group(1)) for m in re.finditer(r"^\s*1\s+(\S+)\s+\d+\s*$", log, re.M)]
+    if not times:
+        return _result("liggghts", {}, {}, "failed", "no thermo line at step 1 in the probe log")
+    consts, checks = _solve_one_step(case, lay, s0, s1, times[-1], _kinematics)
     method = {
         "kn, eta_n": "step 0 (no shear history): F_n = k_n delta - eta_n v_n of a pair at rest and a closing pair",
         "eta_s": "step 0: F_t = -eta_t v_t (zero shear history) of the pair at rest",
@@ -623,6 +632,114 @@ def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
 
 
 # ---------------------------------------------------------------------------------------------
+# LAMMPS
+LAMMPS_DUMP = "probe_*.dump"
+
+
+def lammps_script(base: str) -> str:
+    """The backend's script for the probe case with its dumps, thermo and run replaced by per-atom
+    dumps at full precision, thermo every step and ``run 1``; every other line is the backend's."""
+    keep = [l for l in base.splitlines() if not re.match(r"\s*(dump|dump_modify|run|thermo|thermo_style|thermo_modify)\s", l)]
+    keep += ["thermo_style custom step time atoms",
+             "thermo_modify format float %.17g lost error norm no",
+             "thermo 1",
+             f"dump probe all custom 1 {LAMMPS_DUMP} {' '.join(_DUMP_COLS)}",
+             "dump_modify probe format float %.17g sort id",
+             "run 1"]
+    return "\n".join(keep) + "\n"
+
+
+def _lammps_layout(case: Case) -> Layout:
+    """``layout`` with the sticking speeds lowered so that spring + dashpot stay at 1/5 of the
+    Coulomb cap after one step: LAMMPS caps the total tangential force (and gives none at a first
+    step beyond the cap), where LIGGGHTS caps the spring alone."""
+    lay = layout(case)
+    r = case.resolved
+    dt = float(case.dt)
+
+    def lower(row: int, c: dict) -> None:
+        ks, es = float(c["ks"]), float(c["eta_s"])
+        if ks > 0:
+            lay.discs[row, 5] *= ks * dt / (ks * dt + es)
+
+    for key, roles in lay.disc_pairs.items():
+        a, b = key.split("|")
+        for row in roles["rest"]:
+            lower(row, pair(r, a, b))
+    for m, by in lay.spins.items():
+        for rad, ij in by.items():
+            if ij not in [roles["rest"] for roles in lay.disc_pairs.values()]:
+                for row in ij:
+                    lower(row, pair(r, m, m))
+    for key, roles in lay.walls.items():
+        dm, wm = key.split("|")
+        lower(roles["rest"][0], pair(r, dm, wm))
+    return lay
+
+
+def _kinematics_full_arm(xi, vi, wi, ri, other) -> dict:
+    """As ``_kinematics``, with LAMMPS's rotational slip: r omega with the full radii."""
+    xi, vi = np.asarray(xi, float), np.asarray(vi, float)
+    if isinstance(other[0], str):
+        a, n = np.asarray(other[1], float), np.asarray(other[2], float)
+        en, delta, vr = n, ri - float(np.dot(xi - a, n)), vi
+        spin = ri * wi
+    else:
+        xj, vj, wj, rj = other
+        d = xi - np.asarray(xj, float)
+        dist = float(np.hypot(d[0], d[1]))
+        en, delta, vr = d / dist, ri + rj - dist, vi - np.asarray(vj, float)
+        spin = ri * wi + rj * wj
+    vn = float(np.dot(vr, en))
+    return {"en": en, "delta": delta, "vn": vn, "vtr": vr - vn * en - spin * _zcross(en)}
+
+
+def probe_lammps(case: Case, out_dir: Path, timeout: float = 120) -> dict:
+    """As ``probe_liggghts`` (the same equations of one step) with LAMMPS's law: the rotational slip
+    with the full radii, the sticking pairs below the total cap (``_lammps_layout``); each wall
+    plane acts on its own probe discs only (the discs of the other probes lie beyond the walls'
+    ends, where LAMMPS's infinite plane would still act)."""
+    out_dir = Path(out_dir)
+    lay = _lammps_layout(case)
+    pc = _probe_case(case, lay)
+    rows_of = {}
+    for roles in lay.walls.values():
+        for row, wname in roles.values():
+            rows_of.setdefault(wname, []).append(row)
+    script = lammps_backend.write_inputs(pc, out_dir, wall_rows=rows_of, centre=case.centre)
+    probe_in = out_dir / "in.probe"
+    write_text_atomic(probe_in, lammps_script(script.read_text()))
+    for old in out_dir.glob(LAMMPS_DUMP):
+        old.unlink()
+    rc, log = _run(lammps_backend.command(probe_in), out_dir, timeout, out_dir / "lammps_probe.log")
+    if rc != 0 or "ERROR" in log:
+        err = next((l for l in log.splitlines() if "ERROR" in l), f"exit code {rc}")
+        return _result("lammps", {}, {}, "failed", f"lammps probe failed: {err.strip()}")
+    dumps = {int(re.findall(r"(\d+)", p.name)[-1]): p for p in out_dir.glob(LAMMPS_DUMP)}
+    if set(dumps) != {0, 1}:
+        return _result("lammps", {}, {}, "failed", f"probe dumps at steps {sorted(dumps)}, expected 0 and 1")
+    s0, s1 = _read_probe_dump(dumps[0]), _read_probe_dump(dumps[1])
+    times = [float(m.group(1)) for m in re.finditer(r"^\s*1\s+(\S+)\s+\d+\s*$", log, re.M)]
+    if not times:
+        return _result("lammps", {}, {}, "failed", "no thermo line at step 1 in the probe log")
+    consts, checks = _solve_one_step(case, lay, s0, s1, times[-1], _kinematics_full_arm)
+    method = {
+        "kn, eta_n": "step 0 (no shear history): F_n = k_n delta - eta_n v_n of a pair at rest and a closing pair",
+        "eta_s": "step 0: F_t = -eta_t v_t (zero shear history, below the cap) of the pair at rest",
+        "ks": "step 1: F_t = -(k_t dt + eta_t) v_t(t + dt/2), sticking pair (spring + dashpot at 1/5 of the "
+              "cap), half-step velocities rebuilt from the step-0 forces; v_t with the full radii (LAMMPS's slip)",
+        "mu": "step 1: |F_t| / F_n of a pair sliding beyond the Coulomb cap",
+        "mass": "m = dt (F_0 + F_1) / (2 dv) along the pair normal of a spin pair disc",
+        "inertia": "I = dt (T_0 + T_1) / (2 d omega) of a spin pair disc (fix nve/sphere disc)",
+        "gravity": "(v_1 - v_0) / dt of the free disc",
+        "dt": "thermo time at step 1 (%.17g)",
+        "contact forces": "per-atom f minus m g (g as applied to the free disc), dumped with %.17g",
+        "checks": "mass again as the stored per-atom mass (dump custom mass)",
+    }
+    return _result("lammps", consts, method, checks=checks)
+
+
+# ---------------------------------------------------------------------------------------------
 def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
     """The effective constants of ``code`` for ``case`` (see the module doc); never raises for a
     failed probe: status "failed" and the reason."""
@@ -635,6 +752,8 @@ def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
             res = probe_yade(case, out_dir, timeout)
         elif code == "liggghts":
             res = probe_liggghts(case, out_dir, timeout)
+        elif code == "lammps":
+            res = probe_lammps(case, out_dir, timeout)
         else:
             raise ValueError(f"code: {code!r} is not one of {CODES}")
     except (CaseError, OSError, ValueError, KeyError, ArithmeticError, np.linalg.LinAlgError) as e:

@@ -15,8 +15,8 @@ import numpy as np  # noqa: E402
 from . import calibration  # noqa: E402
 from .common import write_text_atomic  # noqa: E402
 
-COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green"}
-MARKERS = {"native": "o", "liggghts": "s", "yade": "^"}
+COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green", "lammps": "tab:red"}
+MARKERS = {"native": "o", "liggghts": "s", "yade": "^", "lammps": "D"}
 
 
 def _savefig(fig, path: Path) -> None:
@@ -75,13 +75,15 @@ def plot_calibration(rows: list, png: Path) -> None:
     fig, ax = plt.subplots(figsize=(12, 4))
     names = [r["scene"] for r in rows]
     x = np.arange(len(names))
-    for j, code in enumerate(("native", "liggghts", "yade")):
+    codes = [c for c in COLORS if any(c in r["codes"] for r in rows)]
+    width = 0.8 / max(len(codes), 1)
+    for j, code in enumerate(codes):
         vals = []
         for r in rows:
             m = r["codes"].get(code, {})
             dev = [abs(m[q] - r["reference"][q]) / t for q, t in r["tolerance"].items() if q in m and t > 0]
             vals.append(max(dev) if dev else np.nan)
-        ax.bar(x + (j - 1) * 0.27, vals, 0.27, color=COLORS[code], label=code)
+        ax.bar(x + (j - (len(codes) - 1) / 2) * width, vals, width, color=COLORS[code], label=code)
     ax.axhline(1.0, color="k", lw=1, ls="--", label="tolerance")
     ax.set_xticks(x)
     ax.set_xticklabels(names, rotation=60, ha="right", fontsize=7)
@@ -268,7 +270,7 @@ def write(report: dict, out: Path) -> None:
                 L.append(f"| {a['scene']} | {row['option']} | {a['failing']} | {row['failing']} |")
             L.append(f"| {a['scene']} | **verdict** | {a['verdict']} | |")
     if report.get("calibration"):
-        codes = [c for c in ("native", "liggghts", "yade") if c in report["codes"]]
+        codes = [c for c in ("native", "liggghts", "yade", "lammps") if c in report["codes"]]
         L += ["", "## Collisions (Chung & Ooi's tests as scenes: compare/calibration.py)", "",
               "Each code against the reference (**x**: outside the tolerance), and the reference codes against "
               "the native engine.", "", calibration.table(report["calibration"], codes)]

@@ -18,7 +18,7 @@ import numpy as np
 from . import stats
 from .common import ROOT, SHARED_VARIANT, Case, Result, failed, resolve
 
-CODES = ("native", "liggghts", "yade")
+CODES = ("native", "liggghts", "yade", "lammps")
 SCENES = ROOT / "reference_inputs" / "scenes"
 # Stable dt with velocity Verlet and the paper's constants (reference-codes.md; the engine's
 # bound for 11/12-type loose lattices is lower than for the dense ones).

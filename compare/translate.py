@@ -1,4 +1,4 @@
-"""The paper's scenes translated for LIGGGHTS and YADE, committed under reference_inputs/
+"""The paper's scenes translated for LIGGGHTS, YADE and LAMMPS, committed under reference_inputs/
 (``python3 -m compare translate``; ``--check`` in CI fails when they are stale).
 
 Each scene becomes the case the agreement study runs from the scene's own lattice: static
@@ -16,11 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import liggghts_backend, yade_backend
+from . import lammps_backend, liggghts_backend, yade_backend
 from .common import ROOT, SHARED_VARIANT, Case, resolve
 from .study import DEFAULT_DT, LATTICE_DT, SCENES
 
 OUT = ROOT / "reference_inputs"
+SUBDIRS = ("liggghts", "yade", "lammps")
 
 
 def cases() -> list[Case]:
@@ -44,6 +45,7 @@ def write_all(root: Path) -> None:
     for case in cases():
         liggghts_backend.write_inputs(case, root / "liggghts" / case.name)
         yade_backend.write_inputs(case, root / "yade" / case.name)
+        lammps_backend.write_inputs(case, root / "lammps" / case.name)
 
 
 def _same(a: Path, b: Path) -> list[str]:
@@ -57,16 +59,16 @@ def _same(a: Path, b: Path) -> list[str]:
 
 def main(check: bool) -> int:
     if not check:
-        for sub in ("liggghts", "yade"):
+        for sub in SUBDIRS:
             shutil.rmtree(OUT / sub, ignore_errors=True)
         write_all(OUT)
-        print(f"wrote {OUT / 'liggghts'} and {OUT / 'yade'}")
+        print("wrote " + ", ".join(str(OUT / s) for s in SUBDIRS))
         return 0
     with tempfile.TemporaryDirectory() as tmp:
         write_all(Path(tmp))
-        stale = [f"{sub}/{f}" for sub in ("liggghts", "yade") for f in _same(Path(tmp) / sub, OUT / sub)]
+        stale = [f"{sub}/{f}" for sub in SUBDIRS for f in _same(Path(tmp) / sub, OUT / sub)]
     if stale:
         print("stale reference inputs (run python3 -m compare translate): " + ", ".join(stale[:10]), file=sys.stderr)
         return 1
-    print("reference_inputs/liggghts and reference_inputs/yade are up to date")
+    print("reference_inputs/" + ", reference_inputs/".join(SUBDIRS) + " are up to date")
     return 0

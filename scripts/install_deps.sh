@@ -3,7 +3,7 @@
 set -euo pipefail
 PKGS=(cmake g++ make pkg-config libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev
       libgtest-dev googletest libbenchmark-dev python3-numpy python3-scipy python3-matplotlib python3-meshio python3-pytest
-      liggghts yade    # the reference codes of the comparison layer (compare/)
+      liggghts yade lammps   # the reference codes of the comparison layer (compare/); lammps gives lmp
       time)            # GNU time: benchmarks/speed.py measures each run's peak memory with it
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done

@@ -20,6 +20,8 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 
 # The quick agreement study: native vs the real LIGGGHTS and YADE (fails on any disagreement),
-# then the mutants (deliberately wrong translations; fails unless every one is caught).
+# then the mutants (deliberately wrong translations; fails unless every one is caught), then LAMMPS
+# on the scenes it expresses, with its mutants.
 build/dem compare reference_inputs/agreement/quick.list --out out/agreement
 build/dem compare reference_inputs/agreement/mutants.list --mutants --out out/mutants
+build/dem compare reference_inputs/agreement/lammps.list --codes lammps --mutants --out out/lammps

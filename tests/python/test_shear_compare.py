@@ -84,7 +84,9 @@ def test_a_list_line_names_the_codes_it_runs(tmp_path):
     assert plan.codes_of(a, ("native", "liggghts")) == ("native",)
     lst.write_text(f"{SCENES / 'silo_17_18.toml'} --codes yade\n")     # native, the reference, always runs
     assert plan.read_list(lst, plan.Options())[0].options.codes == ("native", "yade")
-    lst.write_text(f"{SCENES / 'silo_17_18.toml'} --codes native,lammps\n")
+    lst.write_text(f"{SCENES / 'silo_17_18.toml'} --codes lammps\n")       # the third reference code
+    assert plan.read_list(lst, plan.Options())[0].options.codes == ("native", "lammps")
+    lst.write_text(f"{SCENES / 'silo_17_18.toml'} --codes native,nosuch\n")
     with pytest.raises(plan.PlanError, match="unknown"):
         plan.read_list(lst, plan.Options())
 
