@@ -466,7 +466,7 @@ def run_written(case: Case, out_dir: Path, timeout: float = 600, threads: int = 
     """Runs the script already written in out_dir and reads it (never raises)."""
     out_dir = Path(out_dir)
     try:
-        info = execute(out_dir, timeout, threads, wrap)
+        execute(out_dir, timeout, threads, wrap)
     except Exception as e:          # noqa: BLE001 - a run never raises
         return failed(NAME, case.name, f"could not run yade: {e!r}", out_dir=str(out_dir))
     return read(case, out_dir)
