@@ -91,6 +91,9 @@ def test_periodic_snapshots_with_walls_in_one_pvd(fill_run):
     entries = pvd(out / "snapshots.pvd")
     assert [(round(t, 9), part) for t, part, _ in entries] == [(t, k) for t in (0.0, 0.1, 0.2) for k in (0, 1, 2)]
     for t, part, name in entries:
+        if t == 0 and part == 2:  # no contact yet (the lattice's gaps): a grid meshio cannot read
+            assert 'NumberOfCells="0"' in (out / name).read_text()
+            continue
         mesh = meshio.read(out / name)
         if part == 0:
             assert len(mesh.points) == 350 and "radius" in mesh.point_data

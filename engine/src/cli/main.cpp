@@ -48,7 +48,8 @@ const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
     "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
     "\n"
-    "  --out DIR       output directory (created; see docs/outputs.md)\n"
+    "  --out DIR       output directory (created, or cleared of an earlier run's files unless\n"
+    "                  --resume; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
     "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
@@ -61,7 +62,7 @@ const char* kRunHelp =
     "                  output.checkpoint_every; 0: none)\n"
     "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
     "                  the result is bit-identical to a run never stopped\n"
-    "  --quiet         no header and no progress line\n"
+    "  --quiet         no header and no progress line (DIR/run.log has the header all the same)\n"
     "\n"
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
     "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
@@ -78,8 +79,9 @@ const char* kEnsembleHelp =
     "       dem ensemble merge DIR [--members M] [--quiet]\n"
     "\n"
     "Runs M copies of the scene (default 8) whose initial disc centres are moved by a seeded\n"
-    "uniform amount in [-CM, CM] (default 1e-4 cm), J at a time (default: all cores), into\n"
-    "DIR/member_KK, and writes DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
+    "uniform amount in [-CM, CM] (default 1e-4 cm; 1e-6 m in an si scene), J at a time (default:\n"
+    "all cores), into DIR/member_KK (each with its run.log and the files of dem run), and writes\n"
+    "DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
     "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n"
     "\n"
     "--member K runs member K alone (0-based), the same member bit for bit as in a full ensemble\n"
@@ -371,6 +373,9 @@ int cmd_ensemble(int argc, char** argv) {
     if (spec.shear_box.shear)  // its members would compress and stop: the shear runs in cmd_run only
       return bad("dem ensemble runs fills and discharges; a [shear] scene runs with dem run");
     eo.command.assign(argv - 2, argv + argc);  // dem ensemble ARGS
+    bool perturb_given = false;  // else 1e-4 cm in the scene's units
+    for (int a = 0; a < argc; ++a) perturb_given |= std::string(argv[a]) == "--perturb";
+    if (!perturb_given) eo.perturb = default_length(spec.units, eo.perturb);
     if (member >= 0) return run_member_alone(spec, eo, member, out, quiet);
     return run_ensemble(spec, eo, out, quiet);
   } catch (const SceneError& e) {

@@ -90,7 +90,7 @@ SceneSpec member_spec(const SceneSpec& spec, const EnsembleOptions& opt, int k) 
 // What identifies the ensemble a member belongs to (DIR/member_KK/member.json): merge checks it.
 json member_identity(const SceneSpec& spec, const EnsembleOptions& opt, int k) {
   return {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
-          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}};
+          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}, {"units", to_string(spec.units)}};
 }
 
 // Runs member k into dir; a member that cannot run is a failed member ("error: ..."), never the
@@ -141,7 +141,8 @@ void print_member(const Member& m) {
 // The statistics of the members (DIR/ensemble.json) and the exit code.
 int write_ensemble(const json& identity, int members_wanted, const std::vector<Member>& members,
                    const std::string& out_dir, bool quiet) {
-  const EnsembleOptions opt{members_wanted, identity["seed"].get<unsigned long>(), identity["perturb"].get<double>(), 0};
+  const EnsembleOptions opt{members_wanted, identity["seed"].get<unsigned long>(), identity["perturb"].get<double>(), 0, {}};
+  const char* length = identity.value("units", std::string("cgs")) == "si" ? "m" : "cm";  // of the perturbation
   std::vector<double> flow, flow_mass, out1, pb, pbw, ps, psw, jam_at;
   int jammed = 0, unstable = 0, failed = 0, funnel = 0, piping = 0;
   json list = json::array();
@@ -185,7 +186,8 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
              {"unstable", unstable}, {"failed", failed},
              {"note", "mean and standard error (std / sqrt(n)) over members with a value; members that were unstable "
                       "or could not run (failed) count in no statistic; jam fraction: members that met a jam, of "
-                      "those with a result; perturbation: uniform [-perturb, perturb] cm on every initial centre"},
+                      "those with a result; perturbation: uniform [-perturb, perturb] " + std::string(length) +
+                      " on every initial centre"},
              {"runs", list}};
   write_file_atomic(out_dir + "/ensemble.json", js.dump(2) + "\n");
   if (!quiet) {
@@ -196,8 +198,8 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
       else
         std::printf("  %-28s %10s\n", label, "-");
     };
-    std::printf("ensemble %s: %d members, seed %lu, perturb %g cm\n", identity["scene"].get<std::string>().c_str(),
-                opt.members, opt.seed, opt.perturb);
+    std::printf("ensemble %s: %d members, seed %lu, perturb %g %s\n", identity["scene"].get<std::string>().c_str(),
+                opt.members, opt.seed, opt.perturb, length);
     show("flow rate [discs/s]", js["flow_rate_discs"]);
     show("discs out at 1 s", js["discs_out_at_1s"]);
     show("peak/static bottom", js["peak_ratio_bottom"]);

@@ -64,8 +64,9 @@ void Recorder::snapshot(const World& w) {
   const bool binary = spec_->vtu_binary(w.discs.size());
   write_disc_files(dir, s + "_discs", *spec_, w.discs, nullptr);
   write_contact_files(dir, s + "_contacts", w, binary);
-  const std::string walls = write_walls(w, s);
-  snapshots.add(w.time, w.steps, "snapshots/" + s + "_discs.vtu", walls, "snapshots/" + s + "_contacts.vtu");
+  write_walls_vtu(dir + "/" + s + "_walls.vtu", w.geometry, binary);
+  snapshots.add(w.time, w.steps, "snapshots/" + s + "_discs.vtu", "snapshots/" + s + "_walls.vtu",
+                "snapshots/" + s + "_contacts.vtu");
 }
 
 void Recorder::write() const {
