@@ -22,6 +22,8 @@ class Recorder {
   // out_dir empty: records nothing (a fill run by a test in memory).
   void configure(const SceneSpec& spec, const std::string& out_dir, double dt);
   bool active() const { return !out_.empty(); }
+  // Whether step `step` is a periodic snapshot's: its contacts need the step's pair totals.
+  bool snapshot_due(long step) const { return active() && snapshot_every_ > 0 && step % snapshot_every_ == 0; }
 
   // A phase's fresh start, each step the guard passed that leaves it running, and its end.
   void phase_start(const World& w, const char* phase);

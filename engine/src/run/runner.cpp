@@ -87,6 +87,7 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
   const bool terminal = isatty(fileno(stderr)) != 0;
   while (status == Status::running) {
     phase.before_step(w, stopping);
+    if (record.snapshot_due(w.steps + 1)) w.record_pair_forces = true;  // the snapshot's contact totals
     w.step();
     if (std::string why = check(w, phase); !why.empty()) {
       reason = why;
