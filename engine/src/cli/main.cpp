@@ -62,7 +62,7 @@ const char* kRunHelp =
     "                  output.checkpoint_every; 0: none)\n"
     "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
     "                  the result is bit-identical to a run never stopped\n"
-    "  --quiet         no header and no progress line (DIR/run.log has the header all the same)\n"
+    "  --quiet         no header and no progress line\n"
     "\n"
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
     "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
