@@ -71,3 +71,24 @@ def test_paraview_reads_the_binary_files(runs, tmp_path):
         mesh = meshio.read(n)
         assert counts[n] == (len(mesh.points), sum(len(c.data) for c in mesh.cells)), n
     assert counts[names[0]] == (350, 350)
+
+
+@pytest.mark.skipif(PVPYTHON is None, reason="ParaView's pvpython is not installed")
+def test_paraview_reads_the_runs_collection(runs, tmp_path):
+    """snapshots.pvd: at each time a multiblock of the discs, the walls and the contacts."""
+    script = tmp_path / "pvd.py"
+    script.write_text(
+        "import sys\n"
+        "from paraview.simple import PVDReader, servermanager\n"
+        "r = PVDReader(FileName=sys.argv[1])\n"
+        "for t in r.TimestepValues:\n"
+        "    r.UpdatePipeline(t)\n"
+        "    d = servermanager.Fetch(r)\n"
+        "    print('at', t, *[d.GetBlock(k).GetNumberOfCells() for k in range(d.GetNumberOfBlocks())])\n")
+    p = subprocess.run([PVPYTHON, str(script), str(runs["binary"] / "snapshots.pvd")], capture_output=True,
+                       text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    rows = [line.split()[1:] for line in p.stdout.splitlines() if line.startswith("at ")]
+    contacts = len(meshio.read(runs["binary"] / "snapshots" / "step_000000400_contacts.vtu").cells[0].data)
+    assert [(round(float(t), 9), int(d), int(w), int(c)) for t, d, w, c in rows] == [(0.0, 350, 5, 0),
+                                                                                     (0.04, 350, 5, contacts)]
