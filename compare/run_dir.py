@@ -49,8 +49,10 @@ SHEAR_SERIES_COLUMNS = ("t", "strain", "angle", "sigma", "tau", "ratio", "sigma_
                         "sliding", "bond_strain", "kinetic_energy")
 SHEAR_PLANE_COLUMNS = ("t", "strain", "plane", "y", "contacts", "sigma", "tau", "sigma_check",
                        "tau_check", "sigma_inertia", "tau_inertia")
-TEXT_COLUMNS = {"kind", "j", "wall", "group", "material", "how", "name"}   # kept as str
-INT_COLUMNS = {"i", "id", "bin", "contacts"}                              # converted to int
+# thermo.csv: these columns, then <group>_normal, <group>_shear per wall group of the run.
+THERMO_COLUMNS = ("t", "step", "phase", "discs", "kinetic_energy", "contacts", "wall_contacts", "max_overlap")
+TEXT_COLUMNS = {"kind", "j", "wall", "group", "material", "how", "name", "phase"}   # kept as str
+INT_COLUMNS = {"i", "id", "bin", "contacts", "step", "wall_contacts"}                              # converted to int
 
 # The files of a run and their columns; the series of a shear are read by their header (a
 # YADE shear run writes the columns it has), the others need every column named here.
@@ -64,6 +66,7 @@ FILES = {
     "wall_totals_series.csv": WALL_TOTALS_COLUMNS,
     "shear_series.csv": SHEAR_SERIES_COLUMNS,
     "shear_planes.csv": SHEAR_PLANE_COLUMNS,
+    "thermo.csv": THERMO_COLUMNS,
 }
 
 # The keys docs/outputs.md promises in summary.json.
@@ -319,6 +322,8 @@ class RunDir:
         if name in ("shear_series.csv", "shear_planes.csv"):
             return read_header_csv(self.file(name), ("strain", "sigma", "tau") +
                                    (("ratio",) if name == "shear_series.csv" else ()))
+        if name == "thermo.csv":  # its wall-group columns are the run's own
+            return read_csv(self.file(name), THERMO_COLUMNS, extra=True)
         return read_csv(self.file(name), FILES[name], empty=empty, extra=(name == "discs.csv"))
 
     def discs(self):
@@ -349,6 +354,10 @@ class RunDir:
 
     def shear_planes(self):
         return self.csv("shear_planes.csv")
+
+    def thermo(self):
+        """thermo.csv: the run's global measures in every phase (``phase`` as str)."""
+        return self.csv("thermo.csv")
 
     def series(self, name):
         """A series by its short name: removals, flow, wall, wall_totals, shear, shear_planes."""

@@ -6,7 +6,7 @@
 Prints one line per file: its path relative to RUN_DIR and the SHA-256 of its bytes. Timing
 fields of summary.json (wall_time_s and keys holding "seconds" or "wall_time", the thread
 count, the engine version and build) are dropped before hashing, as are files that record only
-timings or the command line (log.txt, *.png: drawn by matplotlib, whose version may differ).
+timings or the command line (log.txt, run.log, *.png: drawn by matplotlib, whose version may differ).
 """
 import hashlib
 import json
@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 SKIP_SUFFIX = (".png",)
-SKIP_NAMES = {"log.txt"}
+SKIP_NAMES = {"log.txt", "run.log"}
 
 
 def scrub(v):

@@ -40,6 +40,8 @@ def check_file(path):
         ET.parse(path)
     elif name.endswith(".png"):
         assert matplotlib.image.imread(path).size > 0
+    elif name == "run.log":
+        assert path.read_text().endswith("\n"), f"{path}: no final line break"
     elif name == "checkpoint.dem":
         pass  # checked by resuming
     elif name == "last_good.bin":
@@ -81,7 +83,7 @@ def check_dir(out):
         if path.is_dir():
             continue
         if path.name.endswith(".tmp"):  # an unfinished file keeps its temporary name
-            assert (path.parent / path.name[:-4]).suffix in (".json", ".csv", ".vtu", ".pvd", ".png", ".dem", ".bin"), path
+            assert (path.parent / path.name[:-4]).suffix in (".json", ".csv", ".vtu", ".pvd", ".png", ".dem", ".bin", ".log"), path
             continue
         check_file(path)
         checked += 1
@@ -111,7 +113,7 @@ def test_killed_runs_leave_only_complete_files(tmp_path, dem_binary, scene):
     full = tmp_path / "full"
     engine = timed([str(dem_binary), "run", str(scene), "--out", str(full), "--quiet"])
     drawing = max(0.1, timed([sys.executable, "-m", "compare.figures", "run", str(full)]))
-    assert (full / "network.png").exists() and len(list((full / "snapshots").glob("*.vtu"))) == 52
+    assert (full / "network.png").exists() and len(list((full / "snapshots").glob("*.vtu"))) == 78  # discs, contacts, walls
     assert check_dir(full) > 100
     rng = random.Random(11)
     seen_tmp = 0

@@ -22,11 +22,11 @@ DISCHARGE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
 SHEAR = REPO / "reference_inputs" / "scenes" / "shear_a50_clusters.toml"
 JANSSEN = REPO / "reference_inputs" / "scenes" / "janssen_column.toml"
 # Files a run writes that must be equal bit for bit (summary.json: all but the wall-clock timing).
-FILL_FILES = ["discs.csv", "contacts.csv", "wall_profiles.csv", "discs.vtu", "contacts.vtu"]
+FILL_FILES = ["discs.csv", "contacts.csv", "wall_profiles.csv", "discs.vtu", "contacts.vtu", "thermo.csv"]
 DISCHARGE_FILES = FILL_FILES + ["removals.csv", "flow_series.csv", "wall_series.csv", "wall_totals_series.csv",
-                                "discharge_discs.pvd", "discharge_contacts.pvd"]
-SHEAR_FILES = FILL_FILES + ["shear_series.csv", "shear_planes.csv", "snapshots/index.json"]
-TIMING = ("wall_time_s", "particle_steps_per_s")
+                                "discharge_discs.pvd", "discharge_contacts.pvd", "snapshots.pvd"]
+SHEAR_FILES = FILL_FILES + ["shear_series.csv", "shear_planes.csv", "snapshots/index.json", "snapshots.pvd"]
+TIMING = ("wall_time_s", "particle_steps_per_s", "command")  # and the command line, which --resume changes
 
 
 def dem(dem_binary, *args, **kw):

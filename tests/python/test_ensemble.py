@@ -34,6 +34,13 @@ def test_ensemble_statistics_and_seeds(tmp_path, run_dem):
     assert abs(a["discs_out_at_1s"]["stderr"] - expect_se) <= 1e-12 * max(1.0, expect_se)
     jams = sum(1 for m in members if m["jams"] > 0)
     assert a["jam_fraction"]["value"] == jams / 3
+    # Each member's folder has its run.log (header and outcome), thermo.csv and the command line.
+    member = tmp_path / "a" / "member_01"
+    log = (member / "run.log").read_text()
+    assert "stability bound" in log and "ensemble member 1" in log and " steps; fill rest " in log
+    assert (member / "thermo.csv").read_text().count(",discharge,") > 0
+    s = json.loads((member / "summary.json").read_text())
+    assert s["command"][1:3] == ["ensemble", str(scene)] and "--seed" in s["command"]
 
 
 def test_ensemble_refuses_a_perturbation_that_overlaps(tmp_path, run_dem):

@@ -115,6 +115,21 @@ def test_a_shear(runs):
     assert "db" in set(contacts["kind"])                                 # the clusters' bonds
 
 
+@pytest.mark.parametrize("name,phases", [("fill", ["fill"]), ("discharge", ["fill", "discharge"]),
+                                         ("shear", ["fill", "shear"])])
+def test_thermo_in_every_phase(runs, name, phases):
+    """thermo.csv: rows of every phase in order, the last one the run's end; the wall groups'
+    normal totals of the last row are the summary's."""
+    rd = runs[name]
+    th, s = rd.thermo(), rd.summary
+    assert list(dict.fromkeys(th["phase"])) == phases
+    assert th["step"][-1] == s["steps"] and th["t"][-1] == s["time"] and th["discs"][-1] == s["n_discs"]
+    assert np.all(np.diff(th["step"]) >= 0) and np.all(th["kinetic_energy"] >= 0)
+    for group, g in s["groups"].items():
+        if f"{group}_normal" in th:
+            assert th[f"{group}_normal"][-1] == pytest.approx(g["normal_total"], rel=1e-9, abs=1e-9)
+
+
 # --------------------------------------------------------------------------- errors
 
 def copy_run(rd, to):

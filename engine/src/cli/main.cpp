@@ -11,7 +11,9 @@
 
 #include <unistd.h>
 
+#include "io/out_dir.hpp"
 #include "io/outputs.hpp"
+#include "io/run_log.hpp"
 #include "io/state.hpp"
 #include "physics/elastic_params.hpp"
 #include "physics/free_heap.hpp"
@@ -46,7 +48,8 @@ const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
     "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
     "\n"
-    "  --out DIR       output directory (created; see docs/outputs.md)\n"
+    "  --out DIR       output directory (created, or cleared of an earlier run's files unless\n"
+    "                  --resume; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
     "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
@@ -76,8 +79,9 @@ const char* kEnsembleHelp =
     "       dem ensemble merge DIR [--members M] [--quiet]\n"
     "\n"
     "Runs M copies of the scene (default 8) whose initial disc centres are moved by a seeded\n"
-    "uniform amount in [-CM, CM] (default 1e-4 cm), J at a time (default: all cores), into\n"
-    "DIR/member_KK, and writes DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
+    "uniform amount in [-CM, CM] (default 1e-4 cm; 1e-6 m in an si scene), J at a time (default:\n"
+    "all cores), into DIR/member_KK (each with its run.log and the files of dem run), and writes\n"
+    "DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
     "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n"
     "\n"
     "--member K runs member K alone (0-based), the same member bit for bit as in a full ensemble\n"
@@ -105,44 +109,6 @@ bool number_arg(const char* s, double& v) {
   return end != s && *end == '\0' && std::isfinite(v);
 }
 
-void print_header(const SceneSpec& s, const World& w, const StabilityReport& st) {
-  std::printf("dem %s | scene %s (%s)\n", DEM_VERSION, s.name.c_str(), s.file.c_str());
-  std::printf("  fill: %s\n", s.fill_summary.c_str());
-  std::printf("  N = %zu discs, %zu walls, %zu points; gravity (%g, %g) cm/s^2\n", w.discs.size(),
-              w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy);
-  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d\n", to_string(w.scheme), w.dt,
-              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
-  std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s, lever_arm %s\n",
-              to_string(w.options.normal_spring), to_string(w.options.no_tension), to_string(w.options.friction_cap),
-              to_string(w.options.lever_arm));
-  std::printf("  kernel: shear %s, dashpots %s, bonds %s, moving walls %s (compiled out when off); %d doubles a vector\n",
-              w.kernel_shear ? "on" : "off", w.kernel_dashpots ? "on" : "off", w.bonds.empty() ? "off" : "on",
-              w.moving.empty() ? "off" : "on", World::vector_width);
-  std::printf("  %-14s %9s %9s %7s %9s %6s %7s | dt bounds [s]: %-9s %-9s %-9s %-9s %-9s\n", "pair", "m*", "omega0",
-              "zeta_n", "t_c", "e", "zeta_t", "normal", "tangent", "eq.26", "eq.21", "rot z=4");
-  for (const auto& p : st.pairs) {
-    char tc[32];
-    if (std::isfinite(p.t_contact)) std::snprintf(tc, sizeof tc, "%9.3e", p.t_contact);
-    else std::snprintf(tc, sizeof tc, "%9s", "overdamp");
-    std::printf("  %-14s %9.4g %9.4g %7.4f %s %6.3f %7.4f |  %-9.3e %-9.3e %-9.3e %-9.3e %-9.3e\n", p.name.c_str(),
-                p.m_eff, p.omega0, p.zeta_n, tc, p.restitution, p.zeta_t, p.dt_normal, p.dt_tangential, p.dt_eq26,
-                p.dt_eq21, p.dt_rot_z4);
-  }
-  std::printf("  stability bound of %s: %.4g s (single contact %.4g s, rotation on 4 contacts %.4g s), set by %s;"
-              " dt/bound = %.3f\n", to_string(w.scheme), st.dt_bound, st.dt_single, st.dt_rot_z4, st.limited_by.c_str(),
-              w.dt / st.dt_bound);
-  if (std::isfinite(st.clusters.dt))
-    std::printf("  bonded clusters (%d distinct shapes, neighbours held, contacts sticking): bound %.4g s, set by a"
-                " cluster of %d discs\n", st.clusters.shapes, st.clusters.dt, st.clusters.discs);
-  if (st.clusters.skipped > 0)
-    std::printf("  warning: %d clusters of more than %d discs are not in the bound (their step matrices are too"
-                " large to examine)\n", st.clusters.skipped, kClusterMaxDiscs);
-  if (w.dt > st.dt_rot_z6)
-    std::printf("  warning: dt is above %.4g s, the bound for a disc whose rotation is held by 6 sticking contacts"
-                " (dense packings)\n", st.dt_rot_z6);
-  std::fflush(stdout);
-}
-
 std::string shell_quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -150,16 +116,16 @@ std::string shell_quote(const std::string& s) {
 }
 
 // The discharge's or shear's result line.
-void print_phase_result(const SceneRun& run) {
+void print_phase_result(const SceneRun& run, RunLog& log) {
   if (run.discharge && run.discharge->outcome().status != Status::running) {
     const DischargeOutcome& o = run.discharge->outcome();
-    std::printf("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
+    log.say("  discharge: %s after %.3f s; %zu discs out (%d by 1 s), flow %.4g discs/s, %s; peak/static bottom %.2f, side %.2f\n",
                 to_string(o.status), o.duration, o.removed, o.out_at_1s, o.flow_rate_discs, o.pattern.c_str(),
                 o.peak_ratio_bottom, o.peak_ratio_side);
   }
   if (run.shear && run.shear->outcome().samples > 0) {
     const ShearOutcome& o = run.shear->outcome();
-    std::printf("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
+    log.say("  shear: %s to strain %.4f; peak tau/sigma %.4f at strain %.4f (windowed %.4f), sigma %.4g\n",
                 to_string(run.status), o.strain_final, o.peak_ratio, o.strain_at_peak, o.peak_ratio_windowed,
                 o.sigma_initial);
   }
@@ -307,43 +273,49 @@ int cmd_run(int argc, char** argv) {
       return bad(std::string("--resume: ") + e.what());
     }
   }
-  // Only a valid scene creates its output directory.
+  // Only a valid scene creates its output directory; a fresh run clears what an earlier run left.
   std::error_code ec;
+  const int cleared = resume ? 0 : clear_run_outputs(out);
   std::filesystem::create_directories(out, ec);
   if (ec) return bad("--out " + out + ": cannot create the directory: " + ec.message());
-  if (!quiet) print_header(spec, world, stab);
+  RunLog log(!quiet);  // DIR/run.log, printed unless --quiet
+  log.add(run_header(spec, world, stab));
+  if (cleared > 0) log.say("  removed %d files of an earlier run from %s\n", cleared, out.c_str());
+  run.log = &log;
   install_stop_handlers();
-  if (resume && !quiet)
-    std::printf("  resumed from %s at t = %.4f s (step %ld, %s)\n", ckpt.c_str(), world.time, world.steps,
-                run.phase_name());
-  if (!resume && !spec.start_from.empty() && !quiet)
-    std::printf("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
+  if (resume)
+    log.say("  resumed from %s at t = %.4f s (step %ld, %s)\n", ckpt.c_str(), world.time, world.steps,
+            run.phase_name());
+  if (!resume && !spec.start_from.empty())
+    log.say("  started from %s at t = %.4f s\n", spec.start_from.c_str(), world.time);
   const Status status = run.run(spec.progress && !quiet, !quiet);
 
   nlohmann::ordered_json extra;
-  const RunSummary summary = run.summary(extra);
-  if (!quiet) print_phase_result(run);
+  RunSummary summary = run.summary(extra);
+  summary.command.assign(argv - 2, argv + argc);  // dem run ARGS: argv[0] and "run" precede them
+  print_phase_result(run, log);
   write_outputs(out, spec, world, summary, stab, &extra);
   run.discard_kept();  // the outputs hold it when it was needed; a checkpoint carries its own copy
   if (!save_to.empty() && status != Status::unstable) save_state(world, save_to);
   if (status == Status::unstable) {
-    std::fprintf(stderr, "dem: unstable run: %s\n  last good state at t = %g s written to %s\n", summary.reason.c_str(),
-                 run.runner.last_good.time(), out.c_str());
+    log.warn("dem: unstable run: %s\n  last good state at t = %g s written to %s\n", summary.reason.c_str(),
+             run.runner.last_good.time(), out.c_str());
+    log.write(out, resume);
     return 3;
   }
   if (status == Status::interrupted) {
-    std::fprintf(stderr, "dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (%s goes on)\n",
-                 stop_signal(), world.time, world.steps, ckpt.c_str(), resume_command(argc, argv).c_str());
+    log.warn("dem: interrupted by signal %d at t = %.6g s (step %ld); outputs and %s written (%s goes on)\n",
+             stop_signal(), world.time, world.steps, ckpt.c_str(), resume_command(argc, argv).c_str());
+    log.write(out, resume);
     return 128 + stop_signal();
   }
-  if (!quiet) {
-    std::printf("  %s at t = %.4f s after %ld steps", to_string(status), world.time, world.steps);
-    std::printf("; fill rest %s", summary.rest_reached ? "reached" : "not reached");
-    if (summary.rest_reached) std::printf(" at t = %.4f s", summary.rest_time);
-    std::printf("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s (pictures: %s -m compare.figures run %s)\n",
-                summary.wall_seconds, summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0,
-                out.c_str(), DEM_PYTHON_EXE, shell_quote(out).c_str());
-  }
+  log.say("  %s at t = %.4f s after %ld steps; fill rest %s", to_string(status), world.time, world.steps,
+          summary.rest_reached ? "reached" : "not reached");
+  if (summary.rest_reached) log.say(" at t = %.4f s", summary.rest_time);
+  log.say("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s (pictures: %s -m compare.figures run %s)\n",
+          summary.wall_seconds, summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0,
+          out.c_str(), DEM_PYTHON_EXE, shell_quote(out).c_str());
+  log.write(out, resume);
   return 0;
 }
 
@@ -400,6 +372,10 @@ int cmd_ensemble(int argc, char** argv) {
     if (!spec.start_from.empty()) return bad("dem ensemble starts from the fill: remove start.from");
     if (spec.shear_box.shear)  // its members would compress and stop: the shear runs in cmd_run only
       return bad("dem ensemble runs fills and discharges; a [shear] scene runs with dem run");
+    eo.command.assign(argv - 2, argv + argc);  // dem ensemble ARGS
+    bool perturb_given = false;  // else 1e-4 cm in the scene's units
+    for (int a = 0; a < argc; ++a) perturb_given |= std::string(argv[a]) == "--perturb";
+    if (!perturb_given) eo.perturb = default_length(spec.units, eo.perturb);
     if (member >= 0) return run_member_alone(spec, eo, member, out, quiet);
     return run_ensemble(spec, eo, out, quiet);
   } catch (const SceneError& e) {

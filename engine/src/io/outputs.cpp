@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "io/vtu.hpp"
 #include "run/opening_positions.hpp"
 
 namespace dem {
@@ -68,65 +69,6 @@ namespace {
 
 std::string fmt(double v) { return fmt17(v); }
 
-// Streamed to the file: a 1M-disc VTU never sits in memory, as text or as copies of its
-// columns: every column is read through an accessor from the arrays it comes from.
-struct Column {
-  std::string name;
-  std::function<double(std::size_t)> at;
-};
-struct Column2 {  // a vector in the plane, written with z = 0
-  std::string name;
-  std::function<void(std::size_t, double&, double&)> at;
-};
-struct IntColumn {
-  std::string name;
-  std::function<long long(std::size_t)> at;
-};
-
-// np points (point(k, x, y)) in cells of points_per_cell consecutive points; the columns have
-// one value a cell (cell_data) or a point.
-void vtu(std::ostream& o, std::size_t np, const std::function<void(std::size_t, double&, double&)>& point,
-         int points_per_cell, int vtk_type, const std::vector<Column>& scalars, const std::vector<Column2>& vectors,
-         const std::vector<IntColumn>& ints, bool cell_data) {
-  const std::size_t nc = np / points_per_cell, nv = cell_data ? nc : np;
-  o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-    << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nc << "\">\n";
-  o << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (std::size_t i = 0; i < np; ++i) {
-    double x, y;
-    point(i, x, y);
-    o << fmt(x) << ' ' << fmt(y) << " 0\n";
-  }
-  o << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (std::size_t i = 0; i < np; ++i) o << i << '\n';
-  o << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  for (std::size_t c = 0; c < nc; ++c) o << (c + 1) * points_per_cell << '\n';
-  o << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (std::size_t c = 0; c < nc; ++c) o << vtk_type << '\n';
-  o << "</DataArray>\n</Cells>\n";
-  o << (cell_data ? "<CellData>\n" : "<PointData>\n");
-  for (const Column& c : scalars) {
-    o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < nv; ++i) o << fmt(c.at(i)) << '\n';
-    o << "</DataArray>\n";
-  }
-  for (const Column2& c : vectors) {
-    o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < nv; ++i) {
-      double x, y;
-      c.at(i, x, y);
-      o << fmt(x) << ' ' << fmt(y) << " 0\n";
-    }
-    o << "</DataArray>\n";
-  }
-  for (const IntColumn& c : ints) {
-    o << "<DataArray type=\"Int32\" Name=\"" << c.name << "\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < nv; ++i) o << c.at(i) << '\n';
-    o << "</DataArray>\n";
-  }
-  o << (cell_data ? "</CellData>\n" : "</PointData>\n") << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-}
-
 json pair_json(const PairReport& r) {
   return json{{"name", r.name},
               {"kind", r.disc_disc ? "disc-disc" : "disc-obstacle"},
@@ -171,7 +113,7 @@ class NthKept {
 
 }  // namespace
 
-void write_contact_files(const std::string& dir, const std::string& stem, const World& w) {
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary) {
   const Discs& d = w.discs;
   // Every contact is written where its forces were computed. Eqs. (18) and (19) compute the
   // forces and then move the discs in the same pass, so their discs are taken back by the
@@ -275,12 +217,16 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
-  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
-    vtu(out, 2 * n, point, 2, 3,
-        {{"f_n", [&](std::size_t c) { return entry(c).fn; }}, {"f_s", [&](std::size_t c) { return entry(c).fs; }},
-         {"e_n", [&](std::size_t c) { return entry(c).en; }}, {"e_s", [&](std::size_t c) { return entry(c).es; }}},
-        {}, {{"kind", [&](std::size_t c) { return static_cast<long long>(entry(c).kind); }}}, true);
-  });
+  VtuGrid g;
+  g.np = 2 * n;
+  g.point = point;
+  g.points_per_cell = 2;
+  g.vtk_type = 3;  // VTK_LINE
+  g.scalars = {{"f_n", [&](std::size_t c) { return entry(c).fn; }}, {"f_s", [&](std::size_t c) { return entry(c).fs; }},
+               {"e_n", [&](std::size_t c) { return entry(c).en; }}, {"e_s", [&](std::size_t c) { return entry(c).es; }}};
+  g.ints = {{"kind", [&](std::size_t c) { return static_cast<long long>(entry(c).kind); }}};
+  g.cell_data = true;
+  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) { write_vtu(out, g, binary); });
 }
 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
@@ -314,16 +260,19 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
-  std::vector<Column2> vec;
+  std::vector<VtuVector> vec;
   vec.push_back({"velocity", [&](std::size_t i, double& vx, double& vy) { vx = d.vx[i]; vy = d.vy[i]; }});
   if (disp) vec.push_back({"displacement", displacement});
-  std::vector<Column> scalars = {{"radius", [&](std::size_t i) { return d.r(i); }},
+  std::vector<VtuColumn> scalars = {{"radius", [&](std::size_t i) { return d.r(i); }},
                                  {"omega", [&](std::size_t i) { return d.omega[i]; }}};
   if (angle) scalars.push_back({"phi", [&](std::size_t i) { return d.phi[i]; }});
-  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) {
-    vtu(out, d.size(), [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; }, 1, 1, scalars, vec,
-        {{"id", [&](std::size_t i) { return static_cast<long long>(d.id_at(i)); }}}, false);
-  });
+  VtuGrid g;
+  g.np = d.size();
+  g.point = [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; };
+  g.scalars = std::move(scalars);
+  g.vectors = std::move(vec);
+  g.ints = {{"id", [&](std::size_t i) { return static_cast<long long>(d.id_at(i)); }}};
+  write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) { write_vtu(out, g, spec.vtu_binary(d.size())); });
 }
 
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
@@ -343,13 +292,16 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
 
   json js;
   js["engine"] = std::string("dem ") + DEM_VERSION;
+  js["engine_version"] = DEM_VERSION;
+  js["build_id"] = DEM_BUILD_ID;
+  if (!res.command.empty()) js["command"] = res.command;
   js["scene"] = {{"name", spec.name}, {"file", spec.file}, {"description", spec.description}, {"fill", spec.fill_summary}};
   js["status"] = res.status;
   if (unstable) js["reason"] = res.reason;
   js["options"] = {{"scheme", to_string(w.scheme)}, {"dt", w.dt}, {"dt_forced", spec.force_dt}, {"threads", w.threads},
                    {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},
                    {"friction_cap", to_string(w.options.friction_cap)}, {"lever_arm", to_string(w.options.lever_arm)},
-                   {"gravity", {w.gx, w.gy}},
+                   {"gravity", {w.gx, w.gy}}, {"units", to_string(spec.units)},
                    {"skin", w.neighbors.skin}, {"cell", w.neighbors.cell_size()}, {"profile_bin", spec.profile_bin}};
   js["n_discs"] = d.size();
   js["steps"] = w.steps;
@@ -418,12 +370,12 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                      {"dt_clusters", finite_or_null(stab.clusters.dt)},
                      {"cluster_shapes", stab.clusters.shapes},
                      {"clusters_not_examined", stab.clusters.skipped},
-                     {"note", "bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
+                     {"note", std::string("bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
                               "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
                               "sticking contacts (disc-disc or disc-wall constants); with bonded clusters, on each "
                               "distinct cluster of at most 10 discs (its discs, bonds and the contacts to neighbours "
-                              "within 0.01 cm, those held fixed, every contact sticking); dt_bound = min(single contact, rotation "
-                              "on 4, clusters) is enforced"}};
+                              "within 0.01 ") + unit_names(spec.units).length + ", those held fixed, every contact sticking); "
+                              "dt_bound = min(single contact, rotation on 4, clusters) is enforced"}};
 
   // wall_profiles.csv
   {
@@ -441,7 +393,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   }
   if (extra)
     for (auto& [k, v] : extra->items()) js[k] = std::move(v);
-  if (!unstable) write_contact_files(dir, "contacts", w);
+  if (!unstable) write_contact_files(dir, "contacts", w, spec.vtu_binary(d.size()));
   write_disc_files(dir, "discs", spec, d, nullptr);
   // Serialised straight to the file (some 1.3 MB of text at a million discs, which a string
   // built first held twice over as it grew, at the run's peak): the bytes of js.dump(2).

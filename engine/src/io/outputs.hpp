@@ -46,6 +46,7 @@ struct RunSummary {
   double rest_time = 0, rest_threshold = 0, mean_abs_du = 0, mean_abs_dv = 0;
   double wall_seconds = 0;     // [s] of stepping
   const Discs* good = nullptr; // an unstable run writes these (its last good state) in place of the world's discs
+  std::vector<std::string> command;  // the command line (argv), for summary.json
 };
 
 // Writes all files of one run into dir (which must exist). `extra` is moved into summary.json
@@ -54,7 +55,8 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                    const StabilityReport& stab, nlohmann::ordered_json* extra = nullptr);
 
 // STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
-void write_contact_files(const std::string& dir, const std::string& stem, const World& w);
+// `binary`: the VTU file binary (SceneSpec::vtu_binary), else ASCII.
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary);
 // STEM.csv and STEM.vtu of the discs; with displacement columns from the positions at opening
 // when given.
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,

@@ -58,7 +58,7 @@ void EnergyWatch::start(const World& w, double max_gain) {
   if (!(scale > 0) || !std::isfinite(scale)) active = false;  // nothing to release: no criterion
 }
 
-std::string EnergyWatch::check(const World& w) const {
+std::string EnergyWatch::check(const World& w, const UnitNames& u) const {
   if (!active) return "";
   const double ke = w.kinetic_energy();
   const double now = ke + potential_energy(w);
@@ -73,9 +73,10 @@ std::string EnergyWatch::check(const World& w) const {
   std::ostringstream os;
   os.precision(4);
   os << "energy created without a source: kinetic + potential energy " << now << " exceeds the start budget "
-     << budget << " (kinetic + potential + elastic) by " << (now - budget) << " erg/cm, more than end.max_energy_gain "
+     << budget << " (kinetic + potential + elastic) by " << (now - budget) << ' ' << u.energy << ", more than end.max_energy_gain "
      << gain << " x scale " << scale << "; kinetic energy " << ke << "; fastest disc id " << d.id_at(fast) << " at ("
-     << d.x[fast] << ", " << d.y[fast] << ") cm, speed " << std::sqrt(vmax2) << " cm/s, omega " << d.omega[fast]
+     << d.x[fast] << ", " << d.y[fast] << ") " << u.length << ", speed " << std::sqrt(vmax2) << ' ' << u.velocity
+     << ", omega " << d.omega[fast]
      << " 1/s; at t = " << w.time << " s (step " << w.steps << ")";
   return os.str();
 }

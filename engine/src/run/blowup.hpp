@@ -7,6 +7,8 @@
 
 #include <string>
 
+#include "scene/units.hpp"
+
 namespace dem {
 
 class World;
@@ -20,7 +22,7 @@ struct EnergyWatch {
   // Records the start (call after the forces of the start are known).
   void start(const World& w, double max_gain);
   // "" while the energy stays within budget; else what grew, by how much, and where.
-  std::string check(const World& w) const;
+  std::string check(const World& w, const UnitNames& u) const;
 };
 
 // Gravitational potential energy -sum m (g . x), elastic energy of the contact springs

@@ -14,7 +14,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', '9'};  // the format's version: a checkpoint resumes only in its own
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', 'A'};  // the format's version: a checkpoint resumes only in its own
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -121,6 +121,7 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
     runner.last_good.write_to(o);
     // The fill's rest measure (fill_phase.hpp).
     o.put(rest.reached); o.put(rest.time); o.put(rest.threshold); o.put(rest.mean_abs_du); o.put(rest.mean_abs_dv);
+    runner.record.save(o);  // thermo.csv and snapshots.pvd so far (recorder.hpp)
     // The world, its counters and its lists exactly as they are (no rebuild on resume).
     write_world(o, w);
     o.put(w.particle_steps);
@@ -181,6 +182,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   runner.last_good.read_from(r);
   rest.reached = r.get<bool>(); rest.time = r.get<double>(); rest.threshold = r.get<double>();
   rest.mean_abs_du = r.get<double>(); rest.mean_abs_dv = r.get<double>();
+  runner.record.load(r);
   read_world(r, w);
   w.particle_steps = r.get<double>();
   const long rebuilds = r.get<long>();

@@ -540,9 +540,12 @@ void DischargePhase::snapshots(World& w, double t) {
     char stem[32];
     std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
     write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open);
-    write_contact_files(snapdir, std::string("contacts_") + stem, w);
+    write_contact_files(snapdir, std::string("contacts_") + stem, w, spec_.vtu_binary(w.discs.size()));
     st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
     st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+    if (record && record->active())
+      record->note_snapshot(w, std::string("snapshots/discs_") + stem + ".vtu", record->write_walls(w, stem),
+                            std::string("snapshots/contacts_") + stem + ".vtu");
     ++st.next_snap;
   }
 }
@@ -639,7 +642,9 @@ void DischargePhase::finish(World& w, Status status) {
       {"discs_out_at_1s", out_1s},
       {"flow_rate_mass", num_or_null(q)},
       {"flow_rate_discs", num_or_null(q / m_disc)},
-      {"flow_rate_note", "slope of cumulative removed mass [g/s per cm] from the 5th removal on (least squares)"},
+      {"flow_rate_note", std::string("slope of cumulative removed mass [") +
+                             (spec_.units == Units::si ? "kg/s per m" : "g/s per cm") +
+                             "] from the 5th removal on (least squares)"},
       {"jammed", status == Status::jammed},
       {"jam_at", st.jam_at >= 0 ? json(st.jam_at) : json(nullptr)},
       {"jams", st.jams},

@@ -15,6 +15,7 @@
 #include "physics/world.hpp"
 #include "run/opening_positions.hpp"
 #include "run/phase.hpp"
+#include "run/recorder.hpp"
 #include "scene/scene.hpp"
 
 namespace dem {
@@ -132,6 +133,7 @@ class DischargePhase : public Phase {
   double duration(const World& w) const { return w.time - st.t_open; }
 
   DischargeState st;
+  Recorder* record = nullptr;  // the run's: each snapshot's walls file and its entry in snapshots.pvd
 
  private:
   void sample(World& w, double t);

@@ -12,7 +12,9 @@
 #include <thread>
 #include <vector>
 
+#include "io/out_dir.hpp"
 #include "io/outputs.hpp"
+#include "io/run_log.hpp"
 #include "run/scene_run.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
@@ -88,28 +90,40 @@ SceneSpec member_spec(const SceneSpec& spec, const EnsembleOptions& opt, int k) 
 // What identifies the ensemble a member belongs to (DIR/member_KK/member.json): merge checks it.
 json member_identity(const SceneSpec& spec, const EnsembleOptions& opt, int k) {
   return {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
-          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}};
+          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}, {"units", to_string(spec.units)}};
 }
 
 // Runs member k into dir; a member that cannot run is a failed member ("error: ..."), never the
 // end of the others.
-Member run_member(const SceneSpec& spec_k, const json& identity, int k, const std::string& dir) {
+Member run_member(const SceneSpec& spec_k, const json& identity, int k, const std::string& dir,
+                  const std::vector<std::string>& command) {
   Member m;
   m.index = k;
   try {
+    const int cleared = clear_run_outputs(dir);  // a fresh member folder (io/out_dir.hpp)
     std::filesystem::create_directories(dir);
     SceneSpec s = spec_k;
     World w;
     const StabilityReport stab = build_world_releasing_discs(s, w);
+    RunLog log;  // DIR/run.log: the header and the outcome, as dem run prints them
+    log.add(run_header(s, w, stab));
+    log.say("  ensemble member %d\n", k);
+    if (cleared > 0) log.say("  removed %d files of an earlier run from %s\n", cleared, dir.c_str());
     SceneRun run(s, w, dir);
+    run.log = &log;
     const Status status = run.run(false, false);
     json extra;
-    const RunSummary summary = run.summary(extra);
+    RunSummary summary = run.summary(extra);
+    summary.command = command;
     m.fill_rest = summary.rest_reached;
     m.status = to_string(status);
     if (run.discharge && run.discharge->metrics().is_object()) m.metrics = run.discharge->metrics();
     write_outputs(dir, s, w, summary, stab, &extra);
     run.discard_kept();
+    if (status == Status::unstable) log.say("  unstable: %s\n", summary.reason.c_str());
+    log.say("  %s at t = %.4f s after %ld steps; fill rest %s; %.3g s wall\n", to_string(status), w.time, w.steps,
+            summary.rest_reached ? "reached" : "not reached", summary.wall_seconds);
+    log.write(dir, false);
     write_file_atomic(dir + "/member.json", identity.dump(2) + "\n");
   } catch (const std::exception& e) {
     m.status = std::string("error: ") + e.what();
@@ -127,7 +141,8 @@ void print_member(const Member& m) {
 // The statistics of the members (DIR/ensemble.json) and the exit code.
 int write_ensemble(const json& identity, int members_wanted, const std::vector<Member>& members,
                    const std::string& out_dir, bool quiet) {
-  const EnsembleOptions opt{members_wanted, identity["seed"].get<unsigned long>(), identity["perturb"].get<double>(), 0};
+  const EnsembleOptions opt{members_wanted, identity["seed"].get<unsigned long>(), identity["perturb"].get<double>(), 0, {}};
+  const char* length = identity.value("units", std::string("cgs")) == "si" ? "m" : "cm";  // of the perturbation
   std::vector<double> flow, flow_mass, out1, pb, pbw, ps, psw, jam_at;
   int jammed = 0, unstable = 0, failed = 0, funnel = 0, piping = 0;
   json list = json::array();
@@ -171,7 +186,8 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
              {"unstable", unstable}, {"failed", failed},
              {"note", "mean and standard error (std / sqrt(n)) over members with a value; members that were unstable "
                       "or could not run (failed) count in no statistic; jam fraction: members that met a jam, of "
-                      "those with a result; perturbation: uniform [-perturb, perturb] cm on every initial centre"},
+                      "those with a result; perturbation: uniform [-perturb, perturb] " + std::string(length) +
+                      " on every initial centre"},
              {"runs", list}};
   write_file_atomic(out_dir + "/ensemble.json", js.dump(2) + "\n");
   if (!quiet) {
@@ -182,8 +198,8 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
       else
         std::printf("  %-28s %10s\n", label, "-");
     };
-    std::printf("ensemble %s: %d members, seed %lu, perturb %g cm\n", identity["scene"].get<std::string>().c_str(),
-                opt.members, opt.seed, opt.perturb);
+    std::printf("ensemble %s: %d members, seed %lu, perturb %g %s\n", identity["scene"].get<std::string>().c_str(),
+                opt.members, opt.seed, opt.perturb, length);
     show("flow rate [discs/s]", js["flow_rate_discs"]);
     show("discs out at 1 s", js["discs_out_at_1s"]);
     show("peak/static bottom", js["peak_ratio_bottom"]);
@@ -217,7 +233,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
   std::mutex print;
   auto work = [&]() {
     for (int k; (k = next++) < opt.members;) {
-      members[k] = run_member(specs[k], member_identity(spec, opt, k), k, out_dir + "/" + member_name(k));
+      members[k] = run_member(specs[k], member_identity(spec, opt, k), k, out_dir + "/" + member_name(k), opt.command);
       if (!quiet) {
         std::lock_guard<std::mutex> lock(print);
         print_member(members[k]);
@@ -236,7 +252,7 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
 int run_member_alone(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir, bool quiet) {
   const SceneSpec s = member_spec(spec, opt, k);  // checked before anything is written
   std::filesystem::create_directories(out_dir);
-  const Member m = run_member(s, member_identity(spec, opt, k), k, out_dir + "/" + member_name(k));
+  const Member m = run_member(s, member_identity(spec, opt, k), k, out_dir + "/" + member_name(k), opt.command);
   if (!quiet) print_member(m);
   if (m.status == "unstable") return 3;
   return m.status.rfind("error", 0) == 0 ? 4 : 0;

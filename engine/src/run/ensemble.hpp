@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "scene/scene.hpp"
 
@@ -13,6 +14,7 @@ struct EnsembleOptions {
   unsigned long seed = 1;
   double perturb = 1e-4;  // [cm] each disc centre moves by a uniform amount in [-perturb, perturb]
   int jobs = 0;           // 0: all cores
+  std::vector<std::string> command;  // the command line, for each member's summary.json
 };
 
 // Runs the members into out_dir/member_KK and writes out_dir/ensemble.json; returns the

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "physics/world.hpp"
 #include "run/control.hpp"
 #include "scene/scene.hpp"
@@ -24,7 +26,7 @@ double min_radius(const World& w) {
 }
 
 // What went wrong, for the message of an unstable run.
-std::string diagnose(const World& w, double overlap_limit, const char* phase) {
+std::string diagnose(const World& w, double overlap_limit, const char* phase, const char* length) {
   const Discs& d = w.discs;
   std::ostringstream os;
   os.precision(6);
@@ -35,7 +37,8 @@ std::string diagnose(const World& w, double overlap_limit, const char* phase) {
          << phase << ")";
       return os.str();
     }
-  os << "overlap " << w.max_overlap << " cm exceeds the limit " << overlap_limit << " cm (end.max_overlap x r_min) at t = "
+  os << "overlap " << w.max_overlap << ' ' << length << " exceeds the limit " << overlap_limit << ' ' << length
+     << " (end.max_overlap x r_min) at t = "
      << w.time << " s (step " << w.steps << ", " << phase << "); kinetic energy " << w.kinetic_energy();
   return os.str();
 }
@@ -54,10 +57,11 @@ std::string duration_text(double s) {
 double Runner::wall_now() const { return running_ ? run_start_ + seconds_since(phase_start_) : wall_seconds; }
 
 std::string Runner::check(const World& w, const Phase& phase) {
-  if (!(w.max_overlap <= guard.overlap_limit)) return diagnose(w, guard.overlap_limit, phase.name());
+  const UnitNames u = unit_names(spec_.units);
+  if (!(w.max_overlap <= guard.overlap_limit)) return diagnose(w, guard.overlap_limit, phase.name(), u.length);
   if (w.steps % kCheckEvery == 0) {
-    if (!w.all_finite()) return diagnose(w, guard.overlap_limit, phase.name());
-    if (std::string grew = guard.energy.check(w); !grew.empty()) return grew + " (" + phase.name() + ")";
+    if (!w.all_finite()) return diagnose(w, guard.overlap_limit, phase.name(), u.length);
+    if (std::string grew = guard.energy.check(w, u); !grew.empty()) return grew + " (" + phase.name() + ")";
     if (w.steps % kKeepEvery == 0) last_good.keep(w.discs, w.time);  // checked: finite, within budget
   }
   return "";
@@ -70,6 +74,7 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     guard.overlap_limit = spec_.max_overlap_fraction * min_radius(w);
     status = phase.begin(w, reason);
     guard.energy.start(w, spec_.max_energy_gain);  // after begin: a discharge's budget starts with the gate open
+    record.phase_start(w, phase.name());
   }
   phase_start_ = Clock::now();
   run_start_ = wall_seconds;
@@ -78,8 +83,11 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
   const double fraction0 = phase.fraction(w);
   const long steps0 = w.steps;
   bool printed = false, stopping = false;
+  // On a terminal the line is redrawn in place; in a log (stderr not a terminal) a line is added.
+  const bool terminal = isatty(fileno(stderr)) != 0;
   while (status == Status::running) {
     phase.before_step(w, stopping);
+    if (record.snapshot_due(w.steps + 1)) w.record_pair_forces = true;  // the snapshot's contact totals
     w.step();
     if (std::string why = check(w, phase); !why.empty()) {
       reason = why;
@@ -88,6 +96,7 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     }
     status = phase.after_step(w);
     if (status != Status::running) break;
+    record.after_step(w, phase.name());  // before a stop: the step's row is in the checkpoint
     // A stop request ends the run on a step that recorded its pair forces (the contacts
     // output): this one, or the next, which before_step then asks to record.
     if (stop_signal()) stopping = true;
@@ -102,15 +111,15 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     }
     if (progress && (w.steps & 1023) == 0) {
       const auto now = Clock::now();
-      if (std::chrono::duration<double>(now - last_print).count() > 2.0) {
+      if (std::chrono::duration<double>(now - last_print).count() > spec_.progress_interval) {
         last_print = now;
         const double el = seconds_since(phase_start_), f = phase.fraction(w);
         const double eta = f > fraction0 ? el * (1 - f) / (f - fraction0) : NAN;
-        std::fprintf(stderr, "\r  %s  %.3g steps/s  %s elapsed, ETA %s   ", phase.progress(w).c_str(),
-                     (w.steps - steps0) / std::max(el, 1e-9), duration_text(el).c_str(),
+        std::fprintf(stderr, terminal ? "\r  %s  %.3g steps/s  %s elapsed, ETA %s   " : "  %s  %.3g steps/s  %s elapsed, ETA %s\n",
+                     phase.progress(w).c_str(), (w.steps - steps0) / std::max(el, 1e-9), duration_text(el).c_str(),
                      duration_text(eta).c_str());
         std::fflush(stderr);
-        printed = true;
+        printed = terminal;
       }
     }
   }
@@ -118,6 +127,7 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
   wall_seconds = run_start_ + seconds_since(phase_start_);
   running_ = false;
   phase.finish(w, status);
+  record.phase_end(w, phase.name(), status);
   return status;
 }
 

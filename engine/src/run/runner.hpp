@@ -10,6 +10,7 @@
 #include "run/blowup.hpp"
 #include "run/last_good.hpp"
 #include "run/phase.hpp"
+#include "run/recorder.hpp"
 #include "run/status.hpp"
 
 namespace dem {
@@ -36,6 +37,7 @@ class Runner {
   Status run(Phase& phase, World& w, bool fresh);
 
   bool progress = false;
+  Recorder record;           // thermo.csv and the periodic snapshots (recorder.hpp)
   long checkpoint_every = 0;                          // [steps] 0: none (multiples of the world's steps)
   std::function<void(const Phase&)> write_checkpoint; // called at that cadence and on a stop
 

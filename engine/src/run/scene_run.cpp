@@ -20,6 +20,9 @@ SceneRun::SceneRun(const SceneSpec& spec, World& w, const std::string& out) : ru
     phases_.push_back(shear.get());
   }
   runner.last_good.set_file(out.empty() ? "" : out + "/last_good.bin");  // beside the outputs, not in memory (last_good.hpp)
+  runner.record.configure(spec, out, w.dt);
+  if (discharge) discharge->record = &runner.record;
+  if (shear) shear->record = &runner.record;
 }
 
 void SceneRun::set_checkpoints(long every_steps, const std::string& path, const CheckpointKey& key) {
@@ -60,18 +63,25 @@ Status SceneRun::run(bool progress, bool print) {
   if (fresh_ && current_ == 0) runner.last_good.keep(w_.discs, w_.time);
   for (; current_ < phases_.size(); ++current_, fresh_ = true) {
     Phase& p = *phases_[current_];
-    if (print && fresh_ && &p != &fill) {
+    if ((print || log) && fresh_ && &p != &fill) {
       // A state file does not say whether its run reached rest: not reported as "NOT at rest".
       const char* settled = from_state_ ? "from the state file" : fill.rest.reached ? "at rest" : "NOT at rest";
-      if (&p == discharge.get()) std::printf("  opening the slit at t = %.4f s (fill %s)\n", w_.time, settled);
-      else std::printf("  shearing from t = %.4f s (compression %s)\n", w_.time, settled);
-      std::fflush(stdout);
+      char line[160];
+      if (&p == discharge.get()) std::snprintf(line, sizeof line, "  opening the slit at t = %.4f s (fill %s)\n", w_.time, settled);
+      else std::snprintf(line, sizeof line, "  shearing from t = %.4f s (compression %s)\n", w_.time, settled);
+      if (log) {
+        log->add(line);
+      } else {
+        std::fputs(line, stdout);
+        std::fflush(stdout);
+      }
     }
     status = runner.run(p, w_, fresh_);
     if (status == Status::interrupted && runner.write_checkpoint) checkpoint(p);
     if (status == Status::unstable || status == Status::interrupted) break;
   }
   if (phases_.empty()) status = Status::end_time;  // a state file and nothing to run
+  runner.record.write();
   if (discharge) discharge->at_open().discard();  // a checkpoint carries its own copy
   return status;
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "io/outputs.hpp"
+#include "io/run_log.hpp"
 #include "run/checkpoint.hpp"
 #include "run/discharge.hpp"
 #include "run/fill_phase.hpp"
@@ -44,6 +45,7 @@ class SceneRun {
   void discard_kept();
 
   Status status = Status::running;
+  RunLog* log = nullptr;  // where the lines between phases go (printed or not as the log echoes)
   Runner runner;
   FillPhase fill;
   std::unique_ptr<DischargePhase> discharge;  // null for scenes without [discharge]

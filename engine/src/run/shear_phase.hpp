@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "run/phase.hpp"
+#include "run/recorder.hpp"
 #include "scene/shear_spec.hpp"
 
 namespace dem {
@@ -48,6 +49,8 @@ class ShearPhase : public Phase {
   void load(BinaryIn& r) override;
   nlohmann::ordered_json metrics() const override { return metrics_; }
   const ShearOutcome& outcome() const { return outcome_; }
+
+  Recorder* record = nullptr;  // the run's: each snapshot's walls file and its entry in snapshots.pvd
 
  private:
   Status at_strain(World& w);  // the sample and snapshots due at the current strain; the end test

@@ -101,11 +101,11 @@ void read_walls(SceneSpec& s, Tab& root) {
   if (const toml::table* st = root.table("silo", false)) {
     Tab t(*st, "silo", s.file);
     s.has_silo = true;
-    s.silo_width = t.positive("width", 40.0);
-    s.silo_height = t.positive("height", 40.0);
+    s.silo_width = t.positive("width", default_length(s.units, 40.0));
+    s.silo_height = t.positive("height", default_length(s.units, 40.0));
     check_coordinate(t, "width", show(s.silo_width), s.silo_width);
     check_coordinate(t, "height", show(s.silo_height), s.silo_height);
-    s.slit_width = t.non_negative("slit_width", 8.0);
+    s.slit_width = t.non_negative("slit_width", default_length(s.units, 8.0));
     if (s.slit_width >= s.silo_width) t.fail("slit_width", show(s.slit_width), "must be smaller than the width");
     s.slit_open = t.choice("slit", {"closed", "open"}, "closed") == "open";
     const int wm = material_index(s, t, "wall_material");
@@ -149,9 +149,9 @@ void read_walls(SceneSpec& s, Tab& root) {
         if (!(w.move_until > w.move_from))
           t.fail("move_until", show(w.move_until), "must be later than move_from = " + show(w.move_from));
         const double span = w.move_until - w.move_from;
-        for (double v : {w.move_vx * span, w.move_vy * span}) check_coordinate(t, "velocity", show(v) + " cm of travel", v);
+        for (double v : {w.move_vx * span, w.move_vy * span}) check_coordinate(t, "velocity", show(v) + " " + unit_names(s.units).length + " of travel", v);
         for (double v : {w.ax + w.move_vx * span, w.ay + w.move_vy * span, w.bx + w.move_vx * span, w.by + w.move_vy * span})
-          check_coordinate(t, "velocity", "an end at " + show(v) + " cm", v);
+          check_coordinate(t, "velocity", "an end at " + show(v) + " " + unit_names(s.units).length, v);
       }
       t.finish();
       s.geometry.walls.push_back(w);
@@ -268,8 +268,8 @@ void read_fill(SceneSpec& s, Tab& root) {
     const long s_row = t.integer("s");
     if (s_row < 2 || s_row > 1000000) t.fail("s", std::to_string(s_row), "must be between 2 and 1e6");
     L.s = static_cast<int>(s_row);
-    L.radius = t.positive("radius", 1.0);
-    L.gap = t.non_negative("gap", 0.004);
+    L.radius = t.positive("radius", default_length(s.units, 1.0));
+    L.gap = t.non_negative("gap", default_length(s.units, 0.004));
     check_coordinate(t, "radius", show(L.radius), L.radius);
     check_coordinate(t, "gap", show(L.gap), L.gap);
     L.rows = t.integer("rows", 0L);
@@ -436,6 +436,9 @@ void read_run_tables(SceneSpec& s, Tab& root) {
   }
   if (const toml::table* pt = root.table("physics", false)) {
     Tab t(*pt, "physics", s.file);
+    // The unit system first: gravity's default (and the other defaults with a unit) follow it.
+    s.units = t.choice("units", {"cgs", "si"}, "cgs") == "si" ? Units::si : Units::cgs;
+    s.gy = default_gravity_y(s.units);
     t.vec2("gravity", s.gx, s.gy, false);
     if (!std::isfinite(std::hypot(s.gx, s.gy))) t.fail("gravity", "", "its magnitude is not a finite number");
     t.finish();
@@ -579,12 +582,12 @@ void read_discharge(SceneSpec& s, Tab& root) {
     d.enabled = true;
     d.time = t.positive("time", d.time);
     d.gate = t.str("gate", d.gate);
-    d.outlet_depth = t.positive("outlet_depth", d.outlet_depth);
+    d.outlet_depth = t.positive("outlet_depth", default_length(s.units, d.outlet_depth));
     d.jam_time = t.positive("jam_time", d.jam_time);
     d.remove_keystone = t.choice("on_jam", {"stop", "remove_keystone"}, "stop") == "remove_keystone";
     d.series_interval = t.positive("series_interval", d.series_interval);
     d.peak_window = t.positive("peak_window", d.peak_window);
-    d.surface_column = t.positive("surface_column", d.surface_column);
+    d.surface_column = t.positive("surface_column", default_length(s.units, d.surface_column));
     if (const toml::node* n = t.node("snapshots")) {
       auto a = n->as_array();
       if (!a) t.fail("snapshots", show(*n), "expected an array of times [s]");
@@ -627,6 +630,11 @@ void read_output(SceneSpec& s, Tab& root) {
     s.progress = t.boolean("progress", true);
     s.rotation_angle = t.boolean("rotation_angle", false);
     s.checkpoint_every = t.non_negative("checkpoint_every", 0.0);
+    s.thermo_interval = t.positive("thermo_interval", s.thermo_interval);
+    s.snapshot_interval = t.non_negative("snapshot_interval", 0.0);
+    s.progress_interval = t.non_negative("progress_interval", s.progress_interval);
+    const std::string vtu = t.choice("vtu", {"auto", "ascii", "binary"}, "auto");
+    s.vtu = vtu == "ascii" ? VtuChoice::ascii : vtu == "binary" ? VtuChoice::binary : VtuChoice::automatic;
     t.finish();
   }
 }
@@ -666,6 +674,8 @@ void apply_overrides(SceneSpec& s, const SceneOverrides& ov) {
   };
   steps_limit("end.time", s.end_time);
   steps_limit("output.checkpoint_every", s.checkpoint_every);
+  steps_limit("output.thermo_interval", s.thermo_interval);
+  steps_limit("output.snapshot_interval", s.snapshot_interval);
   if (s.discharge.enabled) {
     steps_limit("discharge.time", s.discharge.time);
     steps_limit("discharge.series_interval", s.discharge.series_interval);

@@ -10,6 +10,7 @@
 #include "physics/model.hpp"
 #include "scene/scene_error.hpp"
 #include "scene/shear_spec.hpp"
+#include "scene/units.hpp"
 
 namespace dem {
 
@@ -45,9 +46,14 @@ struct DischargeSpec {
   double surface_column = 4.0;     // [cm] width of the surface columns at the walls and centre
 };
 
+// output.vtu: ASCII or binary VTU files (auto: binary above kVtuBinaryAbove discs).
+enum class VtuChoice { automatic, ascii, binary };
+constexpr std::size_t kVtuBinaryAbove = 10'000;
+
 struct SceneSpec {
   std::string file, name, description;
-  double gx = 0, gy = -980.0;      // [physics] gravity [cm/s^2]
+  Units units = Units::cgs;        // [physics] units: the defaults with a unit and the words printed
+  double gx = 0, gy = -980.0;      // [physics] gravity [cm/s^2] (default_gravity_y of the units)
   Scheme scheme = Scheme::paper_eq19;
   double dt = 0;                   // [s]
   bool force_dt = false;
@@ -79,6 +85,15 @@ struct SceneSpec {
   double checkpoint_every = 0;     // [s] simulated; 0: no checkpoints (--checkpoint-every overrides)
   bool progress = true;
   bool rotation_angle = false;     // [output] integrate and write each disc's rotation angle phi
+  double thermo_interval = 0.01;   // [s] simulated time between rows of thermo.csv
+  double snapshot_interval = 0;    // [s] simulated time between the run's periodic snapshots; 0: none
+  double progress_interval = 2;    // [s] wall time between progress lines
+  VtuChoice vtu = VtuChoice::automatic;
+
+  // Whether the VTU files of a world of n discs are binary (output.vtu).
+  bool vtu_binary(std::size_t n) const {
+    return vtu == VtuChoice::binary || (vtu == VtuChoice::automatic && n > kVtuBinaryAbove);
+  }
 };
 
 }  // namespace dem

@@ -41,16 +41,16 @@ void read_shear_tables(SceneSpec& s, const toml::table& root) {
   if (const toml::table* tt = table(root, "shear_box", s.file)) {
     Tab t(*tt, "shear_box", s.file);
     b.enabled = true;
-    b.width = t.bounded("width", b.width, true);
-    b.height = t.bounded("height", b.height, true);
+    b.width = t.bounded("width", default_length(s.units, b.width), true);
+    b.height = t.bounded("height", default_length(s.units, b.height), true);
     b.wall_length = t.bounded("wall_length", 1.5 * b.height, true);
     if (b.wall_length < b.height) t.fail("wall_length", show(b.wall_length), "must be >= height = " + show(b.height));
     b.wall_material = material(t, s, "wall_material", -1);
     b.plate_material = material(t, s, "plate_material", b.wall_material);
-    b.plate_volume = t.bounded("plate_volume", b.plate_volume, false, true);
+    b.plate_volume = t.bounded("plate_volume", default_area(s.units, b.plate_volume), false, true);
     b.plate_density = t.bounded("plate_density", 0.0, false, true);
-    b.plate_gap = t.bounded("plate_gap", b.plate_gap, false, true);
-    b.plate_overhang = t.bounded("plate_overhang", b.plate_overhang, false, true);
+    b.plate_gap = t.bounded("plate_gap", default_length(s.units, b.plate_gap), false, true);
+    b.plate_overhang = t.bounded("plate_overhang", default_length(s.units, b.plate_overhang), false, true);
     b.plate_follows_walls = t.choice("plate_horizontal", {"free", "with_walls"}, "free") == "with_walls";
     t.finish();
     const double W = b.width, L = b.wall_length;
@@ -77,7 +77,7 @@ void read_shear_tables(SceneSpec& s, const toml::table& root) {
     ClusterSpec& c = s.clusters;
     c.enabled = true;
     c.bonds = t.choice("bonds", {"all", "touching"}, "all") == "all" ? BondSet::all : BondSet::touching;
-    c.touch_tolerance = t.bounded("touch_tolerance", c.touch_tolerance, false, true);
+    c.touch_tolerance = t.bounded("touch_tolerance", default_length(s.units, c.touch_tolerance), false, true);
     const toml::node* n = t.node("members");
     if (!n) t.fail("members", "", "required value is missing");
     auto a = n->as_array();
@@ -139,7 +139,7 @@ void finish_shear_tables(SceneSpec& s) {
   b.plate_y = top + b.plate_gap;
   if (b.plate_y > b.wall_length)
     throw SceneError(s.file + ": shear_box.wall_length = " + show(b.wall_length) + ": the discs reach " + show(top) +
-                     " cm, the plate must start below the walls' top");
+                     " " + unit_names(s.units).length + ", the plate must start below the walls' top");
   b.plate_mass = b.plate_volume * b.plate_density;
   if (!(b.plate_mass > 0))
     throw SceneError(s.file + ": shear_box.plate_volume = " + show(b.plate_volume) + ": the plate needs a mass > 0");

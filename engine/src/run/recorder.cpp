@@ -1,0 +1,94 @@
+#include "run/recorder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "io/binary.hpp"
+#include "io/files.hpp"
+#include "io/outputs.hpp"
+#include "io/vtu.hpp"
+#include "physics/world.hpp"
+#include "scene/scene.hpp"
+
+namespace dem {
+
+namespace {
+long every(double interval, double dt) {
+  return interval > 0 ? std::max(1L, static_cast<long>(std::llround(interval / dt))) : 0;
+}
+}  // namespace
+
+void Recorder::configure(const SceneSpec& spec, const std::string& out_dir, double dt) {
+  spec_ = &spec;
+  out_ = out_dir;
+  thermo_every_ = every(spec.thermo_interval, dt);
+  snapshot_every_ = every(spec.snapshot_interval, dt);
+}
+
+void Recorder::phase_start(const World& w, const char* phase) {
+  if (!active()) return;
+  thermo.sample(w, phase);
+  if (snapshot_every_ > 0 && w.steps % snapshot_every_ == 0 && snapshots.last_step() != w.steps) snapshot(w);
+}
+
+void Recorder::after_step(const World& w, const char* phase) {
+  if (!active()) return;
+  if (thermo_every_ > 0 && w.steps % thermo_every_ == 0) thermo.sample(w, phase);
+  if (snapshot_every_ > 0 && w.steps % snapshot_every_ == 0 && snapshots.last_step() != w.steps) snapshot(w);
+}
+
+void Recorder::phase_end(const World& w, const char* phase, Status status) {
+  // An interrupted phase goes on after a resume: its end row would not be in the run never stopped.
+  if (!active() || status == Status::interrupted) return;
+  thermo.sample(w, phase);
+}
+
+std::string Recorder::write_walls(const World& w, const std::string& stem) const {
+  const std::string rel = "snapshots/walls_" + stem + ".vtu";
+  write_walls_vtu(out_ + "/" + rel, w.geometry, spec_->vtu_binary(w.discs.size()));
+  return rel;
+}
+
+void Recorder::note_snapshot(const World& w, const std::string& discs, const std::string& walls,
+                             const std::string& contacts) {
+  if (active()) snapshots.add(w.time, w.steps, discs, walls, contacts);
+}
+
+void Recorder::snapshot(const World& w) {
+  std::filesystem::create_directories(out_ + "/snapshots");
+  char stem[40];
+  std::snprintf(stem, sizeof stem, "step_%09ld", w.steps);
+  const std::string dir = out_ + "/snapshots", s = stem;
+  const bool binary = spec_->vtu_binary(w.discs.size());
+  write_disc_files(dir, s + "_discs", *spec_, w.discs, nullptr);
+  write_contact_files(dir, s + "_contacts", w, binary);
+  write_walls_vtu(dir + "/" + s + "_walls.vtu", w.geometry, binary);
+  snapshots.add(w.time, w.steps, "snapshots/" + s + "_discs.vtu", "snapshots/" + s + "_walls.vtu",
+                "snapshots/" + s + "_contacts.vtu");
+}
+
+void Recorder::write() const {
+  if (!active()) return;
+  if (!thermo.text().empty()) write_file_atomic(out_ + "/thermo.csv", thermo.text());
+  if (!snapshots.empty()) snapshots.write(out_ + "/snapshots.pvd");
+}
+
+void Recorder::save(BinaryOut& o) const {
+  o.str(thermo.text());
+  o.put(thermo.last_step());
+  o.str(snapshots.entries());
+  o.put(snapshots.last_step());
+}
+
+void Recorder::load(BinaryIn& r) {
+  std::string text = r.str();
+  const long last = r.get<long>();
+  std::string entries = r.str();
+  const long snap_last = r.get<long>();
+  thermo.restore(std::move(text), last);
+  snapshots.restore(std::move(entries), snap_last);
+}
+
+}  // namespace dem

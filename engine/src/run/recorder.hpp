@@ -1,0 +1,55 @@
+// What the run records in every phase besides the phases' own files: thermo.csv (io/thermo.hpp)
+// every output.thermo_interval, periodic snapshots every output.snapshot_interval, and the run's
+// one ParaView collection snapshots.pvd of every snapshot (periodic, the discharge's and the
+// shear's). Steps are counted on the world's step count, so a resumed run records the same steps.
+#pragma once
+
+#include <string>
+
+#include "io/pvd.hpp"
+#include "io/thermo.hpp"
+#include "run/status.hpp"
+
+namespace dem {
+
+class World;
+struct SceneSpec;
+struct BinaryOut;
+struct BinaryIn;
+
+class Recorder {
+ public:
+  // out_dir empty: records nothing (a fill run by a test in memory).
+  void configure(const SceneSpec& spec, const std::string& out_dir, double dt);
+  bool active() const { return !out_.empty(); }
+  // Whether step `step` is a periodic snapshot's: its contacts need the step's pair totals.
+  bool snapshot_due(long step) const { return active() && snapshot_every_ > 0 && step % snapshot_every_ == 0; }
+
+  // A phase's fresh start, each step the guard passed that leaves it running, and its end.
+  void phase_start(const World& w, const char* phase);
+  void after_step(const World& w, const char* phase);
+  void phase_end(const World& w, const char* phase, Status status);
+
+  // A snapshot a phase wrote (files relative to the output folder); the periodic one of the same
+  // step is then not written.
+  void note_snapshot(const World& w, const std::string& discs, const std::string& walls, const std::string& contacts);
+  // The walls' file of a phase's snapshot, snapshots/walls_STEM.vtu; returns its relative path.
+  std::string write_walls(const World& w, const std::string& stem) const;
+
+  // thermo.csv and snapshots.pvd as they stand.
+  void write() const;
+
+  void save(BinaryOut& o) const;
+  void load(BinaryIn& r);
+
+  Thermo thermo;
+  PvdIndex snapshots;
+
+ private:
+  void snapshot(const World& w);
+  const SceneSpec* spec_ = nullptr;
+  std::string out_;
+  long thermo_every_ = 0, snapshot_every_ = 0;  // [steps] 0: none
+};
+
+}  // namespace dem

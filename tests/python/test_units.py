@@ -1,0 +1,62 @@
+"""physics.units (docs/scene.md): an SI scene gets SI defaults (gravity -9.81 m/s^2, the silo,
+lattice and discharge lengths in m) and prints SI units; the paper's cgs scenes print cgs."""
+import json
+import math
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from compare import scene_toml
+
+REPO = Path(__file__).resolve().parents[2]
+SCENES = REPO / "reference_inputs" / "scenes"
+
+
+def si_scene(path):
+    """The paper's 17/18 discharge in SI: every length x 0.01 (the kn_rho_g family are lengths),
+    density in kg/m^3; gravity, the silo's size, the lattice's radius and gap, and the discharge's
+    outlet depth and surface columns left to their defaults."""
+    doc = scene_toml.load(SCENES / "discharge_17_18.toml")
+    changes = {"materials.sand.density": 2650.0, "end.time": 0.01, "output.profile_bin": 0.02,
+               "discharge.time": 0.01, "discharge.snapshots": [0.0]}
+    for k in (0, 1):
+        for key in ("kn_rho_g", "ks_rho_g", "eta_n_rho_g", "eta_s_rho_g"):
+            changes[f"pairs[{k}].{key}"] = doc["pairs"][k][key] * 0.01
+    remove = ["physics.gravity", "silo.width", "silo.height", "silo.slit_width", "fill.radius", "fill.gap",
+              "discharge.outlet_depth"]
+    return scene_toml.edit(SCENES / "discharge_17_18.toml", changes, path, remove=remove,
+                           add={"physics.units": "si"})
+
+
+def run(dem_binary, scene, out, *extra):
+    p = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), *extra], capture_output=True,
+                       text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    return p, json.loads((out / "summary.json").read_text())
+
+
+def test_an_si_scene_without_gravity_gets_9_81_and_says_m_per_s2(tmp_path, dem_binary):
+    p, s = run(dem_binary, si_scene(tmp_path / "si.toml"), tmp_path / "run")
+    assert s["options"]["gravity"] == [0, -9.81] and s["options"]["units"] == "si"
+    assert s["width"] == pytest.approx(0.4) and s["height"] == pytest.approx(0.4)
+    assert s["discharge"]["outlet_y"] == pytest.approx(-0.04) and s["discharge"]["slit"] == pytest.approx([0.16, 0.24])
+    assert s["disc_weight"] == pytest.approx(2650 * math.pi * 0.01 ** 2 * 9.81)
+    header = p.stdout[:p.stdout.index("stability bound")]
+    assert "gravity (0, -9.81) m/s^2" in header and "units si" in header and "kg/m^3" in header and "N/m" in header
+    assert "cm" not in header.replace(str(tmp_path), "")
+    assert "units si" in (tmp_path / "run" / "run.log").read_text()
+
+
+def test_the_papers_scenes_say_cgs(tmp_path, dem_binary):
+    scene = scene_toml.edit(SCENES / "silo_17_18.toml", {"end.time": 0.01}, tmp_path / "cgs.toml")
+    p, s = run(dem_binary, scene, tmp_path / "run")
+    assert "gravity (0, -980) cm/s^2" in p.stdout and "units cgs" in p.stdout and "dyn/cm" in p.stdout
+    assert s["options"]["units"] == "cgs"
+
+
+def test_a_cgs_scene_without_gravity_gets_980(tmp_path, dem_binary):
+    scene = scene_toml.edit(SCENES / "silo_17_18.toml", {"end.time": 0.01}, tmp_path / "cgs.toml",
+                            remove=["physics.gravity"])
+    _, s = run(dem_binary, scene, tmp_path / "run", "--quiet")
+    assert s["options"]["gravity"] == [0, -980]
