@@ -30,7 +30,9 @@ def _needs(program: str):
 
 
 needs_liggghts, needs_lmp = _needs("liggghts"), _needs("lmp")
-CODES = [pytest.param("liggghts", marks=needs_liggghts), pytest.param("lammps", marks=needs_lmp)]
+# (code, MPI ranks): LIGGGHTS also under mpirun -np 2
+CODES = [pytest.param("liggghts", 1, marks=needs_liggghts), pytest.param("lammps", 1, marks=needs_lmp),
+         pytest.param("liggghts", 2, marks=needs_liggghts)]
 
 DT, REST_TIME = 5e-5, 0.05
 LAW = """
@@ -102,14 +104,15 @@ def _rel(a: float, b: float) -> float:
     return abs(a - b) / abs(b)
 
 
-@pytest.mark.parametrize("code", CODES)
-def test_a_rested_scene_in_a_reference_code_carries_the_native_wall_loads(rested, dem_binary, code):
-    out = rested / code
-    p = dem(dem_binary, "run", rested / "rested.toml", "--engine", code, "--out", out)
+@pytest.mark.parametrize("code,ranks", CODES)
+def test_a_rested_scene_in_a_reference_code_carries_the_native_wall_loads(rested, dem_binary, code, ranks):
+    out = rested / f"{code}_np{ranks}"
+    p = dem(dem_binary, "run", rested / "rested.toml", "--engine", code, "--np", ranks, "--out", out)
     assert p.returncode == 0, p.stdout + p.stderr
     run = RunDir(out, strict=True)
     s, nat = run.summary, RunDir(rested / "native", strict=True).summary
-    assert s["engine_name"] == code and s["engine"].startswith(code) and s["np"] == 1
+    assert s["engine_name"] == code and s["engine"].startswith(code) and s["np"] == s["ranks"] == ranks
+    assert f"on {ranks} procs" in (out / code / f"{code}.log").read_text()     # the program's own count
     assert s["status"] == "end_time" and s["steps"] == round(REST_TIME / DT)
     assert s["rest"]["reached"] is None and "not checked" in s["rest"]["criterion"]
     assert s["n_discs"] == nat["n_discs"] == 14
