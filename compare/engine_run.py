@@ -37,10 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (Case, CaseError, Result, densities, inward_normal, moved_wall, tangent,
-                     write_text_atomic)
+from .common import (Case, CaseError, Result, densities, inward_normal, moved_wall, scene_material_index,
+                     tangent, write_text_atomic)
 from .plan import Entry, Options, PlanError, make_plan, start_discs
-from .common import scene_material_index
 
 CODES = ("liggghts", "lammps", "yade")
 EXIT_BAD, EXIT_UNSTABLE, EXIT_FAILED = 2, 3, 4
@@ -60,7 +59,7 @@ def _fail_exit(code: str, message: str, status: int) -> int:
     return status
 
 
-def make_case(scene: Path, settle: float) -> tuple[Case, object]:
+def make_case(scene: Path, settle: float) -> Case:
     """The one case a scene runs as: the plan's shared law and dt, the scene's own start."""
     plan = make_plan(Entry(Path(scene), Options(start="scene", settle=settle)))
     if plan.kind not in ("static", "discharge"):
@@ -73,9 +72,9 @@ def make_case(scene: Path, settle: float) -> tuple[Case, object]:
         d = r["discharge"]
         return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
                     mode="discharge", settle=plan.settle, materials=mats,
-                    series_interval=float(d.get("series_interval", 0.005))), plan
+                    series_interval=float(d.get("series_interval", 0.005)))
     return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=float(r["end"]["time"]),
-                materials=mats), plan
+                materials=mats)
 
 
 def classify(reason: str) -> int:
@@ -258,7 +257,7 @@ def discharge_block(case: Case, res: Result, out: Path) -> dict:
     return block
 
 
-def summary(case: Case, res: Result, code: str, np_: int, scene: Path, plan, walls: list[dict],
+def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: list[dict],
             rows: np.ndarray, ids: np.ndarray) -> dict:
     r = case.resolved
     gvec = np.array(r["gravity"], float)
@@ -339,14 +338,14 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, plan, wal
     return s
 
 
-def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene: Path, plan) -> dict:
+def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene: Path) -> dict:
     rows, ids = disc_rows(case, res)
     walls, prof_rows = wall_entries(case, res)
     write_text_atomic(out / "wall_profiles.csv",
                       "wall,group,bin,s_lo,s_hi,x_mid,y_mid,depth_mid,normal,shear,contacts\n"
                       + "".join(r + "\n" for r in prof_rows))
     write_discs(out, case, rows, ids)
-    s = summary(case, res, code, np_, scene, plan, walls, rows, ids)
+    s = summary(case, res, code, np_, scene, walls, rows, ids)
     if case.mode == "discharge":
         s["discharge"] = discharge_block(case, res, out)
     write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
@@ -385,7 +384,7 @@ def main(argv=None) -> int:
     if not scene.is_file():
         return _fail_exit(code, f"{a.scene}: no such scene file", EXIT_BAD)
     try:
-        case, plan = make_case(scene, a.settle)
+        case = make_case(scene, a.settle)
     except (PlanError, CaseError) as e:
         return _fail_exit(code, str(e), EXIT_BAD)
     except FileNotFoundError as e:      # no engine binary to resolve the scene with
@@ -415,7 +414,7 @@ def main(argv=None) -> int:
                 indent=1, default=_json) + "\n")
         return _fail_exit(code, f"{'unstable run' if status == EXIT_UNSTABLE else 'the run failed'}: "
                                 f"{res.reason} (program files in {out / code})", status)
-    s = write_outputs(out, case, res, code, a.np, scene, plan)
+    s = write_outputs(out, case, res, code, a.np, scene)
     if not a.quiet:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
               f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
