@@ -70,7 +70,8 @@ def available() -> bool:
 
 def version() -> str:
     try:
-        p = subprocess.run(["liggghts", "-h"], capture_output=True, text=True, timeout=30)
+        # -log none: no log.liggghts in the caller's folder (dem run --engine runs from anywhere)
+        p = subprocess.run(["liggghts", "-log", "none", "-h"], capture_output=True, text=True, timeout=30)
         m = re.search(r"LIGGGHTS \(?([^\n]*?Version[^\n]*)", p.stdout) or re.search(r"(LIGGGHTS[^\n]*)", p.stdout)
         return m.group(1).strip() if m else "liggghts (version not printed)"
     except (OSError, subprocess.TimeoutExpired):
