@@ -36,6 +36,7 @@ Usage, from the repository root::
 import argparse
 import math
 import os
+import sys
 import textwrap
 
 import numpy as np
@@ -1129,7 +1130,16 @@ def plot_discharge(run_dir, outdir):
 
 def plot_run(run_dir):
     """The pictures of one `dem run` directory, written into it (one process: matplotlib is
-    imported once): network.png and side_walls.png; a discharge run adds its three figures."""
+    imported once): network.png and side_walls.png; a discharge run adds its three figures.
+
+    A run without contacts.csv (a reference code's, `dem run --engine`: no contact list is read
+    back) has no network to draw: it is skipped with a note on stderr, and side_walls.png is
+    drawn per bin of wall_profiles.csv."""
+    if not os.path.exists(os.path.join(run_dir, "contacts.csv")):
+        sys.stderr.write(f"compare.figures: {os.path.join(run_dir, 'contacts.csv')}: absent (the run gives no "
+                         "contact list): the contact network is skipped; side_walls.png is drawn per "
+                         "wall_profiles.csv bin\n")
+        return [plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"), per="bin")]
     out = [plot_network(run_dir, os.path.join(run_dir, "network.png")),
            plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"))]
     if os.path.exists(os.path.join(run_dir, "flow_series.csv")):

@@ -403,6 +403,7 @@ def read(case: Case, out_dir: Path) -> Result:
     data = data[np.argsort(data[:, 0])]
     ids, rows = data[:, 0].astype(int), data[:, 1:7]
     res.discs_end = rows.tolist()
+    res.extra["kept_index"] = (ids - 1).tolist()     # rows of the case's start (atom ids from 1)
     res.n_final = len(rows)
     res.kinetic_energy_end = kinetic_energy(case.resolved, rows, case.material_index()[ids - 1])
     settle_steps = int(round(case.settle / case.dt)) if case.mode == "discharge" else 0

@@ -70,7 +70,8 @@ def available() -> bool:
 
 def version() -> str:
     try:
-        p = subprocess.run(["liggghts", "-h"], capture_output=True, text=True, timeout=30)
+        # -log none: no log.liggghts in the caller's folder (dem run --engine runs from anywhere)
+        p = subprocess.run(["liggghts", "-log", "none", "-h"], capture_output=True, text=True, timeout=30)
         m = re.search(r"LIGGGHTS \(?([^\n]*?Version[^\n]*)", p.stdout) or re.search(r"(LIGGGHTS[^\n]*)", p.stdout)
         return m.group(1).strip() if m else "liggghts (version not printed)"
     except (OSError, subprocess.TimeoutExpired):
@@ -428,6 +429,7 @@ def read(case: Case, out_dir: Path) -> Result:
         return failed(NAME, case.name, "missing final disc dump", out_dir=str(out_dir))
     ids, rows = _read_dump(dumps[-1])
     res.discs_end = rows.tolist()
+    res.extra["kept_index"] = (ids - 1).tolist()     # rows of the case's start (atom ids from 1)
     res.n_final = len(rows)
     res.kinetic_energy_end = kinetic_energy(case.resolved, rows, case.material_index()[ids - 1])
     if case.mode != "discharge" and res.n_final != res.n_initial:
@@ -469,6 +471,9 @@ def read(case: Case, out_dir: Path) -> Result:
     res.series = {"t": series_t, "walls": series}
     if case.mode == "discharge":
         res.removals = _removals(out_dir / "removals.txt", settle_steps * dt)
+        rem = _removal_rows(out_dir / "removals.txt")
+        res.extra["removal_index"] = [int(f[0]) - 1 for f in rem]
+        res.extra["removal_velocity"] = [[f[6], f[7]] for f in rem]
     res.extra["ke_max_second_half"] = float(np.max(ke[len(ke) // 2:]))
     return res
 
@@ -512,3 +517,12 @@ def _removals(path: Path, t_open: float) -> list[float]:
             continue
         out.append(float(f[1]) - t_open)
     return sorted(out)
+
+
+def _removal_rows(path: Path) -> list[list[float]]:
+    """The outlet's log rows (ID time diameter x y z u v w) in the order of their times."""
+    if not path.exists():
+        return []
+    rows = [[float(v) for v in line.split()] for line in path.read_text().splitlines()
+            if len(line.split()) >= 9 and not line.lstrip().startswith("#")]
+    return sorted(rows, key=lambda f: f[1])

@@ -47,6 +47,7 @@ const char* kMainHelp =
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
     "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
+    "       dem run SCENE.toml --engine liggghts|lammps|yade [--np N] [--settle S] [--timeout S] --out DIR\n"
     "\n"
     "  --out DIR       output directory (created, or cleared of an earlier run's files unless\n"
     "                  --resume; see docs/outputs.md)\n"
@@ -63,6 +64,10 @@ const char* kRunHelp =
     "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
     "                  the result is bit-identical to a run never stopped\n"
     "  --quiet         no header and no progress line\n"
+    "  --engine CODE   run the scene in the real LIGGGHTS, LAMMPS or YADE with the shared law and write\n"
+    "                  the same outputs (docs/compare.md, \"Running a scene in a reference code\");\n"
+    "                  exit 2 when the code cannot express the scene (the field named)\n"
+    "  --np N          with --engine: MPI ranks (liggghts, lammps: mpirun -np N) or yade -j N\n"
     "\n"
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
     "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
@@ -230,8 +235,27 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
   return -1;
 }
 
+// dem run --engine CODE: the process becomes `python3 -m compare.engine_run ARGS`.
+int cmd_run_engine(int argc, char** argv) {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
+  const char* old = std::getenv("PYTHONPATH");
+  const std::string path = std::string(DEM_SOURCE_DIR) + (old && *old ? std::string(":") + old : "");
+  setenv("PYTHONPATH", path.c_str(), 1);
+  std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m"),
+                             const_cast<char*>("compare.engine_run")};
+  for (int k = 0; k < argc; ++k) args.push_back(argv[k]);
+  args.push_back(nullptr);
+  execv(DEM_PYTHON_EXE, args.data());
+  std::fprintf(stderr, "dem run --engine: cannot start %s: %s\n", DEM_PYTHON_EXE, std::strerror(errno));
+  return 4;
+}
+
 // parse -> load -> build -> run the phases -> write.
 int cmd_run(int argc, char** argv) {
+  for (int k = 0; k < argc; ++k)
+    if (!std::strncmp(argv[k], "--engine", 8)) return cmd_run_engine(argc, argv);
   RunArgs args;
   if (const int code = parse_run_args(argc, argv, args); code >= 0) return code;
   const std::string &scene = args.scene, &out = args.out, &save_to = args.save_to;

@@ -1,0 +1,425 @@
+"""``dem run SCENE.toml --engine liggghts|lammps|yade [--np N] --out DIR``: one scene run in a
+reference code, written as the engine's own run folder (docs/outputs.md), so that
+compare.run_dir (strict) and ``python3 -m compare.figures run DIR`` read it unchanged.
+
+The scene becomes one comparison case (compare/plan.py): the shared law (common.SHARED_VARIANT),
+the scene's dt, and
+
+- a static scene: the scene's own start (its lattice or disc file, its velocities, no jitter)
+  run for ``end.time``; the reference codes do not evaluate the engine's rest criterion, so the
+  run always lasts ``end.time`` (status ``end_time``; ``rest`` says it was not checked);
+- a discharge scene: the same start settles for ``--settle`` s (the comparison's default), the
+  gate opens, ``discharge.time`` s of flow, discs below the outlet removed (as ``dem compare
+  --kind discharge`` runs each member).
+
+What the code cannot express is refused before any run (exit 2, the field named: the backend's
+own translation). LIGGGHTS and LAMMPS run under ``mpirun -np N`` when N > 1, YADE with ``-j N``.
+The program's inputs, log and dumps stay in ``DIR/<code>/``. A run that blows up or loses discs
+exits 3 (unstable), one that crashes or times out exits 4, the program's message on stderr.
+
+Quantities the codes' results do not give are written as null (JSON), ``nan`` or ``-1`` (CSV) and
+listed in summary.json's ``absent``; none is estimated: contacts.csv and contacts.vtu (no contact
+list is read back), the rest measures, the stability bounds and the pair table, the slit ends'
+forces (each code counts them in the end bin of the wall that ends there), per-bin contact counts
+where the code gives none (LIGGGHTS), and for a discharge flow_series.csv, the removed discs'
+velocities and the jam, pattern and dead-zone measures.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .common import (Case, CaseError, Result, densities, inward_normal, moved_wall, scene_material_index,
+                     tangent, write_text_atomic)
+from .plan import Entry, Options, PlanError, make_plan, start_discs
+
+CODES = ("liggghts", "lammps", "yade")
+EXIT_BAD, EXIT_UNSTABLE, EXIT_FAILED = 2, 3, 4
+# Failure reasons (the backends' words and the programs' own) that mean the dynamics went wrong
+# rather than the program: exit 3 like the engine's stability guard.
+UNSTABLE_WORDS = ("blow-up", "blew up", "lost discs", "lost atoms", "non-finite", "nan or inf",
+                  "left the closed container", "at the end:", "out of range atoms")
+# The integrators the codes run (docs/compare.md): LIGGGHTS' and LAMMPS' nve/sphere is velocity
+# Verlet; YADE's NewtonIntegrator is a leapfrog.
+SCHEME = {"liggghts": "velocity_verlet", "lammps": "velocity_verlet", "yade": "leapfrog"}
+REST_NOTE = ("not checked: the reference codes do not evaluate the engine's rest criterion "
+             "(end.rest_factor); the run lasts end.time")
+
+
+def _fail_exit(code: str, message: str, status: int) -> int:
+    sys.stderr.write(f"dem run --engine {code}: {message}\n")
+    return status
+
+
+def make_case(scene: Path, settle: float) -> Case:
+    """The one case a scene runs as: the plan's shared law and dt, the scene's own start."""
+    plan = make_plan(Entry(Path(scene), Options(start="scene", settle=settle)))
+    if plan.kind not in ("static", "discharge"):
+        raise PlanError(f"{scene}: shear_box: dem run --engine runs static and discharge scenes; the shear box "
+                        "runs in YADE through `dem compare --kind shear`")
+    r = plan.shared
+    discs = start_discs(r)
+    mats = scene_material_index(r)
+    if plan.kind == "discharge":
+        d = r["discharge"]
+        return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
+                    mode="discharge", settle=plan.settle, materials=mats,
+                    series_interval=float(d.get("series_interval", 0.005)))
+    return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=float(r["end"]["time"]),
+                materials=mats)
+
+
+def classify(reason: str) -> int:
+    low = reason.lower()
+    if "timed out" in low or "timeout" in low:
+        return EXIT_FAILED
+    return EXIT_UNSTABLE if any(w in low for w in UNSTABLE_WORDS) else EXIT_FAILED
+
+
+# ------------------------------------------------------------------------------- outputs
+
+def _fmt(v) -> str:
+    return "nan" if v is None or (isinstance(v, float) and not math.isfinite(v)) else repr(float(v))
+
+
+def _wall_geometry(case: Case) -> tuple[list[dict], float]:
+    """The walls as they are at the end of the run (a prescribed translation applied), and the top
+    of the walls and points (depth = top - y, as the engine measures it)."""
+    r = case.resolved
+    walls = {w["name"]: moved_wall(w, case.end_time) for w in r["walls"]}
+    ys = [c[1] for w in walls.values() for c in (w["from"], w["to"])] + [p["at"][1] for p in r["points"]]
+    return list(walls.values()), max(ys) if ys else 0.0
+
+
+def _bins(w: dict, p: dict, top: float) -> dict:
+    a, t = np.array(w["from"], float), tangent(w)
+    mid = 0.5 * (np.array(p["s_lo"], float) + np.array(p["s_hi"], float))
+    xy = a[None, :] + mid[:, None] * t[None, :]
+    return {"s_mid": mid, "x_mid": xy[:, 0], "y_mid": xy[:, 1], "depth_mid": top - xy[:, 1]}
+
+
+def _wall_force(w: dict, centre, normal: float, shear: float) -> np.ndarray:
+    """Force of the discs on a straight wall from its normal (pushing positive) and shear totals."""
+    return -normal * inward_normal(w, centre) + shear * tangent(w)
+
+
+def disc_rows(case: Case, res: Result) -> tuple[np.ndarray, np.ndarray]:
+    """The discs at the end (x, y, r, vx, vy, omega) and their ids (rows of the case's start)."""
+    rows = np.array(res.discs_end, float).reshape(-1, 6)
+    kept = res.extra.get("kept_index")
+    ids = np.arange(len(rows)) if kept is None else np.array(kept, int).reshape(-1)
+    if len(ids) != len(rows):
+        raise CaseError(f"the result has {len(rows)} discs and {len(ids)} ids")
+    return rows, ids
+
+
+def write_discs(out: Path, case: Case, rows: np.ndarray, ids: np.ndarray) -> None:
+    import meshio
+    names = [m["name"] for m in case.resolved["materials"]]
+    mats = case.material_index()[ids]
+    lines = ["id,x,y,r,vx,vy,omega,material"]
+    for i, row, m in zip(ids, rows, mats):
+        lines.append(f"{int(i)}," + ",".join("%.17g" % v for v in row) + f",{names[int(m)]}")
+    write_text_atomic(out / "discs.csv", "\n".join(lines) + "\n")
+    pts = np.column_stack([rows[:, :2], np.zeros(len(rows))])
+    vel = np.column_stack([rows[:, 3:5], np.zeros(len(rows))])
+    mesh = meshio.Mesh(pts, [("vertex", np.arange(len(rows)).reshape(-1, 1))],
+                       point_data={"radius": rows[:, 2], "velocity": vel, "omega": rows[:, 5],
+                                   "id": ids.astype(np.int64)})
+    tmp = out / "discs.vtu.tmp"
+    meshio.write(str(tmp), mesh, file_format="vtu")
+    os.replace(tmp, out / "discs.vtu")
+
+
+def wall_entries(case: Case, res: Result) -> tuple[list[dict], list[str]]:
+    """summary.json's walls (the engine's keys) and wall_profiles.csv's rows."""
+    walls, top = _wall_geometry(case)
+    rows, entries = [], []
+    for w in walls:
+        p = res.profiles.get(w["name"])
+        if p is None:       # an opened gate: the code no longer has the wall
+            continue
+        b = _bins(w, p, top)
+        normal, shear = np.array(p["normal"], float), np.array(p["shear"], float)
+        counts = p.get("contacts")
+        f = _wall_force(w, case.centre, float(normal.sum()), float(shear.sum()))
+        entries.append({"name": w["name"], "group": w["group"], "from": list(w["from"]), "to": list(w["to"]),
+                        "normal_total": float(normal.sum()), "shear_total": float(shear.sum()),
+                        "force": f.tolist(), "contacts": int(sum(counts)) if counts is not None else None,
+                        "profile": {"s_lo": list(p["s_lo"]), "s_hi": list(p["s_hi"]),
+                                    "depth_mid": b["depth_mid"].tolist(), "x_mid": b["x_mid"].tolist(),
+                                    "y_mid": b["y_mid"].tolist(), "normal": normal.tolist(),
+                                    "shear": shear.tolist(),
+                                    "contacts": list(counts) if counts is not None else None}})
+        for k in range(len(normal)):
+            rows.append(f"{w['name']},{w['group']},{k},{_fmt(p['s_lo'][k])},{_fmt(p['s_hi'][k])},"
+                        f"{_fmt(b['x_mid'][k])},{_fmt(b['y_mid'][k])},{_fmt(b['depth_mid'][k])},"
+                        f"{_fmt(normal[k])},{_fmt(shear[k])},{int(counts[k]) if counts is not None else -1}")
+    return entries, rows
+
+
+def write_series(out: Path, case: Case, res: Result) -> None:
+    """wall_series.csv and wall_totals_series.csv of a discharge (t since opening)."""
+    walls, top = _wall_geometry(case)
+    ser, ts = res.series.get("walls", {}), res.series.get("t", [])
+    per_bin = ["t,wall,bin,s_mid,x_mid,y_mid,depth_mid,normal,shear"]
+    totals = ["t,name,normal,shear,fx,fy"]
+    geo = {w["name"]: w for w in walls}
+    for k, t in enumerate(ts):
+        for name, s in ser.items():
+            if name not in geo or name not in res.profiles or k >= len(s["normal"]):
+                continue
+            w = geo[name]
+            b = _bins(w, res.profiles[name], top)
+            nrm, shr = np.array(s["normal"][k], float), np.array(s["shear"][k], float)
+            for j in range(len(nrm)):
+                per_bin.append(f"{_fmt(t)},{name},{j},{_fmt(b['s_mid'][j])},{_fmt(b['x_mid'][j])},"
+                               f"{_fmt(b['y_mid'][j])},{_fmt(b['depth_mid'][j])},{_fmt(nrm[j])},{_fmt(shr[j])}")
+            f = _wall_force(w, case.centre, float(nrm.sum()), float(shr.sum()))
+            totals.append(f"{_fmt(t)},{name},{_fmt(nrm.sum())},{_fmt(shr.sum())},{_fmt(f[0])},{_fmt(f[1])}")
+    write_text_atomic(out / "wall_series.csv", "\n".join(per_bin) + "\n")
+    write_text_atomic(out / "wall_totals_series.csv", "\n".join(totals) + "\n")
+
+
+def _masses(case: Case) -> np.ndarray:
+    return densities(case.resolved, case.material_index()) * math.pi * case.discs[:, 2] ** 2
+
+
+def peak_ratios(case: Case, res: Result, window: float | None) -> dict:
+    """docs/outputs.md's peak ratios from the wall series: over the bottom (gate excluded) and side
+    bins whose static load (the first sample, at opening) is at least a quarter of that wall's
+    largest static bin, the largest ratio of the normal force to the static one; windowed: of its
+    moving average over ``window`` s."""
+    t = np.array(res.series.get("t", []), float)
+    gate = case.resolved["discharge"]["gate"]
+    groups = {w["name"]: w["group"] for w in case.resolved["walls"]}
+    out = {}
+    for key, prefix in (("bottom", "bottom"), ("side", "side")):
+        raw = win = None
+        for name, s in res.series.get("walls", {}).items():
+            if name == gate or not str(groups.get(name, "")).startswith(prefix) or not s["normal"]:
+                continue
+            m = np.array(s["normal"], float)
+            static = m[0]
+            if not np.any(static > 0):
+                continue
+            sel = static >= 0.25 * static.max()
+            ratio = m[:, sel] / static[sel]
+            raw = max(raw or -math.inf, float(ratio.max()))
+            if window and len(t) > 1:
+                n = max(1, int(round(window / (t[1] - t[0]))))
+                if n <= len(ratio):
+                    kernel = np.ones(n) / n
+                    avg = np.array([np.convolve(ratio[:, j], kernel, mode="valid") for j in range(ratio.shape[1])])
+                    win = max(win or -math.inf, float(avg.max()))
+        out[f"peak_ratio_{key}"] = raw
+        out[f"peak_ratio_{key}_windowed"] = win
+    return out
+
+
+def discharge_block(case: Case, res: Result, out: Path) -> dict:
+    d = case.resolved["discharge"]
+    rem = sorted(float(x) for x in res.removals)
+    idx = res.extra.get("removal_index")
+    vel = res.extra.get("removal_velocity")
+    mass = _masses(case)
+    # removals.csv: the removed disc's id and mass where the code names it (LIGGGHTS, YADE), else
+    # -1 / nan; its velocity where the code logs it (LIGGGHTS)
+    lines = ["t,id,mass,vx,vy,how"]
+    for k, t in enumerate(rem):
+        i = int(idx[k]) if idx is not None and k < len(idx) else -1
+        v = vel[k] if vel is not None and k < len(vel) else (None, None)
+        lines.append(f"{_fmt(t)},{i},{_fmt(mass[i]) if i >= 0 else 'nan'},{_fmt(v[0])},{_fmt(v[1])},outlet")
+    write_text_atomic(out / "removals.csv", "\n".join(lines) + "\n")
+    write_series(out, case, res)
+    rate = rate_mass = None
+    if len(rem) >= 10:
+        tt, n = np.array(rem[4:]), np.arange(5, len(rem) + 1)
+        rate = float(np.polyfit(tt, n, 1)[0])
+        if np.allclose(mass, mass[0], rtol=1e-12):    # one disc mass: the mass rate follows
+            rate_mass = rate * float(mass[0])
+    block = {"n_initial": len(case.discs), "removed": len(rem), "removed_by_hand": 0,
+             "discs_out_at_1s": sum(1 for t in rem if t <= 1.0) if case.duration >= 1.0 else None,
+             "duration": case.duration, "t_open": round(case.settle / case.dt) * case.dt,
+             "flow_rate_mass": rate_mass, "flow_rate_discs": rate,
+             "jammed": None, "jam_at": None, "jams": None,
+             "pattern": None, "surface_sink_time": None, "dead_fraction_end": None,
+             "gate": d["gate"], "outlet_depth": d["outlet_depth"], "settle": case.settle}
+    block.update(peak_ratios(case, res, d.get("peak_window")))
+    return block
+
+
+def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: list[dict],
+            rows: np.ndarray, ids: np.ndarray) -> dict:
+    r = case.resolved
+    gvec = np.array(r["gravity"], float)
+    g = float(np.linalg.norm(gvec))
+    gh = gvec / g if g > 0 else np.zeros(2)
+    mass = _masses(case)
+    weight = float(mass[ids].sum() * g)
+    vertical = float(sum(np.dot(w["force"], gh) for w in walls))
+    groups: dict = {}
+    for w in walls:
+        G = groups.setdefault(w["group"], {"normal_total": 0.0, "shear_total": 0.0, "force": [0.0, 0.0]})
+        G["normal_total"] += w["normal_total"]
+        G["shear_total"] += w["shear_total"]
+        G["force"] = [G["force"][0] + w["force"][0], G["force"][1] + w["force"][1]]
+    xs = [c[0] for w in walls for c in (w["from"], w["to"])]
+    ys = [c[1] for w in walls for c in (w["from"], w["to"])]
+    steps = int(res.steps)
+    n0 = len(case.discs)
+    # discs x steps summed over the steps: every disc until its removal
+    settle_steps = round(case.settle / case.dt) if case.mode == "discharge" else 0
+    psteps = n0 * steps - sum(max(0, steps - settle_steps - round(t / case.dt)) for t in res.removals)
+    wall_s = float(res.wall_time_s)
+    status = "end_time"
+    if case.mode == "discharge":
+        status = "emptied" if len(rows) == 0 else "discharged"
+    absent = {
+        "contacts.csv, contacts.vtu": "the codes' contact lists are not read back",
+        "rest": REST_NOTE,
+        "derived, stability": "the engine's pair table and dt bounds are not computed for a reference code",
+        "points[].force": f"{code} counts a contact on a slit end in the end bin of the wall ending there",
+        "options.skin, options.cell, neighbor_rebuilds": f"{code}'s own neighbour lists",
+    }
+    if not any(w["profile"]["contacts"] is not None for w in walls):
+        absent["walls[].contacts, wall_profiles.csv contacts (-1)"] = f"{code}'s wall forces come without contact counts"
+    if case.mode == "discharge":
+        absent["flow_series.csv, snapshots"] = "the result holds removals and wall series only"
+        if code == "lammps":
+            absent["removals.csv id (-1), mass, vx, vy (nan)"] = "LAMMPS's outlet log is a count of removals"
+        elif code == "yade":
+            absent["removals.csv vx, vy (nan)"] = "YADE's outlet log gives each removal's time and disc"
+        absent["discharge.jammed, jam_at, jams, pattern, surface_sink_time, dead_fraction_end"] = \
+            "need the discs' positions during the flow"
+    s = {
+        "engine": f"{code} {res.version}".strip(),
+        "engine_name": code, "engine_version": res.version,
+        "translated_by": "compare/engine_run.py (the shared law of the comparison layer)",
+        "np": np_, "ranks": np_ if code != "yade" else 1, "threads": np_ if code == "yade" else 1,
+        "scene": {"name": r.get("name", scene.stem), "file": str(scene), "description": r.get("description", "")},
+        "status": status,
+        "status_note": REST_NOTE if case.mode == "static" else
+        "the gate opened after the settling time; jams are not detected",
+        "options": {"scheme": SCHEME[code], "dt": case.dt, "dt_forced": False, "threads": 1,
+                    **{k: r["contact"][k] for k in ("normal_spring", "no_tension", "friction_cap", "lever_arm")},
+                    "gravity": gvec.tolist(), "skin": None, "cell": None, "profile_bin": case.profile_bin,
+                    "law": "the shared law (compare/common.py SHARED_VARIANT), whatever the scene's [contact]"},
+        "n_discs": int(len(rows)), "steps": steps, "time": steps * case.dt,
+        "wall_time_s": wall_s, "particle_steps": psteps,
+        "particle_steps_per_s": psteps / wall_s if wall_s > 0 else None,
+        "neighbor_rebuilds": None,
+        "rest": {"reached": None, "time": None, "criterion": REST_NOTE, "mean_abs_du": None,
+                 "mean_abs_dv": None, "threshold": None},
+        "weight": weight, "disc_weight": float(mass[0] * g) if len(mass) else 0.0,
+        "height": (max(ys) - min(ys)) if ys else 0.0, "width": (max(xs) - min(xs)) if xs else 0.0,
+        "walls": walls,
+        "points": [{"name": p["name"], "group": p["group"], "at": list(p["at"]), "force": None, "contacts": None}
+                   for p in r["points"]],
+        "groups": groups,
+        "balance": {"weight": weight, "walls_vertical": vertical,
+                    "residual_relative": abs(weight - vertical) / weight if weight > 0 else 0.0,
+                    "note": "weight of all discs against the vertical load on the walls (slit ends folded in)"},
+        "derived": [],
+        "stability": {k: None for k in ("dt_bound", "limited_by", "dt_single_contact", "dt_rotation_z4",
+                                        "dt_rotation_z6", "dt_clusters", "cluster_shapes",
+                                        "clusters_not_examined")},
+        "absent": absent,
+        "kinetic_energy_end": res.kinetic_energy_end,
+    }
+    return s
+
+
+def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene: Path) -> dict:
+    rows, ids = disc_rows(case, res)
+    walls, prof_rows = wall_entries(case, res)
+    write_text_atomic(out / "wall_profiles.csv",
+                      "wall,group,bin,s_lo,s_hi,x_mid,y_mid,depth_mid,normal,shear,contacts\n"
+                      + "".join(r + "\n" for r in prof_rows))
+    write_discs(out, case, rows, ids)
+    s = summary(case, res, code, np_, scene, walls, rows, ids)
+    if case.mode == "discharge":
+        s["discharge"] = discharge_block(case, res, out)
+    write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
+    return s
+
+
+def _json(o):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(type(o))
+
+
+# ------------------------------------------------------------------------------- command line
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="dem run SCENE.toml --engine CODE",
+                                 description="Run a scene in a reference code; write the engine's run folder.")
+    ap.add_argument("scene")
+    ap.add_argument("--engine", required=True, choices=CODES)
+    ap.add_argument("--np", type=int, default=1, help="MPI ranks (LIGGGHTS, LAMMPS) or threads (YADE -j)")
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--settle", type=float, default=0.0,
+                    help="[s] discharge: settling before the gate opens (default: the comparison's 1 s)")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="[s] wall-clock limit of the program (exit 4)")
+    ap.add_argument("--quiet", action="store_true")
+    try:
+        a = ap.parse_args(argv)
+    except SystemExit as e:
+        return 0 if e.code == 0 else EXIT_BAD
+    code = a.engine
+    if a.np < 1 or a.timeout <= 0 or a.settle < 0:
+        return _fail_exit(code, "--np needs an integer >= 1, --timeout a number > 0, --settle >= 0", EXIT_BAD)
+    scene = Path(a.scene).resolve()
+    if not scene.is_file():
+        return _fail_exit(code, f"{a.scene}: no such scene file", EXIT_BAD)
+    try:
+        case = make_case(scene, a.settle)
+    except (PlanError, CaseError) as e:
+        return _fail_exit(code, str(e), EXIT_BAD)
+    except FileNotFoundError as e:      # no engine binary to resolve the scene with
+        return _fail_exit(code, str(e), EXIT_FAILED)
+    be = importlib.import_module(f"compare.{code}_backend")
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            be.write_inputs(case, Path(tmp))
+        except CaseError as e:
+            return _fail_exit(code, f"{scene}: {code} cannot express it: {e}", EXIT_BAD)
+    if not be.available():
+        return _fail_exit(code, f"{code} is not installed", EXIT_FAILED)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    res = be.run(case, out / code, timeout=a.timeout, threads=a.np)
+    if not res.ok:
+        status = classify(res.reason)
+        if status == EXIT_UNSTABLE:
+            # what the failed run still tells: the scene's walls and discs, no loads (non-strict readers)
+            walls, _top = _wall_geometry(case)
+            g = float(np.linalg.norm(case.resolved["gravity"]))
+            write_text_atomic(out / "summary.json", json.dumps(
+                {"engine": f"{code} {res.version}".strip(), "engine_name": code, "status": "unstable",
+                 "reason": res.reason, "np": a.np, "n_discs": len(case.discs), "steps": res.steps or None,
+                 "disc_weight": float(_masses(case)[0] * g) if len(case.discs) else 0.0,
+                 "walls": [{k: w[k] for k in ("name", "group", "from", "to")} for w in walls]},
+                indent=1, default=_json) + "\n")
+        return _fail_exit(code, f"{'unstable run' if status == EXIT_UNSTABLE else 'the run failed'}: "
+                                f"{res.reason} (program files in {out / code})", status)
+    s = write_outputs(out, case, res, code, a.np, scene)
+    if not a.quiet:
+        print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
+              f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
