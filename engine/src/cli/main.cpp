@@ -45,6 +45,7 @@ const char* kMainHelp =
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
     "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
+    "               [--set KEY=VALUE ...]\n"
     "\n"
     "  --out DIR       output directory (created; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
@@ -60,6 +61,11 @@ const char* kRunHelp =
     "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
     "                  the result is bit-identical to a run never stopped\n"
     "  --quiet         no header and no progress line\n"
+    "  --set KEY=VALUE change one value of the scene before it is validated, as if the file said it\n"
+    "                  (repeatable): integrator.dt=5e-5, integrator.scheme=velocity_verlet,\n"
+    "                  walls.0.material=steel (an index picks an entry of [[walls]]); VALUE is read as\n"
+    "                  TOML, else as a string. A wrong key or value is refused (exit 2) like one in the\n"
+    "                  file (docs/scene.md, \"Changing values from the command line\")\n"
     "\n"
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
     "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
@@ -71,14 +77,15 @@ const char* kRunHelp =
 
 const char* kEnsembleHelp =
     "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
-    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet]\n"
+    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet] [--set KEY=VALUE ...]\n"
     "       dem ensemble SCENE.toml --out DIR --member K [--seed S] [--perturb CM] [...]\n"
     "       dem ensemble merge DIR [--members M] [--quiet]\n"
     "\n"
     "Runs M copies of the scene (default 8) whose initial disc centres are moved by a seeded\n"
     "uniform amount in [-CM, CM] (default 1e-4 cm), J at a time (default: all cores), into\n"
     "DIR/member_KK, and writes DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
-    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n"
+    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts. --set KEY=VALUE changes\n"
+    "one value of the scene as dem run --set does (repeatable; merge refuses members of other sets).\n"
     "\n"
     "--member K runs member K alone (0-based), the same member bit for bit as in a full ensemble\n"
     "of that seed and perturbation: one job of a job array. `merge DIR` gathers the finished\n"
@@ -251,6 +258,10 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
       const char* v = value();
       if (!v) return bad("--save-state needs a file name");
       save_to = v;
+    } else if (k == "--set") {
+      const char* v = value();
+      if (!v || !std::strchr(v, '=')) return bad("--set needs KEY=VALUE (integrator.dt=5e-5)");
+      ov.sets.push_back(v);
     } else if (!k.empty() && k[0] == '-') {
       return bad("unknown option " + k + " (see dem run --help)");
     } else if (scene.empty()) {
@@ -372,6 +383,7 @@ int cmd_ensemble(int argc, char** argv) {
     double x;
     if (k == "--out") out = v;
     else if (k == "--scheme") ov.scheme = v;
+    else if (k == "--set") ov.sets.push_back(v);
     else if (!number_arg(v.c_str(), x)) return bad(k + ": \"" + v + "\" is not a number");
     else if (k == "--members") { if (!(x >= 1 && x <= 10000 && x == std::floor(x))) return bad("--members must be an integer in [1, 10000]"); eo.members = static_cast<int>(x); }
     else if (k == "--member") { if (!(x >= 0 && x < 10000 && x == std::floor(x))) return bad("--member must be an integer in [0, 9999]"); member = static_cast<int>(x); }
@@ -464,18 +476,20 @@ int cmd_params(int argc, char** argv) {
 // The validated scene as JSON (stdout or --out): what the comparison layer translates.
 int cmd_resolve(int argc, char** argv) {
   std::string scene, out;
+  SceneOverrides ov;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     if (k == "--out" && a + 1 < argc) out = argv[++a];
+    else if (k == "--set" && a + 1 < argc) ov.sets.push_back(argv[++a]);
     else if (k == "--help" || k == "-h") {
-      std::printf("usage: dem resolve SCENE.toml [--out FILE.json]\n");
+      std::printf("usage: dem resolve SCENE.toml [--out FILE.json] [--set KEY=VALUE ...]\n");
       return 0;
     } else if (!k.empty() && k[0] != '-' && scene.empty()) scene = k;
     else return bad("resolve: unknown or incomplete argument \"" + k + "\"");
   }
   if (scene.empty()) return bad("resolve: no scene file given");
   try {
-    const SceneSpec s = load_scene(scene);
+    const SceneSpec s = load_scene(scene, ov);
     const std::string text = resolved_scene_json(s).dump(1) + "\n";
     if (out.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
     else write_file_atomic(out, text);

@@ -87,8 +87,10 @@ SceneSpec member_spec(const SceneSpec& spec, const EnsembleOptions& opt, int k) 
 
 // What identifies the ensemble a member belongs to (DIR/member_KK/member.json): merge checks it.
 json member_identity(const SceneSpec& spec, const EnsembleOptions& opt, int k) {
-  return {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
-          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}};
+  json id = {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
+             {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}};
+  if (!spec.sets.empty()) id["set"] = spec.sets;  // members of other --set values are another ensemble
+  return id;
 }
 
 // Runs member k into dir; a member that cannot run is a failed member ("error: ..."), never the
@@ -173,6 +175,7 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
                       "or could not run (failed) count in no statistic; jam fraction: members that met a jam, of "
                       "those with a result; perturbation: uniform [-perturb, perturb] cm on every initial centre"},
              {"runs", list}};
+  if (identity.contains("set")) js["set"] = identity["set"];
   write_file_atomic(out_dir + "/ensemble.json", js.dump(2) + "\n");
   if (!quiet) {
     auto show = [&](const char* label, const json& s) {

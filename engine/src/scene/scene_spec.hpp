@@ -47,6 +47,7 @@ struct DischargeSpec {
 
 struct SceneSpec {
   std::string file, name, description;
+  std::vector<std::string> sets;  // the --set assignments read into it (ensemble identities)
   double gx = 0, gy = -980.0;      // [physics] gravity [cm/s^2]
   Scheme scheme = Scheme::paper_eq19;
   double dt = 0;                   // [s]
@@ -79,6 +80,18 @@ struct SceneSpec {
   double checkpoint_every = 0;     // [s] simulated; 0: no checkpoints (--checkpoint-every overrides)
   bool progress = true;
   bool rotation_angle = false;     // [output] integrate and write each disc's rotation angle phi
+};
+
+// What the command line changes in a scene (0 / empty: nothing).
+struct SceneOverrides {
+  double dt = 0;              // 0: none
+  std::string scheme;         // "": none
+  double end_time = 0;        // 0: none
+  bool force_dt = false;
+  int threads = 0;            // 0: none
+  std::string from;           // "": none; a state file to start from
+  long max_discs = 0;         // 0: kMaxDiscs; lower for fuzzing (engine/fuzz)
+  std::vector<std::string> sets;  // "KEY=VALUE" (--set), applied to the table before it is read
 };
 
 }  // namespace dem
