@@ -1,6 +1,6 @@
 // dem.Simulation: a scene's world, stepped, filled or run as `dem run` runs it, and read back as
 // numpy arrays. The per-disc arrays the engine keeps flat (x, y, vx, vy, omega, fx, fy, torque)
-// are read-only views of its memory; everything else is a copy (simulation.md has the table).
+// are read-only views of its memory; everything else is a copy (docs/python.md has the table).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>

@@ -39,6 +39,9 @@ const char* kMainHelp =
     "  dem compare SCENE.toml|LIST --out DIR     the scene in this engine, LIGGGHTS and YADE: agreement report (dem compare --help)\n"
     "  dem --version                            the version and build (compiler, build type)\n"
     "\n"
+    "run, ensemble, resolve and compare take --set KEY=VALUE (repeatable): one value of the scene changed\n"
+    "before it is validated, as if the file said it (integrator.dt=5e-5; docs/scene.md)\n"
+    "\n"
     "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
     "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
 
