@@ -48,6 +48,10 @@ def _parser() -> argparse.ArgumentParser:
                        description="Runs scenes in the native engine and the reference codes (LIGGGHTS, YADE, "
                                    "LAMMPS) and judges whether they agree.", epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     s.add_argument("scenes", nargs="+", type=Path, help="scene TOML files and/or .list files")
+    s.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change one value of every scene given (and of the scenes of list files) before it is "
+                        "translated, as `dem run --set` does: integrator.dt=5e-5, walls.0.material=steel "
+                        "(repeatable; the changed scenes are written to OUT/scenes_set/ and validated by the engine)")
     _common(s)
     plan.add_arguments(s)
     r = sub.add_parser("report", help="the project's agreement study (quick.list, or full.list with --full)")
@@ -106,6 +110,8 @@ def main(argv=None) -> int:
                     raise plan.PlanError(f"{s}: no such scene file")
                 else:
                     entries.append(plan.Entry(s.resolve(), base, str(s)))
+        if a.cmd == "scene" and a.set:
+            entries = with_set(entries, a.set, a.out / "scenes_set")
         plans = pipeline.plans_of(entries, codes)
     except plan.PlanError as e:
         print(f"dem compare: {e}", file=sys.stderr)
@@ -127,6 +133,25 @@ def main(argv=None) -> int:
           f"({len(rep['metrics']) - n_fail} of {len(rep['metrics'])} metrics within tolerance)"
           + (f"; mutants caught: {rep['mutants']['n_caught']} of {rep['mutants']['n_applicable']}" if a.mutants else ""))
     return 0 if verdict else 1
+
+
+def with_set(entries, assignments, folder: Path):
+    """The entries with their scenes changed by ``--set`` (compare.scene_toml), each written into
+    folder/KK/ under its own name and validated by the engine (``dem resolve``); PlanError names
+    the key or the field the engine refuses."""
+    from . import common, scene_toml
+    out = []
+    for k, e in enumerate(entries):
+        path = folder / f"{k:02d}" / e.scene.name
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            doc = scene_toml.rebase_paths(scene_toml.load(e.scene), e.scene.parent, path.parent)
+            scene_toml.write(path, scene_toml.with_assignments(doc, assignments))
+            common.resolve(path)
+        except (KeyError, ValueError, common.CaseError) as err:
+            raise plan.PlanError(f"{e.label or e.scene}: --set: {err}") from None
+        out.append(plan.Entry(path.resolve(), e.options, e.label))
+    return out
 
 
 def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dict:

@@ -336,6 +336,35 @@ def with_changes(doc: dict, changes: dict | None = None, add: dict | None = None
     return out
 
 
+def parse_assignment(assignment: str) -> tuple[str, object]:
+    """(key, value) of ``KEY=VALUE`` as ``dem run --set`` reads it: VALUE as a TOML value (5e-5,
+    2, true, [1, 2], "text"), else as a string (velocity_verlet); ``walls.0.material`` is
+    ``walls[0].material``. ValueError when there is no ``=``."""
+    key, eq, text = assignment.partition("=")
+    if not eq or not key:
+        raise ValueError(f"--set {assignment}: expected KEY=VALUE (integrator.dt=5e-5)")
+    if "\n" in text or "\r" in text:
+        raise ValueError(f"--set {assignment}: the value must be one line")
+    key = re.sub(r"\.(\d+)(?=\.|$)", r"[\1]", key)
+    try:
+        parsed = tomllib.loads("v = " + text)
+        value = parsed["v"] if list(parsed) == ["v"] else text
+    except tomllib.TOMLDecodeError:
+        value = text
+    return key, value
+
+
+def with_assignments(doc: dict, assignments) -> dict:
+    """A copy of doc with each ``KEY=VALUE`` (parse_assignment) set: a key the scene has is
+    changed (with_changes: the same kind of value), one it lacks is added, for the engine's
+    reader to accept or refuse as in a file (``dem resolve``)."""
+    out = doc
+    for a in assignments:
+        key, value = parse_assignment(a)
+        out = with_changes(out, {key: value}) if has(out, key) else with_changes(out, add={key: value})
+    return out if out is not doc else copy.deepcopy(doc)
+
+
 def rebase_paths(doc: dict, from_dir, to_dir) -> dict:
     """A copy of doc whose relative file paths (PATH_KEYS), read by the engine relative to the
     scene's folder ``from_dir``, name the same files from ``to_dir`` (still relative; absolute

@@ -21,6 +21,26 @@ def dem_binary():
     return path
 
 
+def module_dir() -> Path:
+    """Where this build's module dem is (ctest passes DEM_MODULE_DIR; otherwise build/python)."""
+    return Path(os.environ.get("DEM_MODULE_DIR", REPO_ROOT / "build" / "python"))
+
+
+@pytest.fixture(scope="session")
+def dem_module():
+    """This build's Python module dem, imported from its build folder (never another checkout's
+    through a .pth file); skipped on builds without it (sanitizers: DEM_NO_MODULE)."""
+    if os.environ.get("DEM_NO_MODULE") == "1":
+        pytest.skip("this build has no Python module (DEM_PYTHON_MODULE=OFF, or a sanitizer build)")
+    where = module_dir()
+    if not any(where.glob("dem.*.so")):
+        pytest.fail(f"the module dem is not built in {where}: build first (cmake --build build)")
+    sys.path.insert(0, str(where))
+    import dem
+    assert Path(dem.__file__).parent.resolve() == where.resolve(), dem.__file__
+    return dem
+
+
 @pytest.fixture
 def run_dem(dem_binary):
     """Runs `dem ARGS...` and returns the CompletedProcess (text output)."""

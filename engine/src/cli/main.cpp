@@ -41,12 +41,16 @@ const char* kMainHelp =
     "  dem compare SCENE.toml|LIST --out DIR     the scene in this engine, LIGGGHTS and YADE: agreement report (dem compare --help)\n"
     "  dem --version                            the version and build (compiler, build type)\n"
     "\n"
+    "run, ensemble, resolve and compare take --set KEY=VALUE (repeatable): one value of the scene changed\n"
+    "before it is validated, as if the file said it (integrator.dt=5e-5; docs/scene.md)\n"
+    "\n"
     "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
     "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
     "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
+    "               [--set KEY=VALUE ...]\n"
     "       dem run SCENE.toml --engine liggghts|lammps|yade [--np N] [--settle S] [--timeout S] --out DIR\n"
     "\n"
     "  --out DIR       output directory (created, or cleared of an earlier run's files unless\n"
@@ -68,6 +72,11 @@ const char* kRunHelp =
     "                  the same outputs (docs/compare.md, \"Running a scene in a reference code\");\n"
     "                  exit 2 when the code cannot express the scene (the field named)\n"
     "  --np N          with --engine: MPI ranks (liggghts, lammps: mpirun -np N) or yade -j N\n"
+    "  --set KEY=VALUE change one value of the scene before it is validated, as if the file said it\n"
+    "                  (repeatable): integrator.dt=5e-5, integrator.scheme=velocity_verlet,\n"
+    "                  walls.0.material=steel (an index picks an entry of [[walls]]); VALUE is read as\n"
+    "                  TOML, else as a string. A wrong key or value is refused (exit 2) like one in the\n"
+    "                  file (docs/scene.md, \"Changing values from the command line\")\n"
     "\n"
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
     "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
@@ -79,7 +88,7 @@ const char* kRunHelp =
 
 const char* kEnsembleHelp =
     "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
-    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet]\n"
+    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet] [--set KEY=VALUE ...]\n"
     "       dem ensemble SCENE.toml --out DIR --member K [--seed S] [--perturb CM] [...]\n"
     "       dem ensemble merge DIR [--members M] [--quiet]\n"
     "\n"
@@ -87,7 +96,8 @@ const char* kEnsembleHelp =
     "uniform amount in [-CM, CM] (default 1e-4 cm; 1e-6 m in an si scene), J at a time (default:\n"
     "all cores), into DIR/member_KK (each with its run.log and the files of dem run), and writes\n"
     "DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
-    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts.\n"
+    "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts. --set KEY=VALUE changes\n"
+    "one value of the scene as dem run --set does (repeatable; merge refuses members of other sets).\n"
     "\n"
     "--member K runs member K alone (0-based), the same member bit for bit as in a full ensemble\n"
     "of that seed and perturbation: one job of a job array. `merge DIR` gathers the finished\n"
@@ -222,6 +232,10 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
       const char* v = value();
       if (!v) return bad("--save-state needs a file name");
       save_to = v;
+    } else if (k == "--set") {
+      const char* v = value();
+      if (!v || !std::strchr(v, '=')) return bad("--set needs KEY=VALUE (integrator.dt=5e-5)");
+      ov.sets.push_back(v);
     } else if (!k.empty() && k[0] == '-') {
       return bad("unknown option " + k + " (see dem run --help)");
     } else if (scene.empty()) {
@@ -368,6 +382,7 @@ int cmd_ensemble(int argc, char** argv) {
     double x;
     if (k == "--out") out = v;
     else if (k == "--scheme") ov.scheme = v;
+    else if (k == "--set") ov.sets.push_back(v);
     else if (!number_arg(v.c_str(), x)) return bad(k + ": \"" + v + "\" is not a number");
     else if (k == "--members") { if (!(x >= 1 && x <= 10000 && x == std::floor(x))) return bad("--members must be an integer in [1, 10000]"); eo.members = static_cast<int>(x); }
     else if (k == "--member") { if (!(x >= 0 && x < 10000 && x == std::floor(x))) return bad("--member must be an integer in [0, 9999]"); member = static_cast<int>(x); }
@@ -464,18 +479,20 @@ int cmd_params(int argc, char** argv) {
 // The validated scene as JSON (stdout or --out): what the comparison layer translates.
 int cmd_resolve(int argc, char** argv) {
   std::string scene, out;
+  SceneOverrides ov;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     if (k == "--out" && a + 1 < argc) out = argv[++a];
+    else if (k == "--set" && a + 1 < argc) ov.sets.push_back(argv[++a]);
     else if (k == "--help" || k == "-h") {
-      std::printf("usage: dem resolve SCENE.toml [--out FILE.json]\n");
+      std::printf("usage: dem resolve SCENE.toml [--out FILE.json] [--set KEY=VALUE ...]\n");
       return 0;
     } else if (!k.empty() && k[0] != '-' && scene.empty()) scene = k;
     else return bad("resolve: unknown or incomplete argument \"" + k + "\"");
   }
   if (scene.empty()) return bad("resolve: no scene file given");
   try {
-    const SceneSpec s = load_scene(scene);
+    const SceneSpec s = load_scene(scene, ov);
     const std::string text = resolved_scene_json(s).dump(1) + "\n";
     if (out.empty()) std::fwrite(text.data(), 1, text.size(), stdout);
     else write_file_atomic(out, text);

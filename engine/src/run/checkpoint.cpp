@@ -95,6 +95,7 @@ CheckpointKey checkpoint_key(const std::string& scene_file, const SceneOverrides
   os << "dt=" << (ov.dt > 0 ? fmt17(ov.dt) : "") << ";scheme=" << ov.scheme
      << ";end_time=" << (ov.end_time > 0 ? fmt17(ov.end_time) : "") << ";force_dt=" << (ov.force_dt ? 1 : 0)
      << ";from=" << ov.from << ";threads=" << ov.threads;
+  for (const std::string& a : ov.sets) os << ";set=" << a;
   k.overrides = os.str();
   return k;
 }

@@ -89,8 +89,10 @@ SceneSpec member_spec(const SceneSpec& spec, const EnsembleOptions& opt, int k) 
 
 // What identifies the ensemble a member belongs to (DIR/member_KK/member.json): merge checks it.
 json member_identity(const SceneSpec& spec, const EnsembleOptions& opt, int k) {
-  return {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
-          {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}, {"units", to_string(spec.units)}};
+  json id = {{"scene", spec.name}, {"file", spec.file}, {"member", k}, {"seed", opt.seed}, {"perturb", opt.perturb},
+             {"scheme", to_string(spec.scheme)}, {"dt", spec.dt}, {"units", to_string(spec.units)}};
+  if (!spec.sets.empty()) id["set"] = spec.sets;  // members of other --set values are another ensemble
+  return id;
 }
 
 // Runs member k into dir; a member that cannot run is a failed member ("error: ..."), never the
@@ -189,6 +191,7 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
                       "those with a result; perturbation: uniform [-perturb, perturb] " + std::string(length) +
                       " on every initial centre"},
              {"runs", list}};
+  if (identity.contains("set")) js["set"] = identity["set"];
   write_file_atomic(out_dir + "/ensemble.json", js.dump(2) + "\n");
   if (!quiet) {
     auto show = [&](const char* label, const json& s) {

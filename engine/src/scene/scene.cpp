@@ -14,6 +14,8 @@
 #include <unistd.h>
 
 #include "scene/fill.hpp"
+#include "scene/scene_set.hpp"
+#include "scene/scene_table.hpp"
 #include "scene/toml_reader.hpp"
 #include "physics/free_heap.hpp"
 #include "physics/neighbors.hpp"
@@ -404,9 +406,6 @@ Scheme parse_scheme(const std::string& v, bool& ok) {
   return Scheme::paper_eq19;
 }
 
-namespace {
-
-// The file itself: a regular file within the size limit, valid TOML.
 toml::table parse_scene_file(const std::string& path) {
   toml::table root_table;
   {
@@ -425,6 +424,8 @@ toml::table parse_scene_file(const std::string& path) {
   }
   return root_table;
 }
+
+namespace {
 
 // [scene], [physics], [integrator], [contact].
 void read_run_tables(SceneSpec& s, Tab& root) {
@@ -690,10 +691,16 @@ void apply_overrides(SceneSpec& s, const SceneOverrides& ov) {
 }  // namespace
 
 SceneSpec load_scene(const std::string& path, const SceneOverrides& ov) {
+  toml::table root_table = parse_scene_file(path);
+  for (const std::string& a : ov.sets) apply_assignment(root_table, a);
+  return load_scene_table(root_table, path, ov);
+}
+
+SceneSpec load_scene_table(const toml::table& root_table, const std::string& file, const SceneOverrides& ov) {
   SceneSpec s;
-  s.file = path;
+  s.file = file;
+  s.sets = ov.sets;
   s.max_discs = ov.max_discs > 0 ? ov.max_discs : kMaxDiscs;
-  const toml::table root_table = parse_scene_file(path);
   Tab root(root_table, "", s.file);
   read_run_tables(s, root);
   read_materials(s, root);

@@ -14,16 +14,7 @@ namespace dem {
 
 class World;
 
-// Reads and validates; throws SceneError. Overrides (NaN / empty = none) come from the CLI.
-struct SceneOverrides {
-  double dt = 0;              // 0: none
-  std::string scheme;         // "": none
-  double end_time = 0;        // 0: none
-  bool force_dt = false;
-  int threads = 0;            // 0: none
-  std::string from;           // "": none; a state file to start from
-  long max_discs = 0;         // 0: kMaxDiscs; lower for fuzzing (engine/fuzz)
-};
+// Reads and validates; throws SceneError. Overrides (SceneOverrides, scene_spec.hpp) come from the CLI.
 SceneSpec load_scene(const std::string& path, const SceneOverrides& ov = {});
 
 // Refuses overlapping discs and discs outside the walls (throws SceneError).

@@ -53,6 +53,7 @@ constexpr std::size_t kVtuBinaryAbove = 10'000;
 struct SceneSpec {
   std::string file, name, description;
   Units units = Units::cgs;        // [physics] units: the defaults with a unit and the words printed
+  std::vector<std::string> sets;   // the --set assignments read into it (ensemble identities)
   double gx = 0, gy = -980.0;      // [physics] gravity [cm/s^2] (default_gravity_y of the units)
   Scheme scheme = Scheme::paper_eq19;
   double dt = 0;                   // [s]
@@ -94,6 +95,18 @@ struct SceneSpec {
   bool vtu_binary(std::size_t n) const {
     return vtu == VtuChoice::binary || (vtu == VtuChoice::automatic && n > kVtuBinaryAbove);
   }
+};
+
+// What the command line changes in a scene (0 / empty: nothing).
+struct SceneOverrides {
+  double dt = 0;              // 0: none
+  std::string scheme;         // "": none
+  double end_time = 0;        // 0: none
+  bool force_dt = false;
+  int threads = 0;            // 0: none
+  std::string from;           // "": none; a state file to start from
+  long max_discs = 0;         // 0: kMaxDiscs; lower for fuzzing (engine/fuzz)
+  std::vector<std::string> sets;  // "KEY=VALUE" (--set), applied to the table before it is read
 };
 
 }  // namespace dem

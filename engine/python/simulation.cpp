@@ -1,0 +1,267 @@
+// dem.Simulation: a scene's world, stepped, filled or run as `dem run` runs it, and read back as
+// numpy arrays. The per-disc arrays the engine keeps flat (x, y, vx, vy, omega, fx, fy, torque)
+// are read-only views of its memory; everything else is a copy (docs/python.md has the table).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+#include "io/outputs.hpp"
+#include "io/state.hpp"
+#include "physics/world.hpp"
+#include "run/scene_run.hpp"
+#include "run/status.hpp"
+#include "scene/scene.hpp"
+#include "scene_object.hpp"
+
+namespace py = pybind11;
+
+namespace dem::python {
+
+namespace {
+
+class Simulation {
+ public:
+  explicit Simulation(const Scene& scene) : spec_(scene.spec) {
+    stab_ = build_world(spec_, world_);
+    if (!spec_.start_from.empty()) load_state(world_, spec_.start_from);
+  }
+
+  // n steps of the world as they are; the last records its pair forces (contacts()).
+  void step(long n) {
+    if (n < 0) throw py::value_error("step(n): n must be >= 0");
+    for (long k = 0; k < n;) {
+      const long chunk = std::min(n - k, 1000L);
+      {
+        py::gil_scoped_release free;
+        for (long c = 0; c < chunk; ++c, ++k) {
+          world_.record_pair_forces = k + 1 == n;
+          world_.step();
+        }
+        world_.record_pair_forces = false;
+      }
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between chunks
+    }
+    status_ = Status::running;
+  }
+
+  // The fill alone (to rest or end.time), the scene's other phases not run.
+  std::string fill() {
+    {
+      py::gil_scoped_release free;
+      status_ = run_fill(spec_, world_, &rest_);
+    }
+    return to_string(status_);
+  }
+
+  // The scene's phases from its start, as `dem run SCENE --out DIR --quiet` runs them, and its
+  // outputs written into out.
+  std::string run(const std::filesystem::path& out_path, bool progress) {
+    const std::string out = out_path.string();
+    if (world_.steps != 0 && spec_.start_from.empty())
+      throw std::runtime_error("run() runs a scene from its start: make a new Simulation");
+    std::filesystem::create_directories(out);
+    SceneRun run(spec_, world_, out);
+    {
+      py::gil_scoped_release free;
+      status_ = run.run(progress, false);
+    }
+    nlohmann::ordered_json extra;
+    const RunSummary summary = run.summary(extra);
+    rest_ = run.fill.rest;
+    write_outputs(out, spec_, world_, summary, stab_, &extra);
+    run.discard_kept();
+    return to_string(status_);
+  }
+
+  // The outputs of the world as it stands (after step or fill), as a run writes them.
+  void write(const std::filesystem::path& out_path) {
+    const std::string out = out_path.string();
+    std::filesystem::create_directories(out);
+    RunSummary s;
+    s.status = to_string(status_);
+    s.rest_reached = rest_.reached;
+    s.rest_time = rest_.time;
+    s.rest_threshold = rest_.threshold;
+    s.mean_abs_du = rest_.mean_abs_du;
+    s.mean_abs_dv = rest_.mean_abs_dv;
+    write_outputs(out, spec_, world_, s, stab_);
+  }
+
+  // A read-only view of a flat array, kept alive by this object. Steps may move the engine's
+  // arrays (a discharge removes discs), so a view is read again after each step.
+  py::array_t<double> view(const std::vector<double>& v, const py::object& self) const {
+    py::array_t<double> a({static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(double))}, v.data(), self);
+    py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+    return a;
+  }
+
+  py::array_t<double> pairs_of(const std::vector<double>& a, const std::vector<double>& b) const {
+    py::array_t<double> out({static_cast<py::ssize_t>(a.size()), py::ssize_t{2}});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      o(i, 0) = a[i];
+      o(i, 1) = b[i];
+    }
+    return out;
+  }
+
+  template <class F>
+  py::array_t<double> per_disc(F&& f) const {
+    py::array_t<double> out(static_cast<py::ssize_t>(world_.discs.size()));
+    auto o = out.mutable_unchecked<1>();
+    for (std::size_t i = 0; i < world_.discs.size(); ++i) o(i) = f(i);
+    return out;
+  }
+
+  // The touching contacts as contacts.csv lists them (docs/outputs.md): disc-disc pairs in list
+  // order, bonds, then disc-wall and disc-point contacts.
+  py::dict contacts() const {
+    const World& w = world_;
+    const Discs& d = w.discs;
+    const bool moved_after_forces = w.scheme != Scheme::velocity_verlet && w.steps > 0;  // as the CSV
+    const World::Increments inc = w.increments();
+    const auto px = [&](int i) { return moved_after_forces ? d.x[i] - inc.x[i] * inc.factor : d.x[i]; };
+    const auto py_ = [&](int i) { return moved_after_forces ? d.y[i] - inc.y[i] * inc.factor : d.y[i]; };
+    std::vector<int> kind, ci, cj;
+    std::vector<double> en, es, fn, fs;
+    const bool recorded = w.pair_forces_current();
+    PairTotals::Cursor r;
+    for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
+      const PairContact& c = w.neighbors.pairs[p];
+      const double R = std::hypot(px(c.j) - px(c.i), py_(c.j) - py_(c.i));
+      if (!(R <= d.r(c.i) + d.r(c.j) && R != 0)) continue;
+      const PairTotals::Force* f = recorded ? w.pair_totals.at(w.neighbors.pairs, p, r) : nullptr;
+      kind.push_back(0); ci.push_back(d.id_at(c.i)); cj.push_back(d.id_at(c.j));
+      en.push_back(c.en); es.push_back(c.es);
+      fn.push_back(!recorded ? NAN : f ? f->fn : 0.0);
+      fs.push_back(!recorded ? NAN : f ? f->fs : 0.0);
+    }
+    for (const Bond& c : w.bonds) {
+      if (std::hypot(px(c.j) - px(c.i), py_(c.j) - py_(c.i)) == 0) continue;
+      kind.push_back(3); ci.push_back(d.id_at(c.i)); cj.push_back(d.id_at(c.j));
+      en.push_back(c.en); es.push_back(c.es); fn.push_back(c.fn); fs.push_back(c.fs);
+    }
+    const int nw = static_cast<int>(w.geometry.walls.size());
+    for (const WallContact& c : w.neighbors.walls) {
+      if (!c.touching) continue;
+      kind.push_back(c.k < nw ? 1 : 2); ci.push_back(d.id_at(c.i)); cj.push_back(c.k < nw ? c.k : c.k - nw);
+      en.push_back(c.en); es.push_back(c.es); fn.push_back(c.fn); fs.push_back(c.fs);
+    }
+    py::dict out;
+    out["kind"] = py::array_t<int>(kind.size(), kind.data());
+    out["i"] = py::array_t<int>(ci.size(), ci.data());
+    out["j"] = py::array_t<int>(cj.size(), cj.data());
+    out["e_n"] = py::array_t<double>(en.size(), en.data());
+    out["e_s"] = py::array_t<double>(es.size(), es.data());
+    out["f_n"] = py::array_t<double>(fn.size(), fn.data());
+    out["f_s"] = py::array_t<double>(fs.size(), fs.data());
+    return out;
+  }
+
+  // The forces of the discs on each wall and point (summary.json's walls and points).
+  py::dict loads(bool points) const {
+    std::vector<WallLoad> walls;
+    std::vector<PointLoad> pts;
+    measure_loads(world_, spec_.profile_bin, walls, pts);
+    py::dict out;
+    py::list names, groups;
+    std::vector<double> fx, fy, normal, shear;
+    std::vector<int> contacts;
+    if (points) {
+      for (const PointLoad& p : pts) {
+        names.append(p.name); groups.append(p.group);
+        fx.push_back(p.fx); fy.push_back(p.fy); contacts.push_back(p.contacts);
+      }
+    } else {
+      for (const WallLoad& l : walls) {
+        names.append(l.name); groups.append(l.group);
+        fx.push_back(l.fx); fy.push_back(l.fy); normal.push_back(l.normal); shear.push_back(l.shear);
+        contacts.push_back(l.contacts);
+      }
+      out["normal"] = py::array_t<double>(normal.size(), normal.data());
+      out["shear"] = py::array_t<double>(shear.size(), shear.data());
+    }
+    out["name"] = names;
+    out["group"] = groups;
+    out["fx"] = py::array_t<double>(fx.size(), fx.data());
+    out["fy"] = py::array_t<double>(fy.size(), fy.data());
+    out["contacts"] = py::array_t<int>(contacts.size(), contacts.data());
+    return out;
+  }
+
+  World world_;
+  Status status_ = Status::running;
+  Rest rest_;
+
+ private:
+  SceneSpec spec_;  // the world's scene (SceneRun and the outputs read it)
+  StabilityReport stab_;
+};
+
+}  // namespace
+
+void bind_simulation(py::module_& m) {
+  using S = Simulation;
+  auto flat = [](std::vector<double> Discs::*member) {
+    return [member](py::object self) {
+      const S& s = self.cast<const S&>();
+      return s.view(s.world_.discs.*member, self);
+    };
+  };
+  py::class_<S>(m, "Simulation", R"(A scene's world (built and checked as `dem run` builds it).
+
+step(n) steps it; fill() runs the fill to rest or end.time; run(out) runs every phase of the scene
+(fill, discharge, shear) and writes the outputs, as `dem run SCENE --out DIR --quiet`; write(out)
+writes the outputs of the world as it stands. x, y, vx, vy, omega, fx, fy, torque are read-only
+views of the engine's arrays (no copy; read them again after stepping); positions, velocities,
+forces, radii, ids, contacts(), walls() and points() are copies.)")
+      .def(py::init<const Scene&>(), py::arg("scene"))
+      .def("step", &S::step, py::arg("n") = 1, "n time steps (the last one records the pair forces contacts() reads)")
+      .def("fill", &S::fill, "The fill to rest (the paper's note 3) or end.time; returns the status ('rest', 'end_time', 'unstable', ...).")
+      .def("run", &S::run, py::arg("out"), py::arg("progress") = false,
+           "Every phase of the scene from its start, and its outputs written into out (created), as dem run does; returns the status.")
+      .def("write", &S::write, py::arg("out"), "The outputs of the world as it stands into out (created), as a run writes them.")
+      .def_property_readonly("x", flat(&Discs::x))
+      .def_property_readonly("y", flat(&Discs::y))
+      .def_property_readonly("vx", flat(&Discs::vx))
+      .def_property_readonly("vy", flat(&Discs::vy))
+      .def_property_readonly("omega", flat(&Discs::omega), "spins [1/s], counter-clockwise")
+      .def_property_readonly("fx", flat(&Discs::fx), "resultant force of eq. (15), gravity included")
+      .def_property_readonly("fy", flat(&Discs::fy))
+      .def_property_readonly("torque", flat(&Discs::torque))
+      .def_property_readonly("positions", [](const S& s) { return s.pairs_of(s.world_.discs.x, s.world_.discs.y); }, "(N, 2) copy")
+      .def_property_readonly("velocities", [](const S& s) { return s.pairs_of(s.world_.discs.vx, s.world_.discs.vy); }, "(N, 2) copy")
+      .def_property_readonly("forces", [](const S& s) { return s.pairs_of(s.world_.discs.fx, s.world_.discs.fy); }, "(N, 2) copy")
+      .def_property_readonly("radii", [](const S& s) { return s.per_disc([&](std::size_t i) { return s.world_.discs.r(i); }); },
+                             "copy (the engine keeps radii per kind of disc)")
+      .def_property_readonly("masses", [](const S& s) { return s.per_disc([&](std::size_t i) { return s.world_.discs.mass(i); }); },
+                             "rho pi r^2 [g per cm of thickness]; copy")
+      .def_property_readonly("ids", [](const S& s) {
+        py::array_t<int> out(static_cast<py::ssize_t>(s.world_.discs.size()));
+        auto o = out.mutable_unchecked<1>();
+        for (std::size_t i = 0; i < s.world_.discs.size(); ++i) o(i) = s.world_.discs.id_at(i);
+        return out;
+      }, "the discs' ids (a disc keeps its id when others are removed); copy")
+      .def("contacts", &S::contacts,
+           "The touching contacts as contacts.csv lists them: dict of arrays kind (0 disc-disc, 1 disc-wall, 2 "
+           "disc-point, 3 bond), i (disc id), j (disc id, wall or point index), e_n, e_s, f_n, f_s (disc-disc f_n, f_s "
+           "are NaN unless the last step recorded them); copies.")
+      .def("walls", [](const S& s) { return s.loads(false); },
+           "The forces of the discs on each wall: dict of name, group, fx, fy, normal, shear, contacts; copies.")
+      .def("points", [](const S& s) { return s.loads(true); }, "The forces on each point (slit ends): name, group, fx, fy, contacts.")
+      .def("kinetic_energy", [](const S& s) { return s.world_.kinetic_energy(); })
+      .def_property_readonly("time", [](const S& s) { return s.world_.time; })
+      .def_property_readonly("steps", [](const S& s) { return s.world_.steps; })
+      .def_property_readonly("dt", [](const S& s) { return s.world_.dt; })
+      .def_property_readonly("n_discs", [](const S& s) { return s.world_.discs.size(); })
+      .def_property_readonly("status", [](const S& s) { return std::string(to_string(s.status_)); })
+      .def_property_readonly("rest_reached", [](const S& s) { return s.rest_.reached; })
+      .def_property_readonly("rest_time", [](const S& s) { return s.rest_.reached ? py::object(py::float_(s.rest_.time)) : py::object(py::none()); });
+}
+
+}  // namespace dem::python
