@@ -49,3 +49,19 @@ def test_one_two_three_threads_same_bytes(scene, scheme, run_dem, tmp_path):
     for threads in (2, 3):
         differ = sorted(f for f in runs[1].keys() | runs[threads].keys() if runs[1].get(f) != runs[threads].get(f))
         assert not differ, f"{threads} threads: {differ}"
+
+
+@pytest.mark.parametrize("env, shown", [({}, "GOMP_SPINCOUNT=100"),
+                                        ({"OMP_WAIT_POLICY": "active"}, "OMP_WAIT_POLICY=active"),
+                                        ({"GOMP_SPINCOUNT": "7"}, "GOMP_SPINCOUNT=7")],
+                         ids=["unset", "policy_kept", "spincount_kept"])
+def test_barrier_wait_bounded_unless_chosen(dem_binary, tmp_path, env, shown):
+    """libgomp reads its wait setting at load: dem sets GOMP_SPINCOUNT and runs itself again
+    when the user set neither variable (main.cpp, bound_barrier_spinning); the header says what
+    the threads run with."""
+    import os
+    clean = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    p = subprocess.run([str(dem_binary), "run", str(BASE), "--out", str(tmp_path / "run"), "--threads", "2",
+                        "--end-time", "0.001"], env={**clean, **env}, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert f"threads 2 (barriers: {shown})" in p.stdout, p.stdout[:600]

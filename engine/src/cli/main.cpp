@@ -52,7 +52,7 @@ const char* kRunHelp =
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
     "  --force-dt      run even if dt is above the computed stability bound\n"
     "  --threads N     threads of the force and integration loops (integrator.threads, default 1);\n"
-    "                  a given N always gives the same bits; N = 1 is the serial loop\n"
+    "                  every N gives the bits of N = 1, the serial loop\n"
     "  --from STATE    start from a saved state (overrides start.from; skips the fill)\n"
     "  --save-state F  save the final state (positions, velocities, forces, contact history)\n"
     "  --checkpoint-every S  write DIR/checkpoint.dem every S simulated seconds (overrides\n"
@@ -99,6 +99,32 @@ int bad(const std::string& msg) {
   return 2;
 }
 
+// How libgomp's threads wait at a barrier. It reads OMP_WAIT_POLICY and GOMP_SPINCOUNT once, when
+// it is loaded, before main; unset, a thread spins 300000 times (milliseconds) before it sleeps,
+// and with other processes on the cores the spinning thread holds the core its partner needs: 2
+// threads ran 4-15x slower than 1. kSpinCount spins (microseconds) and then sleep, as
+// OMP_WAIT_POLICY=passive does at once; 1000 and 10000 spins were slower on a busy machine
+// (benchmarks/README.md, "Threads on a busy machine"). Unless the user set either variable, dem
+// sets GOMP_SPINCOUNT and runs itself again, once, before anything else.
+constexpr const char* kSpinCount = "100";
+void bound_barrier_spinning(char** argv) {
+#ifdef _OPENMP
+  if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
+  if (setenv("GOMP_SPINCOUNT", kSpinCount, 1) != 0) return;
+  execv("/proc/self/exe", argv);  // returns only if it failed: libgomp's default then
+  unsetenv("GOMP_SPINCOUNT");
+#else
+  (void)argv;
+#endif
+}
+
+// The wait setting libgomp runs with, for the header.
+std::string barrier_wait() {
+  for (const char* v : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT"})
+    if (const char* x = std::getenv(v)) return std::string(v) + "=" + x;
+  return "libgomp's default";
+}
+
 bool number_arg(const char* s, double& v) {
   char* end = nullptr;
   v = std::strtod(s, &end);
@@ -110,8 +136,9 @@ void print_header(const SceneSpec& s, const World& w, const StabilityReport& st)
   std::printf("  fill: %s\n", s.fill_summary.c_str());
   std::printf("  N = %zu discs, %zu walls, %zu points; gravity (%g, %g) cm/s^2\n", w.discs.size(),
               w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy);
-  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d\n", to_string(w.scheme), w.dt,
-              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
+  std::printf("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d%s\n", to_string(w.scheme), w.dt,
+              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads,
+              w.threads > 1 ? (" (barriers: " + barrier_wait() + ")").c_str() : "");
   std::printf("  contact: normal_spring %s, no_tension %s, friction_cap %s, lever_arm %s\n",
               to_string(w.options.normal_spring), to_string(w.options.no_tension), to_string(w.options.friction_cap),
               to_string(w.options.lever_arm));
@@ -509,6 +536,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
+  if (cmd == "run" || cmd == "ensemble" || cmd == "compare") bound_barrier_spinning(argv);
   g_program = argv[0];
   if (cmd == "--version" || cmd == "version") {
     std::printf("dem %s (%s)\n", DEM_VERSION, DEM_BUILD_ID);

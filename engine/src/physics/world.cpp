@@ -572,7 +572,6 @@ void World::pair_contacts(ForceBlock& blk) {
   const std::size_t* cross = CROSS ? cross_in_[blk.t].value.data() : nullptr;
   CrossForce* cross_f = CROSS ? cross_forces_[blk.t].value.data() : nullptr;
   const std::size_t p0 = CROSS ? 0 : blk.p0, p1 = CROSS ? cross_in_[blk.t].value.size() : blk.p1;
-  const int own_end = blk.i1;
   PairTotals::Force* record = blk.record;
   const PairLaw law = kernel_->pair_law[width_index()][ONE_KIND];
   Discs& d = discs;
@@ -610,43 +609,53 @@ void World::pair_contacts(ForceBlock& blk) {
     }
     word_bits |= std::uint64_t{1} << (q & 63);
   };
+  // The own pass stops at each of the block's cross pairs (cross_out_, in list order) and skips it:
+  // j's block computes it. Between them, and on one thread, the loop tests nothing more.
+  const CrossPair* next_cross = CROSS || blk.threads == 1 ? nullptr : cross_out_[blk.t].value.data();
+  const CrossPair* const cross_end = next_cross ? next_cross + cross_out_[blk.t].value.size() : nullptr;
+  std::size_t stop = next_cross != cross_end ? next_cross->q : p1;
   for (std::size_t p = p0; p < p1;) {
     int n = 0, gaps = 0;
-    for (; p < p1 && n < PairBlock::kSize && gaps < PairBlock::kSize; ++p) {
-      PairContact& c = pc[CROSS ? cross[p] : p];
-      const int i = c.i, j = c.j;
-      if (!CROSS && j >= own_end) {  // a cross pair: j's block computes it
+    while (p < p1 && n < PairBlock::kSize && gaps < PairBlock::kSize) {
+      if (p == stop) {  // a cross pair
         if constexpr (RECORD) {
+          const int i = pc[p].i, j = pc[p].j;
           const double dx = x[j] - x[i], dy = y[j] - y[i];
           if (!apart(dx * dx + dy * dy, d.r(i) + d.r(j))) b.gap[gaps++] = static_cast<int>(p - p0);
         }
+        ++p;
+        stop = ++next_cross != cross_end ? next_cross->q : p1;
         continue;
       }
-      const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
-      const double ri = kr[ki], rj = kr[kj];
-      const double dx = x[j] - x[i], dy = y[j] - y[i];
-      const double R2 = dx * dx + dy * dy, sum = ri + rj;
-      if (apart(R2, sum)) {  // (3): apart; the contact and its history end
-        c.en = c.es = 0;
-        if constexpr (CROSS) cross_f[p].touching = false;
-        continue;
+      for (; p < stop && n < PairBlock::kSize; ++p) {
+        PairContact& c = pc[CROSS ? cross[p] : p];
+        const int i = c.i, j = c.j;
+        const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
+        const double ri = kr[ki], rj = kr[kj];
+        const double dx = x[j] - x[i], dy = y[j] - y[i];
+        const double R2 = dx * dx + dy * dy, sum = ri + rj;
+        if (apart(R2, sum)) {  // (3): apart; the contact and its history end
+          c.en = c.es = 0;
+          if constexpr (CROSS) cross_f[p].touching = false;
+          continue;
+        }
+        b.pair[n] = static_cast<int>(p - p0);
+        b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
+        if constexpr (!ONE_KIND) b.sum[n] = sum;
+        b.ddx[n] = ux[i] * uf - ux[j] * uf;  // du_i - du_j of (5)
+        b.ddy[n] = uy[i] * uf - uy[j] * uf;
+        if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
+          b.rot_i[n] = uphi[i] * uf;
+          b.rot_j[n] = uphi[j] * uf;
+          if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
+        } else if constexpr (SHEAR) {
+          b.rot_i[n] = ri * (uphi[i] * uf);  // r_i dphi_i of (5b)
+          b.rot_j[n] = rj * (uphi[j] * uf);
+        }
+        if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
+        b.en[n] = c.en; b.es[n] = c.es;
+        ++n;
       }
-      b.pair[n] = static_cast<int>(p - p0);
-      b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
-      if constexpr (!ONE_KIND) b.sum[n] = sum;
-      b.ddx[n] = ux[i] * uf - ux[j] * uf;  // du_i - du_j of (5)
-      b.ddy[n] = uy[i] * uf - uy[j] * uf;
-      if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
-        b.rot_i[n] = uphi[i] * uf;
-        b.rot_j[n] = uphi[j] * uf;
-        if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
-      } else if constexpr (SHEAR) {
-        b.rot_i[n] = ri * (uphi[i] * uf);  // r_i dphi_i of (5b)
-        b.rot_j[n] = rj * (uphi[j] * uf);
-      }
-      if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
-      b.en[n] = c.en; b.es[n] = c.es;
-      ++n;
     }
     law(b, n, law_props, inv_dt, sum1);
     // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
