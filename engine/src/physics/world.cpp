@@ -557,14 +557,46 @@ constexpr auto pair_block_law_at() {
   return &pair_block_law_sse2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
 }
 
+namespace {
+// A recorded pass's totals (World::pair_contacts): written in list order from `at` on, and each
+// pair's bit gathered a word at a time and or-ed into the list's bits (a thread's first and last
+// words may be shared with its neighbours': atomic, in any order).
+struct TotalsWriter {
+  PairTotals::Force* at;
+  std::uint64_t* bits;
+  std::size_t word = 0;
+  std::uint64_t word_bits = 0;
+  void put(std::size_t q, double fn, double fs) {  // pair q's totals and bit
+    *at++ = PairTotals::Force{fn, fs};
+    if ((q >> 6) != word) {
+      flush();
+      word = q >> 6;
+      word_bits = 0;
+    }
+    word_bits |= std::uint64_t{1} << (q & 63);
+  }
+  // Places for the touching cross pairs gap[g], ... (list offsets from p0) before offset `below`:
+  // kept in `places`, filled by add_cross_forces once j's block has computed them.
+  void keep(const int* gap, int count, int& g, std::size_t p0, std::size_t below, std::vector<PairTotals::Force*>& places) {
+    for (; g < count && static_cast<std::size_t>(gap[g]) < below; ++g) {
+      places.push_back(at);
+      put(p0 + static_cast<std::size_t>(gap[g]), 0, 0);
+    }
+  }
+  void flush() {
+    if (word_bits != 0) __atomic_fetch_or(&bits[word], word_bits, __ATOMIC_RELAXED);
+  }
+};
+}  // namespace
+
 // The stage of the disc pairs: the block's pairs [p0, p1) of the sorted list, a block of touching
 // pairs at a time. The geometry of each pair is gathered (a pair found apart loses its history
 // there), the law runs on the block's arrays (pair_block_law: (4), (5), (6)-(14), (15a, b)), and
 // the results are added to the discs in list order, the sums of (15). A pair whose j is in a
 // later block (a cross pair) is left to j's block. RECORD: the totals of the touching pairs are
-// written from `record` on in list order, a touching cross pair's place kept in `gaps`, and each
-// touching pair's bit set in pair_totals' bits over the list. CROSS: the block's cross pairs
-// (cross_in_): the force on j added, the one on i kept for i's block (add_cross_forces).
+// written in list order from the block's `record` on (TotalsWriter), a touching cross pair's
+// place kept in `gaps`. CROSS: the block's cross pairs (cross_in_): the force on j added, the one
+// on i kept for i's block (add_cross_forces).
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND,
           bool CROSS>
 void World::pair_contacts(ForceBlock& blk) {
@@ -572,7 +604,6 @@ void World::pair_contacts(ForceBlock& blk) {
   const std::size_t* cross = CROSS ? cross_in_[blk.t].value.data() : nullptr;
   CrossForce* cross_f = CROSS ? cross_forces_[blk.t].value.data() : nullptr;
   const std::size_t p0 = CROSS ? 0 : blk.p0, p1 = CROSS ? cross_in_[blk.t].value.size() : blk.p1;
-  PairTotals::Force* record = blk.record;
   const PairLaw law = kernel_->pair_law[width_index()][ONE_KIND];
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
@@ -592,23 +623,7 @@ void World::pair_contacts(ForceBlock& blk) {
   const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
-  // RECORD: the touching pairs' bits, gathered a word at a time and or-ed into the list's bits
-  // (a thread's first and last words may be shared with its neighbours': atomic, in any order).
-  std::uint64_t* const bits = RECORD ? pair_totals.bits() : nullptr;
-  std::size_t word = 0;
-  std::uint64_t word_bits = 0;
-  const auto flush_bits = [&] {
-    if (word_bits != 0) __atomic_fetch_or(&bits[word], word_bits, __ATOMIC_RELAXED);
-  };
-  const auto put_record = [&](std::size_t q, double fn, double fs) {  // pair q's totals and bit
-    *record++ = PairTotals::Force{fn, fs};
-    if ((q >> 6) != word) {
-      flush_bits();
-      word = q >> 6;
-      word_bits = 0;
-    }
-    word_bits |= std::uint64_t{1} << (q & 63);
-  };
+  TotalsWriter totals{blk.record, RECORD ? pair_totals.bits() : nullptr};  // RECORD only
   // The own pass stops at each of the block's cross pairs (cross_out_, in list order) and skips it:
   // j's block computes it. Between them, and on one thread, the loop tests nothing more.
   const CrossPair* next_cross = CROSS || blk.threads == 1 ? nullptr : cross_out_[blk.t].value.data();
@@ -668,13 +683,7 @@ void World::pair_contacts(ForceBlock& blk) {
       fxa[cur] = ax; fya[cur] = ay;
       if constexpr (SHEAR) tq[cur] = at;
     };
-    int g = 0;  // RECORD: the next kept place
-    const auto keep_places = [&](std::size_t below) {  // places of the cross pairs before list offset `below`
-      for (; g < gaps && static_cast<std::size_t>(b.gap[g]) < below; ++g) {
-        blk.gaps->push_back(record);
-        put_record(p0 + static_cast<std::size_t>(b.gap[g]), 0, 0);
-      }
-    };
+    int g = 0;  // RECORD: the next cross pair's place to keep
     for (int k = 0; k < n; ++k) {
       PairContact& c = pc[CROSS ? cross[b.pair[k]] : p0 + static_cast<std::size_t>(b.pair[k])];
       const int i = c.i, j = c.j;
@@ -691,8 +700,8 @@ void World::pair_contacts(ForceBlock& blk) {
         continue;
       }
       if constexpr (RECORD) {
-        keep_places(static_cast<std::size_t>(b.pair[k]));
-        put_record(p0 + static_cast<std::size_t>(b.pair[k]), b.fn[k], fs);
+        totals.keep(b.gap, gaps, g, p0, static_cast<std::size_t>(b.pair[k]), *blk.gaps);
+        totals.put(p0 + static_cast<std::size_t>(b.pair[k]), b.fn[k], fs);
       }
       if (i != cur) {
         put_back();
@@ -706,9 +715,9 @@ void World::pair_contacts(ForceBlock& blk) {
       if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
     }
     put_back();
-    if constexpr (RECORD) keep_places(p - p0);
+    if constexpr (RECORD) totals.keep(b.gap, gaps, g, p0, p - p0, *blk.gaps);
   }
-  if constexpr (RECORD) flush_bits();
+  if constexpr (RECORD) totals.flush();
   blk.pair_overlap = std::max(blk.pair_overlap, worst);
 }
 
