@@ -60,7 +60,7 @@ const char* kRunHelp =
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
     "  --force-dt      run even if dt is above the computed stability bound\n"
     "  --threads N     threads of the force and integration loops (integrator.threads, default 1);\n"
-    "                  a given N always gives the same bits; N = 1 is the serial loop\n"
+    "                  every N gives the bits of N = 1, the serial loop\n"
     "  --from STATE    start from a saved state (overrides start.from; skips the fill)\n"
     "  --save-state F  save the final state (positions, velocities, forces, contact history)\n"
     "  --checkpoint-every S  write DIR/checkpoint.dem every S simulated seconds (overrides\n"
@@ -116,6 +116,25 @@ const char* kParamsHelp =
 int bad(const std::string& msg) {
   std::fprintf(stderr, "dem: %s\n", msg.c_str());
   return 2;
+}
+
+// How libgomp's threads wait at a barrier. It reads OMP_WAIT_POLICY and GOMP_SPINCOUNT once, when
+// it is loaded, before main; unset, a thread spins 300000 times (milliseconds) before it sleeps,
+// and with other processes on the cores the spinning thread holds the core its partner needs: 2
+// threads ran 4-15x slower than 1. kSpinCount spins (microseconds) and then sleep, as
+// OMP_WAIT_POLICY=passive does at once; 1000 and 10000 spins were slower on a busy machine
+// (benchmarks/README.md, "Threads on a busy machine"). Unless the user set either variable, dem
+// sets GOMP_SPINCOUNT and runs itself again, once, before anything else.
+constexpr const char* kSpinCount = "100";
+void bound_barrier_spinning(char** argv) {
+#ifdef _OPENMP
+  if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
+  if (setenv("GOMP_SPINCOUNT", kSpinCount, 1) != 0) return;
+  execv("/proc/self/exe", argv);  // returns only if it failed: libgomp's default then
+  unsetenv("GOMP_SPINCOUNT");
+#else
+  (void)argv;
+#endif
 }
 
 bool number_arg(const char* s, double& v) {
@@ -526,6 +545,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
+  if (cmd == "run" || cmd == "ensemble" || cmd == "compare") bound_barrier_spinning(argv);
   g_program = argv[0];
   if (cmd == "--version" || cmd == "version") {
     std::printf("dem %s (%s)\n", DEM_VERSION, DEM_BUILD_ID);

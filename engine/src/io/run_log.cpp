@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -33,6 +34,13 @@ std::string format(const char* f, ...) {
   return s;
 }
 
+// The wait setting libgomp runs with (cli/main.cpp bounds its spinning), for the header.
+std::string barrier_wait() {
+  for (const char* v : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT"})
+    if (const char* x = std::getenv(v)) return std::string(v) + "=" + x;
+  return "libgomp's default";
+}
+
 }  // namespace
 
 std::string run_header(const SceneSpec& s, const World& w, const StabilityReport& st) {
@@ -44,8 +52,9 @@ std::string run_header(const SceneSpec& s, const World& w, const StabilityReport
               w.geometry.walls.size(), w.geometry.points.size(), w.gx, w.gy, u.acceleration);
   h += format("  units %s: lengths in %s, density %s, forces per unit thickness in %s, energies in %s\n",
               to_string(s.units), u.length, u.density, u.force, u.energy);
-  h += format("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d\n", to_string(w.scheme), w.dt,
-              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads);
+  h += format("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d%s\n", to_string(w.scheme), w.dt,
+              s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads,
+              w.threads > 1 ? (" (barriers: " + barrier_wait() + ")").c_str() : "");
   h += format("  contact: normal_spring %s, no_tension %s, friction_cap %s, lever_arm %s\n",
               to_string(w.options.normal_spring), to_string(w.options.no_tension), to_string(w.options.friction_cap),
               to_string(w.options.lever_arm));

@@ -1,6 +1,7 @@
 // OpenMP glue: the engine builds and runs serial without OpenMP (every pragma is then ignored).
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #ifdef _OPENMP
@@ -42,26 +43,30 @@ inline void parallel_for(long n, int nt, F&& f) {
   for (long i = 0; i < n; ++i) f(i);
 }
 
-// The sum of f(i) over [0, n): the plain loop for one thread; otherwise each thread sums its
-// block and the block sums are added in block order, so a thread count always gives the same bits.
+// The blocks of a sum: kSumBlock items each (the last one shorter), whatever the thread count,
+// so that every thread count adds the same partial sums in the same order (the same bits). A sum
+// of at most kSumBlock items is the plain loop.
+constexpr long kSumBlock = 16384;
+inline long sum_blocks(long n) { return n <= 0 ? 0 : (n + kSumBlock - 1) / kSumBlock; }
+
+// The sum of f(i) over [0, n): each block of kSumBlock summed in order, on any of nt threads, and
+// the block sums added in block order.
 template <class F>
 inline double parallel_sum(long n, int nt, F&& f) {
-  if (nt <= 1) {
+  const long nb = sum_blocks(n);
+  if (nb <= 1) {
     double s = 0;
     for (long i = 0; i < n; ++i) s += f(i);
     return s;
   }
-  std::vector<double> part(static_cast<std::size_t>(nt), 0.0);
-#pragma omp parallel num_threads(nt)
-  {
-    const int t = omp_thread_index();
-    const long i0 = block_start(static_cast<int>(n), nt, t), i1 = block_start(static_cast<int>(n), nt, t + 1);
+  std::vector<double> part(static_cast<std::size_t>(nb), 0.0);
+  parallel_for(nb, static_cast<int>(std::min<long>(nt, nb)), [&](long b) {
     double s = 0;
-    for (long i = i0; i < i1; ++i) s += f(i);
-    part[t] = s;
-  }
-  double s = 0;
-  for (int t = 0; t < nt; ++t) s += part[t];
+    for (long i = b * kSumBlock, end = std::min(n, (b + 1) * kSumBlock); i < end; ++i) s += f(i);
+    part[static_cast<std::size_t>(b)] = s;
+  });
+  double s = part[0];
+  for (long b = 1; b < nb; ++b) s += part[static_cast<std::size_t>(b)];
   return s;
 }
 

@@ -43,8 +43,8 @@ struct World::ForceBlock {
   int t = 0, threads = 1;  // this block's thread, of `threads`
   int i0 = 0, i1 = 0;
   std::size_t p0 = 0, p1 = 0, w0 = 0, w1 = 0;
-  std::vector<Deferred>* later = nullptr;  // the reactions on discs of later blocks
   PairTotals::Force* record = nullptr;     // a recorded pass: this block's first pair total
+  std::vector<PairTotals::Force*>* gaps = nullptr;  // a recorded pass with threads: cross pairs' totals (CrossPair)
   double pair_overlap = 0, wall_overlap = 0;  // the largest overlaps (max_overlap)
 };
 
@@ -75,9 +75,12 @@ void World::step() {
 }
 
 // The stages of a force pass and the move, for each block of discs: the row of the kernel table
-// this scene runs (select_kernel) says which code each force stage is. With threads every block
-// adds its discs' sums in a fixed order, so a thread count always gives the same bits; the order
-// of the walls and the pairs differs between one thread and several, each fixed.
+// this scene runs (select_kernel) says which code each force stage is. A disc's forces are summed
+// in the serial order whatever the blocks: m g, its pairs in list order (those (h, i) before those
+// (i, j), each by the other disc), its walls. With threads a block first computes its cross pairs
+// (h of an earlier block, i its own: the first of i's pairs in that order), then its own pairs,
+// and once every block is done adds the forces of its discs' pairs with a later block's j (the
+// last of their pairs), then the walls.
 bool World::forces_then_move(Move move, double h) {
   const Kernel& k = *kernel_;
   const bool record = record_pair_forces;
@@ -88,14 +91,14 @@ bool World::forces_then_move(Move move, double h) {
   // Bonds and moving walls run on one thread: their stages reach across any block.
   const bool serial = k.key.features.bonds || k.key.features.moving_walls;
   const bool far = each_block(serial ? 1 : threads_for(static_cast<int>(discs.size())), [&](ForceBlock& b) {
-    start_resultants(b.i0, b.i1);             // (15): m_i g in X_i, Y_i; M_i = 0
+    start_resultants(b.i0, b.i1);                            // (15): m_i g in X_i, Y_i; M_i = 0
     if (record) start_recording(b);
-    if (b.threads > 1) (this->*k.walls)(b);   // (3)-(15) discs on walls and points: first with threads,
-    (this->*pairs)(b);                        // (3)-(15) disc pairs
-    if (k.bonds) (this->*k.bonds)(b);         // paper 2's bonds: the law without (8), (13)
-    if (b.threads == 1) (this->*k.walls)(b);  //   last on one thread
-    add_deferred(b);                          // the pairs' reactions from earlier blocks
-    return move_block(move, h, b.i0, b.i1);   // (16)-(19)
+    if (b.threads > 1) (this->*k.cross[one_kind()])(b);      // (3)-(15) the block's cross pairs
+    (this->*pairs)(b);                                       // (3)-(15) disc pairs
+    if (k.bonds) (this->*k.bonds)(b);                        // paper 2's bonds: the law without (8), (13)
+    add_cross_forces(b);                                     // the cross pairs of later blocks, on i
+    (this->*k.walls)(b);                                     // (3)-(15) discs on walls and points
+    return move_block(move, h, b.i0, b.i1);                  // (16)-(19)
   });
   if (record) pair_forces_step = steps + (move == Move::none ? 0 : 1);  // a step's pass: the step it ends
   return far;
@@ -111,8 +114,8 @@ void World::refresh_lists(bool far) {
 
 
 // Threads own contiguous blocks of discs (force_blocks: of equal work, set every kRebalanceEvery
-// steps); a pair is computed by the owner of its i, and what a block adds to a later block's
-// discs is added by that block's owner once all are done, in block order (add_deferred).
+// steps); a pair is computed by the owner of its i, a cross pair (j in a later block) by the
+// owner of its j (forces_then_move).
 template <class F>
 bool World::each_block(int nt, F&& stages) {
   const int n = static_cast<int>(discs.size());
@@ -128,6 +131,7 @@ bool World::each_block(int nt, F&& stages) {
     return far;
   }
   if (!blocks_fit()) balance_blocks();  // other threads or discs than at the last balance
+  const bool map = !cross_ok_;
   std::vector<double>& part = thread_overlap_;
   part.assign(nt, 0.0);
   unsigned far = 0;
@@ -143,11 +147,11 @@ bool World::each_block(int nt, F&& stages) {
     b.p1 = std::lower_bound(pairs.begin(), pairs.end(), b.i1, by_i) - pairs.begin();
     b.w0 = std::lower_bound(wl.begin(), wl.end(), b.i0, by_i) - wl.begin();
     b.w1 = std::lower_bound(wl.begin(), wl.end(), b.i1, by_i) - wl.begin();
-    deferred_[b.t].value.clear();
-    b.later = &deferred_[b.t].value;
+    if (map) map_cross_pairs(b);
     far |= stages(b) ? 1u : 0u;
     part[b.t] = std::max(b.pair_overlap, b.wall_overlap);
   }
+  cross_ok_ = true;
   double worst = 0;
   for (int t = 0; t < nt; ++t) worst = std::max(worst, part[t]);
   max_overlap = worst;
@@ -173,18 +177,49 @@ void World::start_recording(ForceBlock& b) {
   std::size_t offset = 0;
   for (int u = 0; u < b.t; ++u) offset += touching_[u].value;
   b.record = pair_totals.forces() + offset;
+  b.gaps = &cross_gaps_[b.t].value;
+  b.gaps->clear();
 }
 
-void World::add_deferred(ForceBlock& b) {
+// Each block's cross pairs, then each block's list of the cross pairs it computes: those of the
+// earlier blocks, block by block, in list order (so that a disc j gets them by increasing i).
+void World::map_cross_pairs(ForceBlock& b) {
+  const auto& pairs = neighbors.pairs;
+  std::vector<CrossPair>& out = cross_out_[b.t].value;
+  out.clear();
+  for (std::size_t p = b.p0; p < b.p1; ++p)
+    if (pairs[p].j >= b.i1) {
+      const int to = static_cast<int>(std::upper_bound(force_blocks.begin(), force_blocks.end(), pairs[p].j) -
+                                      force_blocks.begin()) - 1;
+      out.push_back(CrossPair{p, pairs[p].i, to, 0});
+    }
+#pragma omp barrier
+  std::vector<std::size_t>& in = cross_in_[b.t].value;
+  in.clear();
+  for (int u = 0; u < b.t; ++u)
+    for (CrossPair& c : cross_out_[u].value)
+      if (c.to == b.t) {
+        c.at = in.size();  // this entry is written by this thread alone
+        in.push_back(c.q);
+      }
+  cross_forces_[b.t].value.resize(in.size());
+}
+
+// After every block's pairs: the forces of the block's cross pairs on their i (computed by the
+// blocks of their j), in list order, which for a disc is the order of its j; a recorded pass puts
+// their totals in the places the pair stage kept for them.
+void World::add_cross_forces(ForceBlock& b) {
   if (b.threads == 1) return;
 #pragma omp barrier
   Discs& d = discs;
-  for (int u = 0; u < b.t; ++u)  // earlier threads' reactions on this block, in their order
-    for (const Deferred& q : deferred_[u].value) {
-      if (q.j < b.i0 || q.j >= b.i1) continue;
-      d.fx[q.j] -= q.fx; d.fy[q.j] -= q.fy;
-      d.torque[q.j] -= q.tq;
-    }
+  PairTotals::Force* const* gap = b.gaps ? b.gaps->data() : nullptr;
+  for (const CrossPair& c : cross_out_[b.t].value) {
+    const CrossForce& f = cross_forces_[c.to].value[c.at];
+    if (!f.touching) continue;
+    d.fx[c.i] += f.fx; d.fy[c.i] += f.fy;
+    d.torque[c.i] -= f.tq;  // 0 without shear: no change, as the serial pass makes none
+    if (gap) **gap++ = PairTotals::Force{f.fn, f.fs};
+  }
 }
 
 bool World::adjacent(int k1, int k2) const {
@@ -202,7 +237,11 @@ void World::prepare(bool build_lists) {
   const int slots = std::max(1, threads);
   touch_scratch_.assign(slots, std::vector<char>(geometry.obstacle_count() + 1, 0));
   dist_scratch_.assign(slots, std::vector<double>(geometry.obstacle_count() + 1, 0.0));
-  deferred_.assign(slots, {});
+  cross_out_.assign(slots, {});
+  cross_in_.assign(slots, {});
+  cross_forces_.assign(slots, {});
+  cross_gaps_.assign(slots, {});
+  cross_ok_ = false;
   touching_.assign(slots, {});
   increment_sums_.assign(slots, {});
   // Only eq. (19) keeps increment arrays (increments()); they start at zero (at rest, or as set).
@@ -228,6 +267,7 @@ void World::balance_blocks() {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
   force_blocks.clear();
+  cross_ok_ = false;
   if (nt <= 1) return;
   // Only what a run resumed from a state file has too (its lists are built again at the restart,
   // with other candidates than the run in one piece, but the same history): the discs and the
@@ -252,6 +292,7 @@ void World::balance_blocks() {
 void World::rebuild_lists() {
   // Totals recorded over the old list (a build right after a recorded pass) name their pairs first.
   pair_totals.detach(neighbors.pairs);
+  cross_ok_ = false;
   neighbors.rebuild(discs, geometry, threads_for(static_cast<int>(discs.size())));
   if (!moving.empty()) walls_listed();
   if (bonds.empty()) return;
@@ -516,19 +557,53 @@ constexpr auto pair_block_law_at() {
   return &pair_block_law_sse2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
 }
 
+namespace {
+// A recorded pass's totals (World::pair_contacts): written in list order from `at` on, and each
+// pair's bit gathered a word at a time and or-ed into the list's bits (a thread's first and last
+// words may be shared with its neighbours': atomic, in any order).
+struct TotalsWriter {
+  PairTotals::Force* at;
+  std::uint64_t* bits;
+  std::size_t word = 0;
+  std::uint64_t word_bits = 0;
+  void put(std::size_t q, double fn, double fs) {  // pair q's totals and bit
+    *at++ = PairTotals::Force{fn, fs};
+    if ((q >> 6) != word) {
+      flush();
+      word = q >> 6;
+      word_bits = 0;
+    }
+    word_bits |= std::uint64_t{1} << (q & 63);
+  }
+  // Places for the touching cross pairs gap[g], ... (list offsets from p0) before offset `below`:
+  // kept in `places`, filled by add_cross_forces once j's block has computed them.
+  void keep(const int* gap, int count, int& g, std::size_t p0, std::size_t below, std::vector<PairTotals::Force*>& places) {
+    for (; g < count && static_cast<std::size_t>(gap[g]) < below; ++g) {
+      places.push_back(at);
+      put(p0 + static_cast<std::size_t>(gap[g]), 0, 0);
+    }
+  }
+  void flush() {
+    if (word_bits != 0) __atomic_fetch_or(&bits[word], word_bits, __ATOMIC_RELAXED);
+  }
+};
+}  // namespace
+
 // The stage of the disc pairs: the block's pairs [p0, p1) of the sorted list, a block of touching
 // pairs at a time. The geometry of each pair is gathered (a pair found apart loses its history
 // there), the law runs on the block's arrays (pair_block_law: (4), (5), (6)-(14), (15a, b)), and
-// the results are added to the discs in list order, the sums of (15). The i side of each pair is
-// added at once; the j side too when j is the block's, otherwise it is kept in `later` and added
-// by j's block (add_deferred). RECORD: the totals of the touching pairs are written from
-// `record` on, and each touching pair's bit set in pair_totals' bits over the list.
-template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
+// the results are added to the discs in list order, the sums of (15). A pair whose j is in a
+// later block (a cross pair) is left to j's block. RECORD: the totals of the touching pairs are
+// written in list order from the block's `record` on (TotalsWriter), a touching cross pair's
+// place kept in `gaps`. CROSS: the block's cross pairs (cross_in_): the force on j added, the one
+// on i kept for i's block (add_cross_forces).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND,
+          bool CROSS>
 void World::pair_contacts(ForceBlock& blk) {
-  const std::size_t p0 = blk.p0, p1 = blk.p1;
-  const int own_end = blk.i1;
-  std::vector<Deferred>* later = blk.later;
-  PairTotals::Force* record = blk.record;
+  static_assert(!(CROSS && RECORD), "the cross pass hands its totals to i's block");
+  const std::size_t* cross = CROSS ? cross_in_[blk.t].value.data() : nullptr;
+  CrossForce* cross_f = CROSS ? cross_forces_[blk.t].value.data() : nullptr;
+  const std::size_t p0 = CROSS ? 0 : blk.p0, p1 = CROSS ? cross_in_[blk.t].value.size() : blk.p1;
   const PairLaw law = kernel_->pair_law[width_index()][ONE_KIND];
   Discs& d = discs;
   const double inv_dt = 1.0 / dt;
@@ -548,43 +623,54 @@ void World::pair_contacts(ForceBlock& blk) {
   const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
-  // RECORD: the touching pairs' bits, gathered a word at a time and or-ed into the list's bits
-  // (a thread's first and last words may be shared with its neighbours': atomic, in any order).
-  std::uint64_t* const bits = RECORD ? pair_totals.bits() : nullptr;
-  std::size_t word = 0;
-  std::uint64_t word_bits = 0;
-  const auto flush_bits = [&] {
-    if (word_bits != 0) __atomic_fetch_or(&bits[word], word_bits, __ATOMIC_RELAXED);
-  };
+  TotalsWriter totals{blk.record, RECORD ? pair_totals.bits() : nullptr};  // RECORD only
+  // The own pass stops at each of the block's cross pairs (cross_out_, in list order) and skips it:
+  // j's block computes it. Between them, and on one thread, the loop tests nothing more.
+  const CrossPair* next_cross = CROSS || blk.threads == 1 ? nullptr : cross_out_[blk.t].value.data();
+  const CrossPair* const cross_end = next_cross ? next_cross + cross_out_[blk.t].value.size() : nullptr;
+  std::size_t stop = next_cross != cross_end ? next_cross->q : p1;
   for (std::size_t p = p0; p < p1;) {
-    int n = 0;
-    for (; p < p1 && n < PairBlock::kSize; ++p) {
-      PairContact& c = pc[p];
-      const int i = c.i, j = c.j;
-      const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
-      const double ri = kr[ki], rj = kr[kj];
-      const double dx = x[j] - x[i], dy = y[j] - y[i];
-      const double R2 = dx * dx + dy * dy, sum = ri + rj;
-      if (apart(R2, sum)) {  // (3): apart; the contact and its history end
-        c.en = c.es = 0;
+    int n = 0, gaps = 0;
+    while (p < p1 && n < PairBlock::kSize && gaps < PairBlock::kSize) {
+      if (p == stop) {  // a cross pair
+        if constexpr (RECORD) {
+          const int i = pc[p].i, j = pc[p].j;
+          const double dx = x[j] - x[i], dy = y[j] - y[i];
+          if (!apart(dx * dx + dy * dy, d.r(i) + d.r(j))) b.gap[gaps++] = static_cast<int>(p - p0);
+        }
+        ++p;
+        stop = ++next_cross != cross_end ? next_cross->q : p1;
         continue;
       }
-      b.pair[n] = static_cast<int>(p - p0);
-      b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
-      if constexpr (!ONE_KIND) b.sum[n] = sum;
-      b.ddx[n] = ux[i] * uf - ux[j] * uf;  // du_i - du_j of (5)
-      b.ddy[n] = uy[i] * uf - uy[j] * uf;
-      if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
-        b.rot_i[n] = uphi[i] * uf;
-        b.rot_j[n] = uphi[j] * uf;
-        if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
-      } else if constexpr (SHEAR) {
-        b.rot_i[n] = ri * (uphi[i] * uf);  // r_i dphi_i of (5b)
-        b.rot_j[n] = rj * (uphi[j] * uf);
+      for (; p < stop && n < PairBlock::kSize; ++p) {
+        PairContact& c = pc[CROSS ? cross[p] : p];
+        const int i = c.i, j = c.j;
+        const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
+        const double ri = kr[ki], rj = kr[kj];
+        const double dx = x[j] - x[i], dy = y[j] - y[i];
+        const double R2 = dx * dx + dy * dy, sum = ri + rj;
+        if (apart(R2, sum)) {  // (3): apart; the contact and its history end
+          c.en = c.es = 0;
+          if constexpr (CROSS) cross_f[p].touching = false;
+          continue;
+        }
+        b.pair[n] = static_cast<int>(p - p0);
+        b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
+        if constexpr (!ONE_KIND) b.sum[n] = sum;
+        b.ddx[n] = ux[i] * uf - ux[j] * uf;  // du_i - du_j of (5)
+        b.ddy[n] = uy[i] * uf - uy[j] * uf;
+        if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
+          b.rot_i[n] = uphi[i] * uf;
+          b.rot_j[n] = uphi[j] * uf;
+          if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
+        } else if constexpr (SHEAR) {
+          b.rot_i[n] = ri * (uphi[i] * uf);  // r_i dphi_i of (5b)
+          b.rot_j[n] = rj * (uphi[j] * uf);
+        }
+        if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
+        b.en[n] = c.en; b.es[n] = c.es;
+        ++n;
       }
-      if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
-      b.en[n] = c.en; b.es[n] = c.es;
-      ++n;
     }
     law(b, n, law_props, inv_dt, sum1);
     // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
@@ -597,21 +683,25 @@ void World::pair_contacts(ForceBlock& blk) {
       fxa[cur] = ax; fya[cur] = ay;
       if constexpr (SHEAR) tq[cur] = at;
     };
+    int g = 0;  // RECORD: the next cross pair's place to keep
     for (int k = 0; k < n; ++k) {
-      PairContact& c = pc[p0 + static_cast<std::size_t>(b.pair[k])];
+      PairContact& c = pc[CROSS ? cross[b.pair[k]] : p0 + static_cast<std::size_t>(b.pair[k])];
       const int i = c.i, j = c.j;
       c.en = b.en[k]; c.es = b.es[k];
       worst = std::max(worst, b.overlap[k]);
       const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
+      constexpr bool CP = LA == LeverArm::contact_point;
+      const double rj = CP ? b.arm_j[k] : kr[ONE_KIND ? 0 : kd[j]];
+      if constexpr (CROSS) {  // j is this block's; i's forces go to its block
+        const double ri = CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]];
+        cross_f[b.pair[k]] = CrossForce{fx, fy, SHEAR ? contact_moment(ri, fs) : 0.0, b.fn[k], fs, true};
+        fxa[j] -= fx; fya[j] -= fy;
+        if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
+        continue;
+      }
       if constexpr (RECORD) {
-        *record++ = PairTotals::Force{b.fn[k], fs};
-        const std::size_t q = p0 + static_cast<std::size_t>(b.pair[k]);
-        if ((q >> 6) != word) {
-          flush_bits();
-          word = q >> 6;
-          word_bits = 0;
-        }
-        word_bits |= std::uint64_t{1} << (q & 63);
+        totals.keep(b.gap, gaps, g, p0, static_cast<std::size_t>(b.pair[k]), *blk.gaps);
+        totals.put(p0 + static_cast<std::size_t>(b.pair[k]), b.fn[k], fs);
       }
       if (i != cur) {
         put_back();
@@ -620,20 +710,15 @@ void World::pair_contacts(ForceBlock& blk) {
         if constexpr (SHEAR) at = tq[i];
       }
       ax += fx; ay += fy;
-      constexpr bool CP = LA == LeverArm::contact_point;
       if constexpr (SHEAR) at -= contact_moment(CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]], fs);  // (15c)
-      const double rj = CP ? b.arm_j[k] : kr[ONE_KIND ? 0 : kd[j]];
-      if (j < own_end) {
-        fxa[j] -= fx; fya[j] -= fy;
-        if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
-      } else {
-        later->push_back(Deferred{j, fx, fy, SHEAR ? contact_moment(rj, fs) : 0.0});
-      }
+      fxa[j] -= fx; fya[j] -= fy;
+      if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
     }
     put_back();
+    if constexpr (RECORD) totals.keep(b.gap, gaps, g, p0, p - p0, *blk.gaps);
   }
-  if constexpr (RECORD) flush_bits();
-  blk.pair_overlap = worst;
+  if constexpr (RECORD) totals.flush();
+  blk.pair_overlap = std::max(blk.pair_overlap, worst);
 }
 
 // The stage of the discs on walls and points: the block's entries [w0, w1) of the wall list
@@ -765,6 +850,8 @@ World::Kernel World::make_kernel() {
   k.pairs[0][1] = &World::pair_contacts<NS, NT, FC, LA, S, D, false, true>;
   k.pairs[1][0] = &World::pair_contacts<NS, NT, FC, LA, S, D, true, false>;
   k.pairs[1][1] = &World::pair_contacts<NS, NT, FC, LA, S, D, true, true>;
+  k.cross[0] = &World::pair_contacts<NS, NT, FC, LA, S, D, false, false, true>;
+  k.cross[1] = &World::pair_contacts<NS, NT, FC, LA, S, D, false, true, true>;
   k.walls = &World::wall_contacts<NS, NT, FC, LA, M, S, D>;
   if constexpr (key.features.bonds) k.bonds = &World::bond_contacts<NS>;
   k.pair_law[0][0] = pair_block_law_at<2, NS, NT, FC, LA, S, D, false>();
@@ -854,6 +941,7 @@ void World::remove_discs(const RemovedDiscs& removed) {
   keep(d.fx); keep(d.fy); keep(d.torque);
   pair_totals.compact(neighbors.pairs, removed);  // the recorded totals follow their pairs
   neighbors.compact(removed);
+  cross_ok_ = false;
   for (int& b : force_blocks)  // the same block edges, less the discs gone below them
     b -= static_cast<int>(std::lower_bound(gone.begin(), gone.end(), b) - gone.begin());
   if (!bonds.empty()) {  // a bond goes with either of its discs; order (i, j) is kept
@@ -888,21 +976,21 @@ World::Increments World::increments() const {
   return {d.vx.data(), d.vy.data(), d.omega.data(), dt};
 }
 
-// The sums of parallel_sum (its blocks, each summed in order): the same bits as summing stored
-// increments with it, whichever threads run this step's passes. One block a thread.
+// The sums of parallel_sum (its blocks of kSumBlock discs, each summed in order): the same bits
+// as summing stored increments with it, whatever the thread count.
 void World::measure_increment_sums() {
-  const int n = static_cast<int>(discs.size());
-  const int nb = threads_for(n);
+  const long n = static_cast<long>(discs.size());
+  const long nb = sum_blocks(n);
+  increment_sums_.resize(static_cast<std::size_t>(nb));
   const double* vx = discs.vx.data(); const double* vy = discs.vy.data();
-#pragma omp parallel for schedule(static) num_threads(nb)
-  for (int b = 0; b < nb; ++b) {
+  parallel_for(nb, static_cast<int>(std::min<long>(threads_for(static_cast<int>(n)), nb)), [&](long b) {
     double sx = 0, sy = 0;
-    for (int i = block_start(n, nb, b); i < block_start(n, nb, b + 1); ++i) {
+    for (long i = b * kSumBlock, end = std::min(n, (b + 1) * kSumBlock); i < end; ++i) {
       sx += std::abs(vx[i] * dt);
       sy += std::abs(vy[i] * dt);
     }
-    increment_sums_[b].value = {sx, sy};
-  }
+    increment_sums_[static_cast<std::size_t>(b)].value = {sx, sy};
+  });
 }
 
 void World::mean_abs_increment(double& mx, double& my) const {
@@ -912,7 +1000,7 @@ void World::mean_abs_increment(double& mx, double& my) const {
     if (increments_measured_step_ != steps)
       throw std::logic_error("mean_abs_increment: this Verlet step did not measure its increments");
     mx = my = 0;
-    for (int b = 0; b < (n ? nt : 0); ++b) { mx += increment_sums_[b].value[0]; my += increment_sums_[b].value[1]; }
+    for (long b = 0; b < sum_blocks(n); ++b) { mx += increment_sums_[b].value[0]; my += increment_sums_[b].value[1]; }
   } else {
     const Increments u = increments();
     mx = parallel_sum(n, nt, [&](long i) { return std::abs(u.x[i] * u.factor); });

@@ -23,7 +23,8 @@ namespace dem {
 // thread's pass 1.8x slower than the first's).
 struct alignas(64) PairBlock {
   static constexpr int kSize = 128;
-  int pair[kSize];  // offset in the pass's part of the list
+  int pair[kSize];  // offset in the pass's part of the list (the cross pass: in its list of pairs)
+  int gap[kSize];   // a recorded pass: offsets of the touching pairs another block computes (cross pairs)
   int prop[kSize];  // index of the pair's constants (several kinds of disc)
   double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j (several kinds)
   double ddx[kSize], ddy[kSize], rot_i[kSize], rot_j[kSize];  // (5): du_i - du_j, r_i dphi_i, r_j dphi_j
@@ -52,9 +53,11 @@ class World {
   // law reads the increments, never the angle. Off: Discs::phi is empty and the drift skips it
   // (output.rotation_angle).
   bool rotation_angle = false;
-  // Threads of the force and integration loops (OpenMP; run.threads, --threads). A given count
-  // always gives bit-identical results; 1 is the plain serial loop. Scenes with bonds or moving
-  // walls, and worlds under kMinDiscsPerThread discs a thread, run serial.
+  // Threads of the force and integration loops (OpenMP; run.threads, --threads). Every count
+  // gives the bits of the plain serial loop (1): each disc's forces are summed in the serial
+  // order (forces_then_move), and sums over the discs have blocks of their own (parallel_sum).
+  // Scenes with bonds or moving walls, and worlds under kMinDiscsPerThread discs a thread, run
+  // serial.
   int threads = 1;
   static constexpr int kMinDiscsPerThread = 2048;
   // Doubles a vector in the pair law and the integration loops: 8 (AVX-512), 4 (AVX2) or 2
@@ -90,12 +93,10 @@ class World {
   // in contact) to one thread and the looser top to the other: 12.8 against 4.5 ms a step at 1M
   // discs. The law runs eight pairs a vector, so a touching pair costs about what a disc does:
   // weighed at 3 units a pair against 1 a disc, the thread of the upper, looser discs has 1.6
-  // times the other's work at 1M discs (perf). Candidate pairs are
-  // not counted: a state file's restart builds its lists at another time than the run in one
-  // piece (other candidates), and the blocks must be the same. Where a reaction crosses a block's
-  // edge its sum is ordered by the blocks, so they are part of the state (saved with it) and are
-  // remapped, not rebuilt, on removals; they depend on the step count and the history only,
-  // which a resumed run has.
+  // times the other's work at 1M discs (perf). The blocks set no sum's order (a disc's forces are
+  // added in the serial order whatever its block), only who computes what: they are saved with
+  // the state and remapped, not rebuilt, on removals, so that a resumed run keeps the balance of
+  // the run in one piece.
   std::vector<int> force_blocks;
   static constexpr long kRebalanceEvery = 64;
   bool blocks_fit() const;  // force_blocks fit the thread count and the discs
@@ -165,9 +166,16 @@ class World {
   // A thread's share of a force pass (serial: one block of everything): its discs [i0, i1)
   // (force_blocks), their pairs [p0, p1) and wall entries [w0, w1) of the lists.
   struct ForceBlock;
-  struct Deferred {  // a pair's reaction on a disc of another thread's block
-    int j;
-    double fx, fy, tq;
+  // A cross pair: a pair of a block's part of the list whose j is in a later block `to`; j's
+  // block computes it (its cross pass), at `at` in its list of cross pairs.
+  struct CrossPair {
+    std::size_t q;  // in the pair list
+    int i, to;
+    std::size_t at;
+  };
+  struct CrossForce {  // a cross pair's result for i's block: the force on i, the moment, the totals
+    double fx, fy, tq, fn, fs;
+    bool touching;
   };
   // A stage of a force pass on one block, and the pair law on a block of pairs (PairBlock).
   using Stage = void (World::*)(ForceBlock&);
@@ -177,6 +185,7 @@ class World {
     KernelKey key;
     std::string name;
     Stage pairs[2][2] = {};       // [recorded pass][one kind of disc]
+    Stage cross[2] = {};          // [one kind of disc]: the block's cross pairs (threads)
     Stage walls = nullptr;
     Stage bonds = nullptr;        // none without bonds
     PairLaw pair_law[3][2] = {};  // [vector width 2, 4, 8][one kind of disc]: what pairs runs
@@ -196,13 +205,16 @@ class World {
   bool each_block(int nt, F&& stages);  // stages(block) for each thread's block; whether some disc is far
   void start_resultants(int i0, int i1);  // the m_i g of (15) and a zero torque
   void start_recording(ForceBlock& b);    // where a recorded pass puts the block's pair totals
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND>
-  void pair_contacts(ForceBlock& b);      // disc pairs: (3)-(15)
+  // Disc pairs: (3)-(15). CROSS: the pairs of earlier blocks whose j is in this block (cross_in_).
+  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND,
+            bool CROSS = false>
+  void pair_contacts(ForceBlock& b);
   template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
   void wall_contacts(ForceBlock& b);      // discs on walls and points: (3)-(15)
   template <NormalSpring NS>
   void bond_contacts(ForceBlock& b);      // paper 2's bonds: (4), (5), the bond law, (15)
-  void add_deferred(ForceBlock& b);       // the reactions on the block's discs from earlier blocks
+  void map_cross_pairs(ForceBlock& b);    // cross_out_, cross_in_ for the blocks and lists as they are
+  void add_cross_forces(ForceBlock& b);   // the forces on the block's discs of its cross pairs, computed by later blocks
   bool move_block(Move move, double h, int i0, int i1);  // (16)-(19) for discs [i0, i1)
   bool move_discs(Move move, double h);   // move_block on equal blocks, one parallel region
   void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (moving_walls.cpp)
@@ -219,7 +231,14 @@ class World {
   void measure_increment_sums();  // Verlet: sums of |v dt| of parallel_sum's blocks, before the closing kick
   std::vector<Padded<std::array<double, 2>>> increment_sums_;  // by parallel_sum's blocks
   long increments_measured_step_ = -1;
-  std::vector<Padded<std::vector<Deferred>>> deferred_;  // per thread
+  // Per block (thread): its cross pairs in list order; the cross pairs it computes (earlier
+  // blocks' pairs with j here, block by block in list order) and their results. Set at the first
+  // pass with threads after a list build, a balance or a removal (cross_ok_ false).
+  std::vector<Padded<std::vector<CrossPair>>> cross_out_;
+  std::vector<Padded<std::vector<std::size_t>>> cross_in_;
+  std::vector<Padded<std::vector<CrossForce>>> cross_forces_;
+  std::vector<Padded<std::vector<PairTotals::Force*>>> cross_gaps_;  // a recorded pass: where cross_out_'s touching totals go
+  bool cross_ok_ = false;
   std::vector<double> thread_overlap_;            // per thread: largest overlap of the last pass
   void rebuild_lists();       // neighbour lists without the bonded pairs
   bool walls_moved_far() const;  // some wall moved skin/2 since the lists were built
