@@ -356,6 +356,33 @@ def failed(code: str, case: str, reason: str, **kw) -> Result:
     return Result(code=code, case=case, status="failed", reason=reason, **kw)
 
 
+def run_logged(code: str, case: str, cmd: list, out_dir: Path, log: Path, timeout: float):
+    """Runs a reference program in out_dir with its output in ``log`` (one thread of OpenMP a
+    rank), killing its whole process group (mpirun and ranks) after ``timeout`` seconds.
+    Returns (None, wall seconds) when it ended cleanly, else (the failed Result, wall seconds):
+    a timeout, a non-zero exit or an ERROR line (quoted)."""
+    import signal
+    import time
+    t0 = time.monotonic()
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    with open(log, "w") as f:
+        p = subprocess.Popen(cmd, cwd=out_dir, stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                             start_new_session=True, env=env)
+        try:
+            rc = p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+            return failed(code, case, f"timed out after {timeout:.0f} s", out_dir=str(out_dir)), timeout
+    wall = time.monotonic() - t0
+    text = Path(log).read_text(errors="replace")
+    if rc != 0 or "ERROR" in text:
+        err = next((line for line in text.splitlines() if "ERROR" in line), f"exit code {rc}")
+        return failed(code, case, f"{code} failed (exit {rc}): {err.strip()}", out_dir=str(out_dir),
+                      wall_time_s=wall), wall
+    return None, wall
+
+
 def _json_default(o):
     if isinstance(o, (np.floating, np.integer)):
         return o.item()

@@ -49,14 +49,12 @@ import glob
 import math
 import os
 import re
-import signal
 import subprocess
-import time
 from pathlib import Path
 
 import numpy as np
 
-from .common import (SHARED_VARIANT, Case, CaseError, Result, failed, inward_normal, kinetic_energy, outlet_y, pair,
+from .common import (run_logged, SHARED_VARIANT, Case, CaseError, Result, failed, inward_normal, kinetic_energy, outlet_y, pair,
                      profiles_from_contacts, tangent, write_text_atomic)
 
 NAME = "lammps"
@@ -334,24 +332,9 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
         return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
     for old in glob.glob(str(out_dir / "wall_*.dump")) + glob.glob(str(out_dir / "discs_*.dump")):
         os.remove(old)
-    log = out_dir / "lammps.log"
-    t0 = time.monotonic()
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    with open(log, "w") as f:
-        p = subprocess.Popen(command(script, threads), cwd=out_dir, stdout=f, stderr=subprocess.STDOUT,
-                             stdin=subprocess.DEVNULL, start_new_session=True, env=env)
-        try:
-            rc = p.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
-            return failed(NAME, case.name, f"timed out after {timeout:.0f} s", out_dir=str(out_dir))
-    wall = time.monotonic() - t0
-    text = log.read_text(errors="replace")
-    if rc != 0 or "ERROR" in text:
-        err = next((l for l in text.splitlines() if "ERROR" in l), f"exit code {rc}")
-        return failed(NAME, case.name, f"lammps failed (exit {rc}): {err.strip()}", out_dir=str(out_dir),
-                      wall_time_s=wall)
+    bad, wall = run_logged(NAME, case.name, command(script, threads), out_dir, out_dir / "lammps.log", timeout)
+    if bad is not None:
+        return bad
     res = read(case, out_dir)
     res.wall_time_s = wall
     res.extra["ranks"] = threads

@@ -46,15 +46,13 @@ import glob
 import math
 import os
 import re
-import signal
 import subprocess
-import time
 from pathlib import Path
 
 import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
 
-from .common import (outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
+from .common import (run_logged, outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
                      motion_steps, moved_wall,
                      inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
 
@@ -322,24 +320,9 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
     for old in (glob.glob(str(out_dir / "mesh_*.vtk")) + glob.glob(str(out_dir / "discs_*.dump"))
                 + glob.glob(str(out_dir / "snap_*.vt[ur]"))):
         os.remove(old)
-    log = out_dir / "liggghts.log"
-    t0 = time.monotonic()
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    with open(log, "w") as f:
-        p = subprocess.Popen(command(script, threads), cwd=out_dir, stdout=f,
-                             stderr=subprocess.STDOUT, start_new_session=True, env=env)
-        try:
-            rc = p.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
-            return failed(NAME, case.name, f"timed out after {timeout:.0f} s", out_dir=str(out_dir))
-    wall = time.monotonic() - t0
-    text = log.read_text(errors="replace")
-    if rc != 0 or "ERROR" in text:
-        err = next((l for l in text.splitlines() if "ERROR" in l), f"exit code {rc}")
-        return failed(NAME, case.name, f"liggghts failed (exit {rc}): {err.strip()}", out_dir=str(out_dir),
-                      wall_time_s=wall)
+    bad, wall = run_logged(NAME, case.name, command(script, threads), out_dir, out_dir / "liggghts.log", timeout)
+    if bad is not None:
+        return bad
     res = read(case, out_dir)
     res.wall_time_s = wall
     res.extra["ranks"] = threads
