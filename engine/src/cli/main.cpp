@@ -268,21 +268,28 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
   return -1;
 }
 
-// dem run --engine CODE: the process becomes `python3 -m compare.engine_run ARGS`.
-int cmd_run_engine(int argc, char** argv) {
+// The process becomes `python3 -m MODULE... ARGS` of the comparison layer (compare/, Python), with
+// this binary as its native engine (DEM_BINARY) and the source tree on its path. Returns only
+// when Python cannot start (exit 4, `who` naming the command).
+int exec_python(std::vector<const char*> module, int argc, char** argv, const char* who) {
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
   const char* old = std::getenv("PYTHONPATH");
   const std::string path = std::string(DEM_SOURCE_DIR) + (old && *old ? std::string(":") + old : "");
   setenv("PYTHONPATH", path.c_str(), 1);
-  std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m"),
-                             const_cast<char*>("compare.engine_run")};
+  std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m")};
+  for (const char* m : module) args.push_back(const_cast<char*>(m));
   for (int k = 0; k < argc; ++k) args.push_back(argv[k]);
   args.push_back(nullptr);
   execv(DEM_PYTHON_EXE, args.data());
-  std::fprintf(stderr, "dem run --engine: cannot start %s: %s\n", DEM_PYTHON_EXE, std::strerror(errno));
+  std::fprintf(stderr, "%s: cannot start %s: %s\n", who, DEM_PYTHON_EXE, std::strerror(errno));
   return 4;
+}
+
+// dem run --engine CODE: `python3 -m compare.engine_run ARGS`.
+int cmd_run_engine(int argc, char** argv) {
+  return exec_python({"compare.engine_run"}, argc, argv, "dem run --engine");
 }
 
 // parse -> load -> build -> run the phases -> write.
@@ -521,23 +528,8 @@ int cmd_resolve(int argc, char** argv) {
   return 0;
 }
 
-// dem compare: the comparison layer (compare/, Python) with this binary as the native engine.
-// The process becomes `python3 -m compare scene ARGS` (its help: dem compare --help).
-int cmd_compare(int argc, char** argv) {
-  std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
-  const char* old = std::getenv("PYTHONPATH");
-  const std::string path = std::string(DEM_SOURCE_DIR) + (old && *old ? std::string(":") + old : "");
-  setenv("PYTHONPATH", path.c_str(), 1);
-  std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m"),
-                             const_cast<char*>("compare"), const_cast<char*>("scene")};
-  for (int k = 0; k < argc; ++k) args.push_back(argv[k]);
-  args.push_back(nullptr);
-  execv(DEM_PYTHON_EXE, args.data());
-  std::fprintf(stderr, "dem compare: cannot start %s: %s\n", DEM_PYTHON_EXE, std::strerror(errno));
-  return 4;
-}
+// dem compare: `python3 -m compare scene ARGS` (its help: dem compare --help).
+int cmd_compare(int argc, char** argv) { return exec_python({"compare", "scene"}, argc, argv, "dem compare"); }
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
