@@ -14,7 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare import figures, scene_toml
+from compare import figures, paper_claims, scene_toml
 from compare.common import write_text_atomic
 from compare.run_dir import RunDir
 
@@ -134,6 +134,12 @@ def main(argv=None):
               "static bin (raw: sampled every 5 ms; 50 ms: moving average); funnel = the top surface first sinks at",
               "a wall column, piping = first at the centre column. Members that blew up or failed count in no",
               "statistic (the jam fraction is of the members with a result).", "",
+              "## The paper's statements against these ensembles", "",
+              f"The paper's scheme (eq. 19, dt = 1e-4 s), {args.members} members each; peak ratios are "
+              "ensemble means (`compare/paper_claims.py` says how each is judged).", ""]
+    paper = {r["arrangement"]: r["ensemble"] for r in results
+             if r["scheme"] == "paper_eq19" and r["contact"] == "paper" and "ensemble" in r}
+    lines += paper_claims.table(paper_claims.discharge(paper)) + ["",
               "## One run against the ensemble", "",
               "`as written` is the scene file run as it is (`dem run`, or an ensemble of one member with",
               "`--perturb 0`): the unperturbed, symmetric lattice. Discharge is chaotic: a perturbation of",

@@ -68,3 +68,17 @@ def test_static_report_leaves_out_runs_not_at_rest_and_checks_the_paper(tmp_path
     row = next(line for line in claims.splitlines() if line.startswith("| force chains"))
     v = {k: float(x) for k, x in (p.split() for p in row.split("|")[3].split(":")[1].split("(")[0].split(","))}
     assert v["11/12"] < v["17/18"]
+
+
+def test_discharge_claims_follow_the_ensembles():
+    def ens(funnel, piping, bottom, side):
+        return {"pattern": {"funnel": funnel, "piping": piping, "undetermined": 0},
+                "peak_ratio_bottom": {"mean": bottom}, "peak_ratio_bottom_windowed": {"mean": bottom / 3},
+                "peak_ratio_side": {"mean": side}, "peak_ratio_side_windowed": {"mean": side / 3}}
+    rows = {r["statement"]: r for r in paper_claims.discharge({"17/18": ens(7, 1, 11.0, 4.0),
+                                                              "11/12": ens(0, 8, 2.5, 1.0)})}
+    assert all(r["agrees"] for r in rows.values()) and len(rows) == 5
+    rows = {r["statement"]: r for r in paper_claims.discharge({"17/18": ens(1, 7, 40.0, 30.0),
+                                                              "11/12": ens(8, 0, 9.0, 1.0)})}
+    assert not any(r["agrees"] for r in rows.values())
+    assert "funnel 1, piping 7, undetermined 0 of 8 members" in rows["17/18 flow pattern"]["shows"]
