@@ -217,7 +217,7 @@ class World {
   void add_cross_forces(ForceBlock& b);   // the forces on the block's discs of its cross pairs, computed by later blocks
   bool move_block(Move move, double h, int i0, int i1);  // (16)-(19) for discs [i0, i1)
   bool move_discs(Move move, double h);   // move_block on equal blocks, one parallel region
-  void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (moving_walls.cpp)
+  void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (world_walls.cpp)
 
   // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).
   static bool apart(double R2, double sum) { return R2 > sum * sum; }

@@ -1,5 +1,5 @@
-// World's moving obstacles: prescribed wall rotations, rigid plates and prescribed wall
-// translations (moving_walls.hpp).
+// World's moving-wall stages (world.hpp): prescribed wall rotations, rigid plates and prescribed
+// wall translations (their state: moving_walls.hpp), moved, placed and listed.
 #include <algorithm>
 #include <cmath>
 
