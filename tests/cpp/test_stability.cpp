@@ -112,6 +112,16 @@ TEST(Stability, AHeldClusterIsStifferAndEqualShapesAreComputedOnce) {
   EXPECT_DOUBLE_EQ(cluster_dt_bound(w, Scheme::velocity_verlet).dt, alone);
 }
 
+TEST(Stability, TheTouchDistanceDecidesWhichNeighboursHoldACluster) {
+  // The wall 0.005 below the pair holds it within a touch of 0.01 (the cgs default) and not within
+  // 0.0001 (the same 0.01 cm in an si scene's metres would be 1e-4 of its lengths).
+  World w = two_bonded_discs(Scheme::velocity_verlet, 0.0);
+  const double alone = cluster_dt_bound(w, Scheme::velocity_verlet).dt;
+  w.geometry.walls.push_back({"floor", "bottom", -5, -1.005, 20, -1.005, 0});
+  EXPECT_LT(cluster_dt_bound(w, Scheme::velocity_verlet, kClusterTouch).dt, alone);
+  EXPECT_DOUBLE_EQ(cluster_dt_bound(w, Scheme::velocity_verlet, 1e-4).dt, alone);
+}
+
 TEST(Stability, ClustersTooLargeToExamineAreCountedNotComputed) {
   // A row of kClusterMaxDiscs + 1 touching discs bonded into one body: skipped (a step matrix of
   // 9 rows a disc, bisected a hundred times, takes seconds at 16 discs); one disc fewer is examined.

@@ -128,7 +128,7 @@ double system_dt_bound(Scheme scheme, const ClusterSystem& s) {
 }
 }  // namespace
 
-ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
+ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch) {
   ClusterBound out;
   out.dt = std::numeric_limits<double>::infinity();
   if (w.bonds.empty()) return out;
@@ -160,7 +160,7 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
     }
   }
   // The sticking contacts of each cluster: bonds, and the partners the engine's own lists find
-  // within kClusterTouch of touching (a build with that skin), discs and obstacles.
+  // within `touch` of touching (a build with that skin), discs and obstacles.
   struct Link {
     int a, b;         // places in the cluster (b < 0: a fixed partner)
     double nx, ny;    // unit normal from a to b
@@ -175,7 +175,7 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
                                    &w.pair(d.material(b.i), d.material(b.j))});
   }
   Neighbors near;
-  near.skin = kClusterTouch;
+  near.skin = touch;
   near.rebuild(d, w.geometry, 1);
   const auto bonded = [&](int i, int j) {  // i < j
     return std::binary_search(w.bonds.begin(), w.bonds.end(), Bond{i, j, 0, 0, 0, 0, 0, 0, 0},
@@ -185,7 +185,7 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
     const int i = c.i, j = c.j;
     if ((cluster[i] < 0 && cluster[j] < 0) || bonded(i, j)) continue;
     const double dx = d.x[j] - d.x[i], dy = d.y[j] - d.y[i], R = std::hypot(dx, dy);
-    if (!(R > 0) || R - d.r(i) - d.r(j) > kClusterTouch) continue;
+    if (!(R > 0) || R - d.r(i) - d.r(j) > touch) continue;
     const PairProps* p = &w.pair(d.material(i), d.material(j));
     const bool same = cluster[i] == cluster[j];
     if (cluster[i] >= 0) links[cluster[i]].push_back({local[i], same ? local[j] : -1, dx / R, dy / R, d.r(i), d.r(j), p});
@@ -195,7 +195,7 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
   for (const WallContact& c : near.walls) {
     ObstacleHit h{};
     if (cluster[c.i] < 0 || !closest_point(w.geometry, c.k, d.x[c.i], d.y[c.i], h)) continue;
-    if (!(h.dist > 0) || h.dist - d.r(c.i) > kClusterTouch) continue;
+    if (!(h.dist > 0) || h.dist - d.r(c.i) > touch) continue;
     const int mat = c.k < nw ? w.geometry.walls[c.k].material : w.geometry.points[c.k - nw].material;
     links[cluster[c.i]].push_back({local[c.i], -1, (h.px - d.x[c.i]) / h.dist, (h.py - d.y[c.i]) / h.dist,
                                    d.r(c.i), 0, &w.pair(d.material(c.i), mat)});
@@ -242,7 +242,7 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme) {
   return out;
 }
 
-StabilityReport stability_report(const World& w, const std::vector<std::string>& names) {
+StabilityReport stability_report(const World& w, const std::vector<std::string>& names, double cluster_touch) {
   StabilityReport rep;
   const Discs& d = w.discs;
   const int nm = w.n_materials;
@@ -333,7 +333,7 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
   }
   // Paper 2's clusters: their bonds (across a gap, long lever arms) raise the frequencies of the
   // rotation modes above the one-contact ones.
-  rep.clusters = cluster_dt_bound(w, w.scheme);
+  rep.clusters = cluster_dt_bound(w, w.scheme, cluster_touch);
   if (rep.clusters.dt < rep.dt_bound) {
     rep.dt_bound = rep.clusters.dt;
     rep.limited_by = "a bonded cluster of " + std::to_string(rep.clusters.discs) +

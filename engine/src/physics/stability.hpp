@@ -45,7 +45,7 @@ struct PairReport {
 // many-degree-of-freedom form of the one-contact bounds above: bonds across a gap (lever arms
 // R0/2 > r) stiffen the coupled rotation modes. Like them, not a bound for the whole assembly
 // (moving neighbours can raise the frequencies). Infinite without bonds.
-constexpr double kClusterTouch = 0.01;  // [cm] a neighbour this near holds the cluster (lattice gaps: 0.004 cm)
+constexpr double kClusterTouch = 0.01;  // [cm] default touch: a neighbour this near holds the cluster (lattice gaps: 0.004 cm)
 constexpr int kClusterMaxDiscs = 10;    // larger clusters are not examined (counted in `skipped`)
 struct ClusterBound {
   double dt = 0;       // [s] the smallest bound; infinite without bonds
@@ -53,7 +53,9 @@ struct ClusterBound {
   int shapes = 0;      // distinct cluster shapes examined
   int skipped = 0;     // clusters of more than kClusterMaxDiscs discs, not examined
 };
-ClusterBound cluster_dt_bound(const World& w, Scheme scheme);
+// touch: [length] a neighbour within it of touching holds the cluster (kClusterTouch in cm; the
+// scene's units give it in theirs: default_length).
+ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch = kClusterTouch);
 
 struct StabilityReport {
   std::vector<PairReport> pairs;
@@ -66,6 +68,7 @@ struct StabilityReport {
   std::string limited_by;
 };
 
-StabilityReport stability_report(const World& w, const std::vector<std::string>& material_names);
+StabilityReport stability_report(const World& w, const std::vector<std::string>& material_names,
+                                 double cluster_touch = kClusterTouch);
 
 }  // namespace dem

@@ -757,7 +757,7 @@ StabilityReport set_up_world(const SceneSpec& s, World& w) {
   }
   w.neighbors.skin = s.skin;
   w.neighbors.min_cell = s.cell;
-  const StabilityReport rep = stability_report(w, s.material_names);
+  const StabilityReport rep = stability_report(w, s.material_names, default_length(s.units, kClusterTouch));
   if (s.dt > rep.dt_bound && !s.force_dt) {
     std::ostringstream os;
     os.precision(4);
