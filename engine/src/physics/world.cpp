@@ -576,10 +576,11 @@ struct TotalsWriter {
     word_bits |= std::uint64_t{1} << (q & 63);
   }
   // Places for the touching cross pairs gap[g], ... (list offsets from p0) before offset `below`:
-  // kept in `places`, filled by add_cross_forces once j's block has computed them.
-  void keep(const int* gap, int count, int& g, std::size_t p0, std::size_t below, std::vector<PairTotals::Force*>& places) {
+  // kept in `places`, filled by add_cross_forces once j's block has computed them (a pointer: a
+  // pass without threads has no cross pairs, count 0, and no places).
+  void keep(const int* gap, int count, int& g, std::size_t p0, std::size_t below, std::vector<PairTotals::Force*>* places) {
     for (; g < count && static_cast<std::size_t>(gap[g]) < below; ++g) {
-      places.push_back(at);
+      places->push_back(at);
       put(p0 + static_cast<std::size_t>(gap[g]), 0, 0);
     }
   }
@@ -700,7 +701,7 @@ void World::pair_contacts(ForceBlock& blk) {
         continue;
       }
       if constexpr (RECORD) {
-        totals.keep(b.gap, gaps, g, p0, static_cast<std::size_t>(b.pair[k]), *blk.gaps);
+        totals.keep(b.gap, gaps, g, p0, static_cast<std::size_t>(b.pair[k]), blk.gaps);
         totals.put(p0 + static_cast<std::size_t>(b.pair[k]), b.fn[k], fs);
       }
       if (i != cur) {
@@ -715,7 +716,7 @@ void World::pair_contacts(ForceBlock& blk) {
       if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
     }
     put_back();
-    if constexpr (RECORD) totals.keep(b.gap, gaps, g, p0, p - p0, *blk.gaps);
+    if constexpr (RECORD) totals.keep(b.gap, gaps, g, p0, p - p0, blk.gaps);
   }
   if constexpr (RECORD) totals.flush();
   blk.pair_overlap = std::max(blk.pair_overlap, worst);
