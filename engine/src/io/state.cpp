@@ -18,6 +18,7 @@ constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '6'};  // the for
 // equal states give equal files.
 std::vector<WallContact> zero_padded(const std::vector<WallContact>& v) {
   std::vector<WallContact> out(v.size());
+  if (out.empty()) return out;  // no data() to clear (memset of a null pointer is undefined)
   std::memset(static_cast<void*>(out.data()), 0, out.size() * sizeof(WallContact));
   for (std::size_t k = 0; k < v.size(); ++k) {
     char* to = reinterpret_cast<char*>(&out[k]);
