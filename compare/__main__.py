@@ -76,6 +76,9 @@ def _common(p) -> None:
                    help="run only this mutant (a name of the --mutants table, e.g. mu_disc_wall_x0.8 for every "
                         "reference code or liggghts_mu_disc_wall_x0.8 for one; repeatable; implies --mutants)")
     p.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
+    p.add_argument("--jobs", type=int, default=1,
+                   help="ensemble members run at once (default 1; each member's codes run one after another, "
+                        "every run single-threaded: up to one job a core)")
 
 
 def main(argv=None) -> int:
@@ -89,7 +92,10 @@ def main(argv=None) -> int:
         print(f"--codes: unknown {bad}" if bad else "--codes: name native and any of liggghts,yade,lammps", file=sys.stderr)
         return 2
     codes = ("native",) + tuple(c for c in codes if c != "native")    # native, the reference, always runs
-    base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout)
+    if a.jobs < 1:
+        print(f"--jobs: {a.jobs} is not a count of parallel members (give 1 or more)", file=sys.stderr)
+        return 2
+    base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout, jobs=a.jobs)
     if a.mutant:
         a.mutants = True
         try:

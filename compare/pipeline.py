@@ -168,12 +168,27 @@ def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, di
     return metrics, detail
 
 
+def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=None) -> list:
+    """[(code -> Result, Case)] for members 0 .. plan.members - 1, in member order; up to
+    ``plan.options.jobs`` members at once (each member in its own folder out/mK: the runs share
+    nothing, so the order they finish in changes no result)."""
+    def one(k):
+        case = member_case(plan, k)
+        if series_interval is not None:
+            case.series_interval = series_interval
+        return run_all(codes, case, plan, out / f"m{k}", mutation), case
+    jobs = max(1, min(plan.options.jobs, plan.members))
+    if jobs == 1:
+        return [one(k) for k in range(plan.members)]
+    import concurrent.futures as cf
+    with cf.ThreadPoolExecutor(max_workers=jobs) as ex:
+        return list(ex.map(one, range(plan.members)))
+
+
 def ensemble_runs(plan: Plan, codes, out: Path, mutation=None) -> dict:
     """code -> [(Result, Case)] over the members."""
     per = {c: [] for c in codes}
-    for k in range(plan.members):
-        case = member_case(plan, k)
-        res = run_all(codes, case, plan, out / f"m{k}", mutation)
+    for res, case in member_runs(plan, codes, out, mutation):
         for c in codes:
             per[c].append((res[c], case))
     return per
@@ -287,10 +302,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     force + wall friction = weight."""
     from . import janssen_figure
     records = {c: [] for c in codes}
-    for k in range(plan.members):
-        case = member_case(plan, k)
-        case.series_interval = JANSSEN_SERIES
-        res = run_all(codes, case, plan, out / f"m{k}", mutation)
+    for k, (res, case) in enumerate(member_runs(plan, codes, out, mutation, JANSSEN_SERIES)):
         for c in codes:
             r = res[c]
             records[c].append(janssen.member_record(plan.shared, r, c, k, case.end_time) if r.ok else

@@ -67,6 +67,7 @@ class Options:
     perturb: float = 1e-3        # [cm] members' uniform jitter of x and y
     native_law: str = "shared"   # "shared" | "scene": the native side runs the scene's own law
     timeout: float = 900.0       # [s] per reference run
+    jobs: int = 1                # ensemble members run at once (each member's codes one after another)
     codes: tuple = ()            # a list line's --codes: the codes this entry runs (empty: the command's)
 
     def resolved_members(self) -> int:

@@ -104,7 +104,7 @@ def packing() -> str:
 # (the floor or piston drawn down slowly): from 1.2 s to 1.7 s the floor moves down 0.25 cm (a
 # quarter of the mean diameter) at 0.5 cm/s, about a thousandth of the speed of a free fall over
 # a diameter (sqrt(2 g d) = 44 cm/s), so the column follows it quasi-statically and slides down
-# along the side walls, turning their friction upward everywhere; from 1.7 s to 2.0 s it rests.
+# along the side walls, turning their friction upward everywhere; from 1.7 s to 2.5 s it rests.
 # A filled column without the lowering keeps the friction its dynamic settling left, about a
 # fifth of mu_w and of either sign contact by contact; dropping the floor suddenly by the same
 # distance gives about 0.3 mu_w (the impact's rebound turns part of it back). The side walls
@@ -116,7 +116,7 @@ C_SEED = 20261125
 C_SIDE_END = -1.0                # cm: the side walls' lower ends, below the lowered floor
 C_LOWER_FROM, C_LOWER_UNTIL = 1.2, 1.7   # s
 C_LOWER_SPEED = 0.5              # cm/s: 0.25 cm in 0.5 s
-C_END = 2.0                      # s
+C_END = 2.5                      # s
 
 COLUMN_HEADER = f"""Janssen column: a 2D bin W = {C_W} cm (20 mean disc diameters) wide, mu = mu_w = 0.5, {C_N}
 discs (radii {R_MIN}-{R_MAX} cm) on a loose grid that fall and settle to a fill about 6.5 W deep;
