@@ -76,6 +76,10 @@ def _common(p) -> None:
                    help="run only this mutant (a name of the --mutants table, e.g. mu_disc_wall_x0.8 for every "
                         "reference code or liggghts_mu_disc_wall_x0.8 for one; repeatable; implies --mutants)")
     p.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
+    p.add_argument("--resume", action="store_true",
+                   help="read back every run of OUT that finished (result.json ok) from byte-identical translated "
+                        "inputs instead of running it again; failed, missing or changed runs run (a long study "
+                        "stopped or timed out midway continues)")
     p.add_argument("--jobs", type=int, default=1,
                    help="ensemble members run at once (default 1; each member's codes run one after another, "
                         "every run single-threaded: up to one job a core)")
@@ -95,7 +99,8 @@ def main(argv=None) -> int:
     if a.jobs < 1:
         print(f"--jobs: {a.jobs} is not a count of parallel members (give 1 or more)", file=sys.stderr)
         return 2
-    base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout, jobs=a.jobs)
+    base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout, jobs=a.jobs,
+                        resume=a.resume)
     if a.mutant:
         a.mutants = True
         try:

@@ -69,7 +69,7 @@ def run_one(code: str, case: Case, plan: Plan, out: Path, mutation=None) -> Resu
     mutated = mutation is not None and mutation.code == code
     d = mutation.folder(out, code) if mutated else out / code
     return study.run_code(code, case_for(code, case, plan, mutation), d, plan.options.timeout,
-                          reuse=mutation is not None and not mutated)
+                          reuse=mutation is not None and not mutated, resume=plan.options.resume)
 
 
 def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:

@@ -68,6 +68,7 @@ class Options:
     native_law: str = "shared"   # "shared" | "scene": the native side runs the scene's own law
     timeout: float = 900.0       # [s] per reference run
     jobs: int = 1                # ensemble members run at once (each member's codes one after another)
+    resume: bool = False         # reuse finished runs whose translated inputs are unchanged
     codes: tuple = ()            # a list line's --codes: the codes this entry runs (empty: the command's)
 
     def resolved_members(self) -> int:
