@@ -37,8 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (Case, CaseError, Result, densities, inward_normal, moved_wall, scene_material_index,
-                     tangent, write_text_atomic)
+from . import engine_flow
+from .common import (Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall, outlet_y,
+                     scene_material_index, tangent, write_text_atomic)
 from .plan import Entry, Options, PlanError, make_plan, start_discs
 
 CODES = ("liggghts", "lammps", "yade")
@@ -70,9 +71,13 @@ def make_case(scene: Path, settle: float) -> Case:
     mats = scene_material_index(r)
     if plan.kind == "discharge":
         d = r["discharge"]
+        interval = float(d.get("series_interval", 0.005))
+        # the discs dumped at every sample of the wall series (a whole number of steps, as the
+        # backends sample): flow_series.csv, the pattern and the snapshots are measured from them
+        every = max(1, round(interval / plan.dt)) * plan.dt
         return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
-                    mode="discharge", settle=plan.settle, materials=mats,
-                    series_interval=float(d.get("series_interval", 0.005)))
+                    mode="discharge", settle=plan.settle, materials=mats, series_interval=interval,
+                    snapshot_interval=every)
     return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=float(r["end"]["time"]),
                 materials=mats)
 
@@ -225,34 +230,111 @@ def peak_ratios(case: Case, res: Result, window: float | None) -> dict:
     return out
 
 
-def discharge_block(case: Case, res: Result, out: Path) -> dict:
-    d = case.resolved["discharge"]
+def removal_rows(case: Case, res: Result, frames: list[Snapshot]) -> list[tuple[float, int, tuple]]:
+    """(t, id, (vx, vy)) of every disc out, in time order: the id where the code names it
+    (LIGGGHTS, YADE), else from the disc frames (engine_flow.removal_ids); the velocity where the
+    code logs it (LIGGGHTS), else nan."""
     rem = sorted(float(x) for x in res.removals)
     idx = res.extra.get("removal_index")
     vel = res.extra.get("removal_velocity")
+    if idx is None or len(idx) != len(rem):
+        idx = engine_flow.removal_ids(frames, rem, case.dt)
+    return [(t, int(idx[k]), tuple(vel[k]) if vel is not None and k < len(vel) else (None, None))
+            for k, t in enumerate(rem)]
+
+
+def flow_rate(rows, mass: np.ndarray) -> float | None:
+    """The engine's flow_rate: least-squares slope of the cumulative removed mass against time,
+    from the 5th removal on; None with fewer than 10 removals (or one of unknown mass)."""
+    if len(rows) < 10 or any(i < 0 for _t, i, _v in rows):
+        return None
+    t = np.array([r[0] for r in rows])
+    m = np.cumsum([mass[r[1]] for r in rows])
+    return float(np.polyfit(t[4:], m[4:], 1)[0])
+
+
+def write_snapshots(out: Path, case: Case, frames: list[Snapshot]) -> list[float]:
+    """snapshots/discs_NNNN.{csv,vtu} (the engine's columns, with dx, dy since the opening) at the
+    scene's discharge.snapshots times, each the disc frame at that time (frames lie every sample:
+    the nearest, within half a sample), indexed by discharge_discs.pvd and snapshots.pvd. The
+    contact files are absent (no contact list is read back). Returns the times written."""
+    import meshio
+    names = [m["name"] for m in case.resolved["materials"]]
+    mats = case.material_index()
+    want = case.resolved["discharge"].get("snapshots", [])
+    half = 0.5 * max(case.snapshot_interval, case.dt)
+    open_at = {int(i): (x, y) for i, x, y in zip(frames[0].id, frames[0].x, frames[0].y)} if frames else {}
+    (out / "snapshots").mkdir(exist_ok=True)
+    entries, times = [], []
+    for k, tw in enumerate(want):
+        near = min(frames, key=lambda s: abs(s.t - tw), default=None)
+        if near is None or abs(near.t - tw) > half + 1e-12:
+            continue
+        stem = f"discs_{k:04d}"
+        x0 = np.array([open_at.get(int(i), (math.nan, math.nan)) for i in near.id], float).reshape(-1, 2)
+        lines = ["id,x,y,r,vx,vy,omega,material,dx,dy"]
+        for j, i in enumerate(near.id):
+            vals = (near.x[j], near.y[j], near.r[j], near.vx[j], near.vy[j], near.omega[j])
+            lines.append(f"{int(i)}," + ",".join("%.17g" % v for v in vals) + f",{names[int(mats[int(i)])]},"
+                         + "%.17g,%.17g" % (near.x[j] - x0[j, 0], near.y[j] - x0[j, 1]))
+        write_text_atomic(out / "snapshots" / f"{stem}.csv", "\n".join(lines) + "\n")
+        n = len(near.id)
+        mesh = meshio.Mesh(np.column_stack([near.x, near.y, np.zeros(n)]), [("vertex", np.arange(n).reshape(-1, 1))],
+                           point_data={"radius": near.r, "velocity": np.column_stack([near.vx, near.vy, np.zeros(n)]),
+                                       "omega": near.omega, "id": near.id.astype(np.int64),
+                                       "dx": near.x - x0[:, 0], "dy": near.y - x0[:, 1]})
+        tmp = out / "snapshots" / f"{stem}.vtu.tmp"
+        meshio.write(str(tmp), mesh, file_format="vtu")
+        os.replace(tmp, out / "snapshots" / f"{stem}.vtu")
+        entries.append((near.t, f"snapshots/{stem}.vtu"))
+        times.append(near.t)
+    t_open = round(case.settle / case.dt) * case.dt
+    for name, shift in (("discharge_discs.pvd", 0.0), ("snapshots.pvd", t_open)):
+        body = "".join(f'    <DataSet timestep="{"%.17g" % (t + shift)}" file="{f}"/>\n' for t, f in entries)
+        write_text_atomic(out / name, '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                          f"  <Collection>\n{body}  </Collection>\n</VTKFile>\n")
+    return times
+
+
+def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot]) -> dict:
+    d = case.resolved["discharge"]
     mass = _masses(case)
-    # removals.csv: the removed disc's id and mass where the code names it (LIGGGHTS, YADE), else
-    # -1 / nan; its velocity where the code logs it (LIGGGHTS)
+    rows = removal_rows(case, res, frames)
     lines = ["t,id,mass,vx,vy,how"]
-    for k, t in enumerate(rem):
-        i = int(idx[k]) if idx is not None and k < len(idx) else -1
-        v = vel[k] if vel is not None and k < len(vel) else (None, None)
+    for t, i, v in rows:
         lines.append(f"{_fmt(t)},{i},{_fmt(mass[i]) if i >= 0 else 'nan'},{_fmt(v[0])},{_fmt(v[1])},outlet")
     write_text_atomic(out / "removals.csv", "\n".join(lines) + "\n")
     write_series(out, case, res)
-    rate = rate_mass = None
-    if len(rem) >= 10:
-        tt, n = np.array(rem[4:]), np.arange(5, len(rem) + 1)
-        rate = float(np.polyfit(tt, n, 1)[0])
-        if np.allclose(mass, mass[0], rtol=1e-12):    # one disc mass: the mass rate follows
-            rate_mass = rate * float(mass[0])
+    f = engine_flow.silo_frame(case.resolved)
+    fl = engine_flow.flow(frames, [(t, i) for t, i, _v in rows], mass, len(case.discs), f, case.resolved, case.dt)
+    write_text_atomic(out / "flow_series.csv", "\n".join(fl["rows"]) + "\n")
+    snaps = write_snapshots(out, case, frames)
+    jam_at, jams = engine_flow.jams([t for t, _i, _v in rows], frames, f, float(d["jam_time"]), case.duration,
+                                    case.dt)
+    rem = [t for t, _i, _v in rows]
+    q = flow_rate(rows, mass)
+    left = res.extra.get("kept_index")
+    m_disc = float(mass[int(left[0])]) if left else (float(mass[rows[0][1]]) if rows and rows[0][1] >= 0 else None)
+    gate = next(w for w in case.resolved["walls"] if w["name"] == d["gate"])
+    top = max(c[1] for w in case.resolved["walls"] for c in (w["from"], w["to"]))
+    units = case.resolved.get("units", {}).get("system", "cgs")
     block = {"n_initial": len(case.discs), "removed": len(rem), "removed_by_hand": 0,
-             "discs_out_at_1s": sum(1 for t in rem if t <= 1.0) if case.duration >= 1.0 else None,
+             "discs_out_at_1s": sum(1 for t in rem if t <= 1.0 + 1e-12) if case.duration >= 1.0 else None,
              "duration": case.duration, "t_open": round(case.settle / case.dt) * case.dt,
-             "flow_rate_mass": rate_mass, "flow_rate_discs": rate,
-             "jammed": None, "jam_at": None, "jams": None,
-             "pattern": None, "surface_sink_time": None, "dead_fraction_end": None,
-             "gate": d["gate"], "outlet_depth": d["outlet_depth"], "settle": case.settle}
+             "flow_rate_mass": q, "flow_rate_discs": q / m_disc if q is not None and m_disc else None,
+             "flow_rate_note": "slope of cumulative removed mass [" + ("kg/s per m" if units == "si" else "g/s per cm")
+                               + "] from the 5th removal on (least squares)",
+             "jammed": jam_at is not None, "jam_at": jam_at, "jams": jams,
+             "jam_note": "read off the removal log: the code ran on to the end (no stop, no keystone removed)",
+             "pattern": fl["pattern"],
+             "surface_sink_time": {"left_wall": fl["sink"][0], "centre": fl["sink"][1], "right_wall": fl["sink"][2]},
+             "pattern_note": "funnel: the top surface first sinks (by one mean radius) at a wall column; piping: "
+                             "first at the centre column (from the code's disc frames every series_interval)",
+             "moved_fraction_end": fl["moved_fraction_end"], "dead_fraction_end": 1.0 - fl["moved_fraction_end"],
+             "gate": d["gate"], "slit": [min(gate["from"][0], gate["to"][0]), max(gate["from"][0], gate["to"][0])],
+             "outlet_y": outlet_y(case.resolved), "outlet_depth": d["outlet_depth"], "settle": case.settle,
+             "fill_top": float(np.max(frames[0].y)) if frames and len(frames[0].y) else None, "top": top,
+             "snapshots": snaps, "gravity": float(np.linalg.norm(case.resolved["gravity"]))}
     block.update(peak_ratios(case, res, d.get("peak_window")))
     return block
 
@@ -293,13 +375,14 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
     if not any(w["profile"]["contacts"] is not None for w in walls):
         absent["walls[].contacts, wall_profiles.csv contacts (-1)"] = f"{code}'s wall forces come without contact counts"
     if case.mode == "discharge":
-        absent["flow_series.csv, snapshots"] = "the result holds removals and wall series only"
+        absent["snapshots/contacts_NNNN, discharge_contacts.pvd"] = "the codes' contact lists are not read back"
+        absent["flow_series.csv arch_discs, arch_crown_y"] = \
+            "the arch runs over overlapping discs of the code's frames (its pair forces are not read back)"
         if code == "lammps":
-            absent["removals.csv id (-1), mass, vx, vy (nan)"] = "LAMMPS's outlet log is a count of removals"
+            absent["removals.csv vx, vy (nan)"] = ("LAMMPS's outlet log is a count of removals; each removal's disc "
+                                                   "is the one gone from the frames, the lowest first")
         elif code == "yade":
             absent["removals.csv vx, vy (nan)"] = "YADE's outlet log gives each removal's time and disc"
-        absent["discharge.jammed, jam_at, jams, pattern, surface_sink_time, dead_fraction_end"] = \
-            "need the discs' positions during the flow"
     s = {
         "engine": f"{code} {res.version}".strip(),
         "engine_name": code, "engine_version": res.version,
@@ -308,7 +391,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
         "scene": {"name": r.get("name", scene.stem), "file": str(scene), "description": r.get("description", "")},
         "status": status,
         "status_note": REST_NOTE if case.mode == "static" else
-        "the gate opened after the settling time; jams are not detected",
+        "the gate opened after the settling time; the run lasts discharge.time (jams are read off the removal log)",
         "options": {"scheme": SCHEME[code], "dt": case.dt, "dt_forced": False, "threads": 1,
                     **{k: r["contact"][k] for k in ("normal_spring", "no_tension", "friction_cap", "lever_arm")},
                     "gravity": gvec.tolist(), "skin": None, "cell": None, "profile_bin": case.profile_bin,
@@ -338,7 +421,8 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
     return s
 
 
-def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene: Path) -> dict:
+def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene: Path,
+                  frames: list[Snapshot] | None = None) -> dict:
     rows, ids = disc_rows(case, res)
     walls, prof_rows = wall_entries(case, res)
     write_text_atomic(out / "wall_profiles.csv",
@@ -347,7 +431,7 @@ def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene
     write_discs(out, case, rows, ids)
     s = summary(case, res, code, np_, scene, walls, rows, ids)
     if case.mode == "discharge":
-        s["discharge"] = discharge_block(case, res, out)
+        s["discharge"] = discharge_block(case, res, out, frames or [])
     write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
     return s
 
@@ -414,7 +498,17 @@ def main(argv=None) -> int:
                 indent=1, default=_json) + "\n")
         return _fail_exit(code, f"{'unstable run' if status == EXIT_UNSTABLE else 'the run failed'}: "
                                 f"{res.reason} (program files in {out / code})", status)
-    s = write_outputs(out, case, res, code, a.np, scene)
+    frames = []
+    if case.mode == "discharge":
+        try:
+            frames = be.read_snapshots(case, out / code)
+        except (OSError, ValueError, KeyError) as e:
+            return _fail_exit(code, f"the run failed: its disc frames cannot be read: {e} (program files in "
+                                    f"{out / code})", EXIT_FAILED)
+        if not frames or abs(frames[0].t) > 0.5 * case.dt:
+            return _fail_exit(code, f"the run failed: no disc frame at the opening (program files in {out / code})",
+                              EXIT_FAILED)
+    s = write_outputs(out, case, res, code, a.np, scene, frames)
     if not a.quiet:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
               f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
