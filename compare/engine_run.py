@@ -27,6 +27,7 @@ velocities and the jam, pattern and dead-zone measures.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import json
 import math
@@ -80,6 +81,46 @@ def make_case(scene: Path, settle: float) -> Case:
                     snapshot_interval=every)
     return Case(name=scene.stem, resolved=r, discs=discs, dt=plan.dt, duration=float(r["end"]["time"]),
                 materials=mats)
+
+
+def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
+    """The scene with the ``--set`` assignments applied (compare.scene_toml, as `dem compare
+    --set`), written into ``folder`` under the scene's own name (its relative paths rebased), for
+    the engine to validate as it resolves it; the scene itself without assignments."""
+    if not assignments:
+        return scene
+    from . import scene_toml
+    path = folder / scene.name
+    try:
+        doc = scene_toml.rebase_paths(scene_toml.load(scene), scene.parent, folder)
+        scene_toml.write(path, scene_toml.with_assignments(doc, assignments))
+    except (KeyError, ValueError) as e:
+        raise PlanError(f"{scene}: --set: {e}") from None
+    return path
+
+
+# A deliberately wrong translation, for the tests that must be able to fail (as compare/mutants.py
+# does for the comparison): DEM_ENGINE_MUTANT=WHAT:FACTOR scales one constant of what the code is
+# given (WHAT: density, gravity, or a pair constant kn, ks, eta_n, eta_s, mu of every pair); the
+# outputs are still measured against the scene as it is.
+MUTANT_ENV = "DEM_ENGINE_MUTANT"
+MUTANT_WHATS = ("density", "gravity", "kn", "ks", "eta_n", "eta_s", "mu")
+
+
+def mutated(case: Case, spec: str) -> Case:
+    """The case the code runs: ``case`` itself, or with the DEM_ENGINE_MUTANT constant scaled."""
+    if not spec:
+        return case
+    from .mutants import Mutation
+    what, _, factor = spec.partition(":")
+    try:
+        f = float(factor)
+    except ValueError:
+        f = math.nan
+    if what not in MUTANT_WHATS or not (math.isfinite(f) and f > 0):
+        raise CaseError(f"{MUTANT_ENV}={spec!r}: expected WHAT:FACTOR, WHAT one of {', '.join(MUTANT_WHATS)}, "
+                        "FACTOR a number > 0")
+    return dataclasses.replace(case, resolved=Mutation("testing", "", what, "all", f, "all").apply(case.resolved))
 
 
 def classify(reason: str) -> int:
@@ -296,7 +337,42 @@ def write_snapshots(out: Path, case: Case, frames: list[Snapshot]) -> list[float
     return times
 
 
-def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot]) -> dict:
+def _peaks(v: np.ndarray, win: int) -> tuple[float, float]:
+    """The engine's PeakTracker: the largest sample (at least 0) and the largest mean of win
+    consecutive samples (0 with fewer)."""
+    raw = max(0.0, float(np.max(v))) if len(v) else 0.0
+    means = np.convolve(v, np.ones(win) / win, mode="valid") if len(v) >= win else []
+    return raw, max(0.0, float(np.max(means))) if len(means) else 0.0
+
+
+def wall_ratios(case: Case, res: Result) -> list[dict]:
+    """summary.json's discharge.walls: each wall's static (first sample) and peak normal force,
+    total and per bin, raw and windowed, and their ratios (bins with a static load of at least a
+    quarter of the wall's largest), from the wall series."""
+    d = case.resolved["discharge"]
+    win = max(1, round(float(d.get("peak_window", 0.05)) / case.snapshot_interval)) if case.snapshot_interval else 1
+    groups = {w["name"]: w["group"] for w in case.resolved["walls"]}
+    out = []
+    for name, sr in res.series.get("walls", {}).items():
+        m = np.array(sr["normal"], float)
+        if m.ndim != 2 or not len(m):
+            continue
+        tot = m.sum(axis=1)
+        raw, wnd = _peaks(tot, win)
+        static, smax = m[0], float(np.max(m[0])) if m.shape[1] else 0.0
+        bins = []
+        for b in range(m.shape[1]):
+            br, bw = _peaks(m[:, b], win)
+            ok = smax > 0 and static[b] >= 0.25 * smax
+            bins.append({"bin": b, "static": float(static[b]), "peak": br, "peak_windowed": bw,
+                         "ratio": br / static[b] if ok else None, "ratio_windowed": bw / static[b] if ok else None})
+        out.append({"name": name, "group": groups.get(name, ""), "static_normal": float(tot[0]), "peak_normal": raw,
+                    "peak_normal_windowed": wnd, "ratio": raw / tot[0] if tot[0] > 0 else None,
+                    "ratio_windowed": wnd / tot[0] if tot[0] > 0 else None, "bins": bins})
+    return out
+
+
+def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot], status: str) -> dict:
     d = case.resolved["discharge"]
     mass = _masses(case)
     rows = removal_rows(case, res, frames)
@@ -318,7 +394,7 @@ def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot]) 
     gate = next(w for w in case.resolved["walls"] if w["name"] == d["gate"])
     top = max(c[1] for w in case.resolved["walls"] for c in (w["from"], w["to"]))
     units = case.resolved.get("units", {}).get("system", "cgs")
-    block = {"n_initial": len(case.discs), "removed": len(rem), "removed_by_hand": 0,
+    block = {"status": status, "n_initial": len(case.discs), "removed": len(rem), "removed_by_hand": 0,
              "discs_out_at_1s": sum(1 for t in rem if t <= 1.0 + 1e-12) if case.duration >= 1.0 else None,
              "duration": case.duration, "t_open": round(case.settle / case.dt) * case.dt,
              "flow_rate_mass": q, "flow_rate_discs": q / m_disc if q is not None and m_disc else None,
@@ -334,8 +410,12 @@ def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot]) 
              "gate": d["gate"], "slit": [min(gate["from"][0], gate["to"][0]), max(gate["from"][0], gate["to"][0])],
              "outlet_y": outlet_y(case.resolved), "outlet_depth": d["outlet_depth"], "settle": case.settle,
              "fill_top": float(np.max(frames[0].y)) if frames and len(frames[0].y) else None, "top": top,
-             "snapshots": snaps, "gravity": float(np.linalg.norm(case.resolved["gravity"]))}
+             "snapshots": snaps, "width": f.x_right - f.x_left,
+             "gravity": float(np.linalg.norm(case.resolved["gravity"])),
+             "ratio_note": "max over the bins (static >= 1/4 of the wall's largest) of peak / static normal force; "
+                           "windowed: moving average over peak_window"}
     block.update(peak_ratios(case, res, d.get("peak_window")))
+    block["walls"] = wall_ratios(case, res)
     return block
 
 
@@ -431,7 +511,7 @@ def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene
     write_discs(out, case, rows, ids)
     s = summary(case, res, code, np_, scene, walls, rows, ids)
     if case.mode == "discharge":
-        s["discharge"] = discharge_block(case, res, out, frames or [])
+        s["discharge"] = discharge_block(case, res, out, frames or [], s["status"])
     write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
     return s
 
@@ -456,6 +536,8 @@ def main(argv=None) -> int:
     ap.add_argument("--settle", type=float, default=0.0,
                     help="[s] discharge: settling before the gate opens (default: the comparison's 1 s)")
     ap.add_argument("--timeout", type=float, default=3600.0, help="[s] wall-clock limit of the program (exit 4)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="one value of the scene changed, as dem run --set (repeatable)")
     ap.add_argument("--quiet", action="store_true")
     try:
         a = ap.parse_args(argv)
@@ -468,22 +550,30 @@ def main(argv=None) -> int:
     if not scene.is_file():
         return _fail_exit(code, f"{a.scene}: no such scene file", EXIT_BAD)
     try:
-        case = make_case(scene, a.settle)
+        with tempfile.TemporaryDirectory() as tmp:
+            case = make_case(with_set(scene, a.set, Path(tmp)), a.settle)
     except (PlanError, CaseError) as e:
         return _fail_exit(code, str(e), EXIT_BAD)
     except FileNotFoundError as e:      # no engine binary to resolve the scene with
         return _fail_exit(code, str(e), EXIT_FAILED)
+    try:
+        run_case = mutated(case, os.environ.get(MUTANT_ENV, ""))
+    except CaseError as e:
+        return _fail_exit(code, str(e), EXIT_BAD)
+    if run_case is not case:
+        sys.stderr.write(f"dem run --engine {code}: {MUTANT_ENV}={os.environ[MUTANT_ENV]}: a deliberately wrong "
+                         "translation (testing)\n")
     be = importlib.import_module(f"compare.{code}_backend")
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            be.write_inputs(case, Path(tmp))
+            be.write_inputs(run_case, Path(tmp))
         except CaseError as e:
             return _fail_exit(code, f"{scene}: {code} cannot express it: {e}", EXIT_BAD)
     if not be.available():
         return _fail_exit(code, f"{code} is not installed", EXIT_FAILED)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    res = be.run(case, out / code, timeout=a.timeout, threads=a.np)
+    res = be.run(run_case, out / code, timeout=a.timeout, threads=a.np)
     if not res.ok:
         status = classify(res.reason)
         if status == EXIT_UNSTABLE:
@@ -501,7 +591,7 @@ def main(argv=None) -> int:
     frames = []
     if case.mode == "discharge":
         try:
-            frames = be.read_snapshots(case, out / code)
+            frames = be.read_snapshots(run_case, out / code)
         except (OSError, ValueError, KeyError) as e:
             return _fail_exit(code, f"the run failed: its disc frames cannot be read: {e} (program files in "
                                     f"{out / code})", EXIT_FAILED)
@@ -509,6 +599,9 @@ def main(argv=None) -> int:
             return _fail_exit(code, f"the run failed: no disc frame at the opening (program files in {out / code})",
                               EXIT_FAILED)
     s = write_outputs(out, case, res, code, a.np, scene, frames)
+    if run_case is not case:      # the folder says so
+        s["mutant"] = os.environ[MUTANT_ENV]
+        write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
     if not a.quiet:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
               f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
