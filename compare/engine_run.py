@@ -10,7 +10,12 @@ the scene's dt, and
   run always lasts ``end.time`` (status ``end_time``; ``rest`` says it was not checked);
 - a discharge scene: the same start settles for ``--settle`` s (the comparison's default), the
   gate opens, ``discharge.time`` s of flow, discs below the outlet removed (as ``dem compare
-  --kind discharge`` runs each member).
+  --kind discharge`` runs each member). The code dumps its discs at every wall-series sample;
+  compare/engine_flow.py measures flow_series.csv, the pattern, the jams and the dead fraction
+  from those frames, and the snapshots are the frames at ``discharge.snapshots``.
+
+``--set KEY=VALUE`` changes the scene as ``dem run --set`` does; ``--member-start FILE`` starts
+from an ensemble member's perturbed centres (``dem ensemble --member K --engine CODE``).
 
 What the code cannot express is refused before any run (exit 2, the field named: the backend's
 own translation). LIGGGHTS and LAMMPS run under ``mpirun -np N`` when N > 1, YADE with ``-j N``.
@@ -21,8 +26,8 @@ Quantities the codes' results do not give are written as null (JSON), ``nan`` or
 listed in summary.json's ``absent``; none is estimated: contacts.csv and contacts.vtu (no contact
 list is read back), the rest measures, the stability bounds and the pair table, the slit ends'
 forces (each code counts them in the end bin of the wall that ends there), per-bin contact counts
-where the code gives none (LIGGGHTS), and for a discharge flow_series.csv, the removed discs'
-velocities and the jam, pattern and dead-zone measures.
+where the code gives none (LIGGGHTS), and for a discharge the contact snapshots and the removed
+discs' velocities where the code does not log them (LAMMPS, YADE).
 """
 from __future__ import annotations
 
@@ -121,6 +126,20 @@ def mutated(case: Case, spec: str) -> Case:
         raise CaseError(f"{MUTANT_ENV}={spec!r}: expected WHAT:FACTOR, WHAT one of {', '.join(MUTANT_WHATS)}, "
                         "FACTOR a number > 0")
     return dataclasses.replace(case, resolved=Mutation("testing", "", what, "all", f, "all").apply(case.resolved))
+
+
+def member_start(case: Case, path: Path) -> Case:
+    """The case started from an ensemble member's disc centres (x, y per disc, the scene's order)."""
+    try:
+        xy = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except (OSError, ValueError) as e:
+        raise CaseError(f"--member-start {path}: {e}") from None
+    if xy.shape != (len(case.discs), 2) or not np.all(np.isfinite(xy)):
+        raise CaseError(f"--member-start {path}: needs x,y of each of the scene's {len(case.discs)} discs "
+                        f"(finite), found an array of shape {xy.shape}")
+    discs = np.array(case.discs, float, copy=True)
+    discs[:, :2] = xy
+    return dataclasses.replace(case, discs=discs)
 
 
 def classify(reason: str) -> int:
@@ -395,7 +414,7 @@ def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot], 
     top = max(c[1] for w in case.resolved["walls"] for c in (w["from"], w["to"]))
     units = case.resolved.get("units", {}).get("system", "cgs")
     block = {"status": status, "n_initial": len(case.discs), "removed": len(rem), "removed_by_hand": 0,
-             "discs_out_at_1s": sum(1 for t in rem if t <= 1.0 + 1e-12) if case.duration >= 1.0 else None,
+             "discs_out_at_1s": sum(1 for t in rem if t <= 1.0 + 1e-12),
              "duration": case.duration, "t_open": round(case.settle / case.dt) * case.dt,
              "flow_rate_mass": q, "flow_rate_discs": q / m_disc if q is not None and m_disc else None,
              "flow_rate_note": "slope of cumulative removed mass [" + ("kg/s per m" if units == "si" else "g/s per cm")
@@ -538,6 +557,9 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=3600.0, help="[s] wall-clock limit of the program (exit 4)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="one value of the scene changed, as dem run --set (repeatable)")
+    ap.add_argument("--member-start", default="",
+                    help="CSV x,y of each disc's start, in the scene's order (dem ensemble --member K --engine: "
+                         "the member's perturbed start)")
     ap.add_argument("--quiet", action="store_true")
     try:
         a = ap.parse_args(argv)
@@ -557,6 +579,8 @@ def main(argv=None) -> int:
     except FileNotFoundError as e:      # no engine binary to resolve the scene with
         return _fail_exit(code, str(e), EXIT_FAILED)
     try:
+        if a.member_start:
+            case = member_start(case, Path(a.member_start))
         run_case = mutated(case, os.environ.get(MUTANT_ENV, ""))
     except CaseError as e:
         return _fail_exit(code, str(e), EXIT_BAD)
