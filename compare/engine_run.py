@@ -313,17 +313,39 @@ def flow_rate(rows, mass: np.ndarray) -> float | None:
     return float(np.polyfit(t[4:], m[4:], 1)[0])
 
 
-def write_snapshots(out: Path, case: Case, frames: list[Snapshot]) -> list[float]:
-    """snapshots/discs_NNNN.{csv,vtu} (the engine's columns, with dx, dy since the opening) at the
-    scene's discharge.snapshots times, each the disc frame at that time (frames lie every sample:
-    the nearest, within half a sample), indexed by discharge_discs.pvd and snapshots.pvd. The
-    contact files are absent (no contact list is read back). Returns the times written."""
+def write_walls_vtu(path: Path, case: Case, t_world: float, wall_names: list[str]) -> None:
+    """The walls present at world time t (the opened gate gone, a moving wall where it stands) as
+    VTK_LINE cells with cell data ``wall``: the index in summary.json's ``walls``."""
+    import meshio
+    gate = case.resolved["discharge"]["gate"]
+    pts, cells, index = [], [], []
+    for w in case.resolved["walls"]:
+        if not w.get("active", True) or w["name"] == gate or w["name"] not in wall_names:
+            continue
+        m = moved_wall(w, t_world)
+        cells.append([len(pts), len(pts) + 1])
+        pts += [[*m["from"], 0.0], [*m["to"], 0.0]]
+        index.append(wall_names.index(w["name"]))
+    mesh = meshio.Mesh(np.array(pts, float).reshape(-1, 3), [("line", np.array(cells, int).reshape(-1, 2))],
+                       cell_data={"wall": [np.array(index, np.int32)]})
+    tmp = path.with_name(path.name + ".tmp")
+    meshio.write(str(tmp), mesh, file_format="vtu")
+    os.replace(tmp, path)
+
+
+def write_snapshots(out: Path, case: Case, frames: list[Snapshot], wall_names: list[str]) -> list[float]:
+    """snapshots/discs_NNNN.{csv,vtu} (the engine's columns, with dx, dy since the opening) and
+    snapshots/walls_NNNN.vtu at the scene's discharge.snapshots times, each the disc frame at that
+    time (frames lie every sample: the nearest, within half a sample), indexed by
+    discharge_discs.pvd (times since opening) and snapshots.pvd (world times, parts 0 discs and 1
+    walls). The contact files are absent (no contact list is read back). Returns the times written."""
     import meshio
     names = [m["name"] for m in case.resolved["materials"]]
     mats = case.material_index()
     want = case.resolved["discharge"].get("snapshots", [])
     half = 0.5 * max(case.snapshot_interval, case.dt)
     open_at = {int(i): (x, y) for i, x, y in zip(frames[0].id, frames[0].x, frames[0].y)} if frames else {}
+    t_open = round(case.settle / case.dt) * case.dt
     (out / "snapshots").mkdir(exist_ok=True)
     entries, times = [], []
     for k, tw in enumerate(want):
@@ -346,13 +368,16 @@ def write_snapshots(out: Path, case: Case, frames: list[Snapshot]) -> list[float
         tmp = out / "snapshots" / f"{stem}.vtu.tmp"
         meshio.write(str(tmp), mesh, file_format="vtu")
         os.replace(tmp, out / "snapshots" / f"{stem}.vtu")
-        entries.append((near.t, f"snapshots/{stem}.vtu"))
+        write_walls_vtu(out / "snapshots" / f"walls_{k:04d}.vtu", case, t_open + near.t, wall_names)
+        entries.append((near.t, f"snapshots/{stem}.vtu", f"snapshots/walls_{k:04d}.vtu"))
         times.append(near.t)
-    t_open = round(case.settle / case.dt) * case.dt
-    for name, shift in (("discharge_discs.pvd", 0.0), ("snapshots.pvd", t_open)):
-        body = "".join(f'    <DataSet timestep="{"%.17g" % (t + shift)}" file="{f}"/>\n' for t, f in entries)
-        write_text_atomic(out / name, '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                          f"  <Collection>\n{body}  </Collection>\n</VTKFile>\n")
+    head = '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+    tail = "  </Collection>\n</VTKFile>\n"
+    write_text_atomic(out / "discharge_discs.pvd", head + "".join(
+        f'    <DataSet timestep="{"%.17g" % t}" file="{f}"/>\n' for t, f, _w in entries) + tail)
+    write_text_atomic(out / "snapshots.pvd", head + "".join(
+        f'    <DataSet timestep="{"%.17g" % (t + t_open)}" part="0" file="{f}"/>\n'
+        f'    <DataSet timestep="{"%.17g" % (t + t_open)}" part="1" file="{w}"/>\n' for t, f, w in entries) + tail)
     return times
 
 
@@ -391,7 +416,8 @@ def wall_ratios(case: Case, res: Result) -> list[dict]:
     return out
 
 
-def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot], status: str) -> dict:
+def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot], status: str,
+                    wall_names: list[str]) -> dict:
     d = case.resolved["discharge"]
     mass = _masses(case)
     rows = removal_rows(case, res, frames)
@@ -403,7 +429,7 @@ def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot], 
     f = engine_flow.silo_frame(case.resolved)
     fl = engine_flow.flow(frames, [(t, i) for t, i, _v in rows], mass, len(case.discs), f, case.resolved, case.dt)
     write_text_atomic(out / "flow_series.csv", "\n".join(fl["rows"]) + "\n")
-    snaps = write_snapshots(out, case, frames)
+    snaps = write_snapshots(out, case, frames, wall_names)
     jam_at, jams = engine_flow.jams([t for t, _i, _v in rows], frames, f, float(d["jam_time"]), case.duration,
                                     case.dt)
     rem = [t for t, _i, _v in rows]
@@ -530,7 +556,7 @@ def write_outputs(out: Path, case: Case, res: Result, code: str, np_: int, scene
     write_discs(out, case, rows, ids)
     s = summary(case, res, code, np_, scene, walls, rows, ids)
     if case.mode == "discharge":
-        s["discharge"] = discharge_block(case, res, out, frames or [], s["status"])
+        s["discharge"] = discharge_block(case, res, out, frames or [], s["status"], [w["name"] for w in walls])
     write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
     return s
 

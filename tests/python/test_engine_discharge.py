@@ -101,6 +101,9 @@ def check_native_layout(out: Path, native: Path) -> None:
     mine, theirs = (json.loads((p / "summary.json").read_text())["discharge"] for p in (out, native))
     missing = set(theirs) - set(mine)
     assert not missing, missing
+    # the snapshot files but the contacts': discs_NNNN.{csv,vtu}, walls_NNNN.vtu
+    names = {p.name for p in (native / "snapshots").iterdir() if not p.name.startswith("contacts_")}
+    assert {p.name for p in (out / "snapshots").iterdir()} == names
     snaps = read_pvd(out / "discharge_discs.pvd")
     assert [t for t, _f in snaps] == pytest.approx(SNAPSHOTS)
     for _t, f in snaps:
