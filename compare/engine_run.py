@@ -571,7 +571,29 @@ def _json(o):
 
 # ------------------------------------------------------------------------------- command line
 
+def _withdraw_member(start: str) -> None:
+    """A refused ensemble member (dem ensemble --member K --engine) leaves nothing: the start and
+    member.json that `dem ensemble` put into its folder go, and the folder when that empties it."""
+    folder = Path(start).parent
+    for f in (Path(start), folder / "member.json"):
+        f.unlink(missing_ok=True)
+    try:
+        folder.rmdir()
+    except OSError:
+        pass
+
+
 def main(argv=None) -> int:
+    status = _main(argv)
+    if status == EXIT_BAD and _MEMBER_START:
+        _withdraw_member(_MEMBER_START[0])
+    return status
+
+
+_MEMBER_START: list[str] = []   # the --member-start of this process's run
+
+
+def _main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="dem run SCENE.toml --engine CODE",
                                  description="Run a scene in a reference code; write the engine's run folder.")
     ap.add_argument("scene")
@@ -592,6 +614,9 @@ def main(argv=None) -> int:
     except SystemExit as e:
         return 0 if e.code == 0 else EXIT_BAD
     code = a.engine
+    if a.member_start and Path(a.member_start).name == "member_start.csv" and \
+            (Path(a.member_start).parent / "member.json").is_file():
+        _MEMBER_START[:] = [a.member_start]
     if a.np < 1 or a.timeout <= 0 or a.settle < 0:
         return _fail_exit(code, "--np needs an integer >= 1, --timeout a number > 0, --settle >= 0", EXIT_BAD)
     scene = Path(a.scene).resolve()

@@ -101,3 +101,13 @@ def test_engine_needs_a_member_and_a_known_code(silo, dem_binary):
     p = dem(dem_binary, "ensemble", silo / "d.toml", "--out", silo / "x", "--member", 0, "--np", 2)
     assert p.returncode == 2 and "--engine" in p.stderr
     assert not (silo / "x").exists()
+
+
+@needs_lmp
+def test_a_member_the_code_refuses_leaves_nothing(silo, dem_binary, tmp_path):
+    text = (silo / "d.toml").read_text().replace("eta_n_rho_g = 15.3", "eta_n_rho_g = 0.0")   # LAMMPS: no
+    (tmp_path / "no_dashpot.toml").write_text(text)
+    out = tmp_path / "ens"
+    p = dem(dem_binary, "ensemble", tmp_path / "no_dashpot.toml", "--out", out, "--member", 0, "--engine", "lammps")
+    assert p.returncode == 2 and "lammps cannot express it" in p.stderr
+    assert not (out / "member_00").exists()
