@@ -806,8 +806,13 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     if ncols < 1:
         raise SystemExit(f"compare.figures: ncols must be >= 1, found {ncols}")
     snaps = select_snapshots(snapshot_index(run_dir), times)
+    # a reference code's run (dem run --engine) has no contact files: its discs without forces
     frames = [(s["t"], read_csv(s["discs"], SNAPSHOT_DISC_COLUMNS),
-               read_csv(s["contacts"], CONTACT_COLUMNS)) for s in snaps]
+               read_csv(s["contacts"], CONTACT_COLUMNS) if os.path.exists(s["contacts"]) else None)
+              for s in snaps]
+    if any(c is None for _, _, c in frames):
+        sys.stderr.write(f"compare.figures: {run_dir}: snapshots without contact files (the run gives no "
+                         "contact list): frames.png draws the discs only\n")
     r_ref = next((reference_radius(d) for _, d, _ in frames if len(d["r"])), None)
     if r_ref is None:
         _fail(snaps[0]["discs"], "no discs in any snapshot: the plot scale needs disc 0")
@@ -816,7 +821,8 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     walls = [w for w in summary["walls"] if w.get("name") != gate]
     points = point_positions(summary, None)
     for _, _, c in frames:
-        points.update({k: v for k, v in point_positions({}, c).items() if k not in points})
+        if c is not None:
+            points.update({k: v for k, v in point_positions({}, c).items() if k not in points})
     n_initial = info.get("n_initial") or len(frames[0][1]["r"])
     outlet_y = info.get("outlet_y")
 
@@ -856,8 +862,9 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
         face[dead] = dead_colour
         face[~dead] = cmap(norm(moved[~dead]))
         _draw_discs(ax, discs, face, "0.5", 0.4 * lw)
-        ax.add_collection(LineCollection(network_segments(contacts, r_ref, weight),
-                                         colors="black", linewidths=1.6 * lw, zorder=3))
+        if contacts is not None:
+            ax.add_collection(LineCollection(network_segments(contacts, r_ref, weight),
+                                             colors="black", linewidths=1.6 * lw, zorder=3))
         _draw_walls(ax, walls, lw)
         _draw_points(ax, points, lw * 1.5)
         slit = info.get("slit")
@@ -1134,12 +1141,15 @@ def plot_run(run_dir):
 
     A run without contacts.csv (a reference code's, `dem run --engine`: no contact list is read
     back) has no network to draw: it is skipped with a note on stderr, and side_walls.png is
-    drawn per bin of wall_profiles.csv."""
+    drawn per bin of wall_profiles.csv; a discharge's frames.png has its discs without forces."""
     if not os.path.exists(os.path.join(run_dir, "contacts.csv")):
         sys.stderr.write(f"compare.figures: {os.path.join(run_dir, 'contacts.csv')}: absent (the run gives no "
                          "contact list): the contact network is skipped; side_walls.png is drawn per "
                          "wall_profiles.csv bin\n")
-        return [plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"), per="bin")]
+        out = [plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"), per="bin")]
+        if os.path.exists(os.path.join(run_dir, "flow_series.csv")):
+            out += plot_discharge(run_dir, run_dir)
+        return out
     out = [plot_network(run_dir, os.path.join(run_dir, "network.png")),
            plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"))]
     if os.path.exists(os.path.join(run_dir, "flow_series.csv")):

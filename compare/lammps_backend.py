@@ -21,7 +21,10 @@ What the translation does:
   its ends are corners acting as point contacts, the slit ends L and R once the gate is open; the
   gate block drops GATE_DROP cm in the first step after settling (``move`` with a step variable,
   the same run: no setup in between); ``fix evaporate`` removes each disc whose centre is below
-  ``common.outlet_y``, and ``fix print`` writes the count every step (the removal times).
+  ``common.outlet_y``, and ``fix print`` writes the count every step (the removal times);
+- particle snapshots (``Case.snapshot_interval``): ``dump custom`` to ``snap_STEP.dump`` at full
+  precision, every interval from the start (static) or the opening (discharge), read by
+  ``read_snapshots``.
 
 What LAMMPS cannot express, refused before any run (CaseError naming the field):
 - static and collision cases: walls whose union on one line has a gap, walls of different
@@ -54,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (run_logged, SHARED_VARIANT, Case, CaseError, Result, failed, inward_normal, kinetic_energy, outlet_y, pair,
+from .common import (run_logged, SHARED_VARIANT, Case, CaseError, Result, Snapshot, failed, inward_normal, kinetic_energy, outlet_y, pair,
                      profiles_from_contacts, tangent, write_text_atomic)
 
 NAME = "lammps"
@@ -310,6 +313,14 @@ def _script(case: Case, pls: list[dict], types: dict, wall_rows: dict | None) ->
         cols = " ".join(f"f_{fid}[{k}]" for k in (1, 2, 3, 5, 6))
         s += [f"dump d_{fid} {grp} custom {sample} wall_{fid}_*.dump id {cols}",
               f"dump_modify d_{fid} format float %.17g thresh f_{fid}[1] > 0"]
+    snap = case.snapshot_steps()
+    if snap:     # particle snapshots every snap steps from the start, or from the opening on
+        s += [f"dump d_snap all custom {snap} snap_*.dump id x y radius vx vy omegaz",
+              "dump_modify d_snap format float %.17g sort id"]
+        if settle_steps:  # the next dump step: the opening, then the opening + whole intervals
+            s += [f'variable snap_next equal "(step<{settle_steps})*{settle_steps}+(step>={settle_steps})*'
+                  f'({settle_steps}+{snap}*(floor((step-{settle_steps})/{snap})+1))"',
+                  "dump_modify d_snap every v_snap_next"]
     s += [f"dump d_end all custom {total} discs_*.dump id x y radius vx vy omegaz",
           "dump_modify d_end format float %.17g sort id",
           f"run {total}"]
@@ -330,7 +341,8 @@ def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Re
         script = write_inputs(case, out_dir, threads)
     except CaseError as e:
         return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
-    for old in glob.glob(str(out_dir / "wall_*.dump")) + glob.glob(str(out_dir / "discs_*.dump")):
+    for old in (glob.glob(str(out_dir / "wall_*.dump")) + glob.glob(str(out_dir / "discs_*.dump"))
+                + glob.glob(str(out_dir / "snap_*.dump"))):
         os.remove(old)
     bad, wall = run_logged(NAME, case.name, command(script, threads), out_dir, out_dir / "lammps.log", timeout)
     if bad is not None:
@@ -451,6 +463,16 @@ def _removals(path: Path, settle_steps: int, dt: float) -> list[float]:
     return out
 
 
-def read_snapshots(case: Case, out_dir: Path) -> list:
-    """No particle snapshots (the runs write the final discs and the wall contacts only)."""
-    return []
+def read_snapshots(case: Case, out_dir: Path) -> list[Snapshot]:
+    """Particle snapshots in the common form from the ``dump custom`` files (``snap_STEP.dump``,
+    full precision), times since the start (static) or the opening (discharge; dumps while settling
+    are left out). Ids: LAMMPS atom id - 1 = the row in the case's packing."""
+    settle_steps = int(round(case.settle / case.dt)) if case.mode == "discharge" else 0
+    out = []
+    for step, f in _steps(str(Path(out_dir) / "snap_*.dump")):
+        if step < settle_steps:
+            continue
+        d = _read_rows(f, 7)
+        out.append(Snapshot.from_columns((step - settle_steps) * case.dt, d[:, 0].astype(int) - 1, x=d[:, 1],
+                                         y=d[:, 2], r=d[:, 3], vx=d[:, 4], vy=d[:, 5], omega=d[:, 6]))
+    return out

@@ -60,3 +60,58 @@ def test_a_cgs_scene_without_gravity_gets_980(tmp_path, dem_binary):
                             remove=["physics.gravity"])
     _, s = run(dem_binary, scene, tmp_path / "run", "--quiet")
     assert s["options"]["gravity"] == [0, -980]
+
+
+def _table(text):
+    """The rows of dem params' table: E -> (K_n/(rho g), eta_n/(rho g), dt, K_s/(rho g), b)."""
+    rows = {}
+    for line in text.splitlines():
+        cells = line.split()
+        try:
+            vals = [float(c) for c in cells]
+        except ValueError:
+            continue
+        if len(vals) == 6:
+            rows[vals[0]] = vals[1:]
+    return rows
+
+
+def params(dem_binary, *args):
+    p = subprocess.run([str(dem_binary), "params", *args], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    return p.stdout
+
+
+def test_params_in_si_are_the_cgs_table_in_metres(tmp_path, dem_binary):
+    """The same material in SI (r 0.01 m, rho 2650 kg/m^3, q 30 gf/cm, g 9.8 m/s^2): every
+    X/(rho g) is a length, so the SI column is the cgs one x 0.01; dt (seconds) and the ratios
+    stay. An SI scene's physics.units gives the same table as --units si."""
+    cgs, si = _table(params(dem_binary)), _table(params(dem_binary, "--units", "si"))
+    assert set(cgs) == set(si) == {7.5e2, 1e3, 1e4, 1e5, 1e6}
+    for e in cgs:
+        kn, eta, dt, ks, b = cgs[e]
+        assert si[e] == pytest.approx([kn * 0.01, eta * 0.01, dt, ks * 0.01, b * 0.01], rel=2e-3)  # %.4g printing
+    out = params(dem_binary, str(si_scene(tmp_path / "si.toml")))
+    assert _table(out) == si
+    header = out.splitlines()[:3]
+    assert "[m]" in header[2] and "[m s]" in header[2] and "kg/m^3" in header[0] and "cm" not in header[2]
+    cgs_out = params(dem_binary, str(SCENES / "discharge_17_18.toml"))
+    assert _table(cgs_out) == cgs and "[cm]" in cgs_out.splitlines()[2]
+
+
+def test_params_refuses_an_unknown_unit_system(dem_binary):
+    p = subprocess.run([str(dem_binary), "params", "--units", "imperial"], capture_output=True, text=True,
+                       timeout=60)
+    assert p.returncode == 2 and "--units" in p.stderr and "imperial" in p.stderr
+
+
+def test_resolve_names_the_units_of_its_numbers(tmp_path, dem_binary):
+    def resolve(scene):
+        p = subprocess.run([str(dem_binary), "resolve", str(scene)], capture_output=True, text=True, timeout=60)
+        assert p.returncode == 0, p.stderr
+        return json.loads(p.stdout)
+    si = resolve(si_scene(tmp_path / "si.toml"))["units"]
+    cgs = resolve(SCENES / "discharge_17_18.toml")["units"]
+    assert si["system"] == "si" and si["length"] == "m" and si["force"] == "N/m" and si["density"] == "kg/m^3"
+    assert cgs["system"] == "cgs" and cgs["length"] == "cm" and cgs["force"] == "dyn/cm"
+    assert cgs["acceleration"] == "cm/s^2" and si["time"] == cgs["time"] == "s"

@@ -90,6 +90,8 @@ const char* kEnsembleHelp =
     "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
     "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet] [--set KEY=VALUE ...]\n"
     "       dem ensemble SCENE.toml --out DIR --member K [--seed S] [--perturb CM] [...]\n"
+    "       dem ensemble SCENE.toml --out DIR --member K --engine liggghts|lammps|yade [--np N]\n"
+    "                    [--settle S] [--timeout S] [--seed S] [--perturb CM] [--set ...] [--quiet]\n"
     "       dem ensemble merge DIR [--members M] [--quiet]\n"
     "\n"
     "Runs M copies of the scene (default 8) whose initial disc centres are moved by a seeded\n"
@@ -103,15 +105,22 @@ const char* kEnsembleHelp =
     "of that seed and perturbation: one job of a job array. `merge DIR` gathers the finished\n"
     "members into DIR/ensemble.json, the same file a full ensemble writes; it refuses members of\n"
     "another ensemble and, with --members M, any of 0..M-1 missing (docs/ensembles.md).\n"
+    "--member K --engine CODE runs member K (the same perturbed start) in the reference code as\n"
+    "dem run --engine does (settling --settle s, default 1 s, then the discharge), into\n"
+    "DIR/member_KK; merge gathers such members (members of another code are another ensemble).\n"
     "Exit codes: 0; 3 when every member was unstable; 4 when every member failed or one could not run.\n";
 
 const char* kParamsHelp =
-    "usage: dem params [--E kgf/cm2,...] [--nu V] [--r CM] [--rho G/CM3] [--q GF/CM] [--s V] [--g CM/S2]\n"
+    "usage: dem params [SCENE.toml] [--units cgs|si] [--E kgf/cm2,...] [--nu V] [--r L] [--rho D] [--q F]\n"
+    "                  [--s V] [--g A]\n"
     "\n"
-    "Prints the paper's Table 1: K_n/(rho g) [cm], eta_n/(rho g) [cm s] and the dt bound of eq. (26)\n"
-    "for each Young's modulus E (default 7.5e2,1e3,1e4,1e5,1e6 kgf/cm^2), with nu = 0.3, r = 1 cm,\n"
-    "rho = 2.65 g/cm^3, line load q = 30 gf/cm (not printed in the paper; it reproduces Table 1),\n"
-    "s = K_s/K_n = 0.25, g = 980 cm/s^2.\n";
+    "Prints the paper's Table 1: K_n/(rho g) [length], eta_n/(rho g) [length s] and the dt bound of\n"
+    "eq. (26) for each Young's modulus E (always in kgf/cm^2, the paper's unit; default\n"
+    "7.5e2,1e3,1e4,1e5,1e6), with nu = 0.3, s = K_s/K_n = 0.25 and, in the unit system chosen,\n"
+    "cgs (the default): r = 1 cm, rho = 2.65 g/cm^3, line load q = 30 gf/cm (not printed in the\n"
+    "paper; it reproduces Table 1), g = 980 cm/s^2; si: r = 0.01 m, rho = 2650 kg/m^3,\n"
+    "q = 29.42 N/m (the same 30 gf/cm), g = 9.8 m/s^2. The system is the scene's physics.units\n"
+    "when a scene is given, else --units; --r, --rho, --q (force per thickness) and --g are read in it.\n";
 
 int bad(const std::string& msg) {
   std::fprintf(stderr, "dem: %s\n", msg.c_str());
@@ -389,11 +398,23 @@ int cmd_ensemble(int argc, char** argv) {
   EnsembleOptions eo;
   bool quiet = false, merge = false;
   int member = -1;
+  // --engine CODE: the member in a reference code (compare.engine_run); its own options pass on
+  std::string engine;
+  std::vector<std::string> engine_args;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     if (k == "--help" || k == "-h") {
       std::fputs(kEnsembleHelp, stdout);
       return 0;
+    }
+    if (k == "--engine" || k == "--np" || k == "--settle" || k == "--timeout") {
+      if (a + 1 >= argc) return bad(k + " needs a value (see dem ensemble --help)");
+      if (k == "--engine") engine = argv[++a];
+      else {
+        engine_args.push_back(k);
+        engine_args.push_back(argv[++a]);
+      }
+      continue;
     }
     if (k == "--quiet") { quiet = true; continue; }
     if (k == "--force-dt") { ov.force_dt = true; continue; }
@@ -430,6 +451,14 @@ int cmd_ensemble(int argc, char** argv) {
   }
   if (scene.empty()) return bad("no scene file given (see dem ensemble --help)");
   if (out.empty()) return bad("--out DIR is required (see dem ensemble --help)");
+  if (engine.empty() && !engine_args.empty())
+    return bad(engine_args[0] + " goes with --engine CODE (see dem ensemble --help)");
+  if (!engine.empty() && engine != "liggghts" && engine != "lammps" && engine != "yade")
+    return bad("--engine: \"" + engine + "\" is none of liggghts, lammps, yade");
+  if (!engine.empty() && member < 0)
+    return bad("--engine runs one member: give --member K (and gather them with dem ensemble merge DIR)");
+  if (!engine.empty() && (ov.dt > 0 || !ov.scheme.empty() || ov.force_dt))  // the codes run the shared law's dt
+    return bad("--dt, --scheme, --force-dt do not go with --engine: set the scene's value with --set");
   try {
     SceneSpec spec = load_scene(scene, ov);
     World probe;
@@ -441,6 +470,24 @@ int cmd_ensemble(int argc, char** argv) {
     bool perturb_given = false;  // else 1e-4 cm in the scene's units
     for (int a = 0; a < argc; ++a) perturb_given |= std::string(argv[a]) == "--perturb";
     if (!perturb_given) eo.perturb = default_length(spec.units, eo.perturb);
+    if (!engine.empty()) {
+      double settle = 1.0;  // the comparison's settling time (compare/plan.py), the member's identity
+      for (std::size_t a = 0; a + 1 < engine_args.size(); a += 2)
+        if (engine_args[a] == "--settle" && !(number_arg(engine_args[a + 1].c_str(), settle) && settle >= 0))
+          return bad("--settle must be a number >= 0");
+      const std::string dir = prepare_engine_member(spec, eo, member, out, engine, settle);
+      std::vector<std::string> args = {scene, "--engine", engine, "--out", dir, "--member-start",
+                                       dir + "/member_start.csv", "--settle", engine_args.empty() ? "" : ""};
+      args.pop_back();
+      args.push_back(fmt17(settle));
+      for (std::size_t a = 0; a + 1 < engine_args.size(); a += 2)
+        if (engine_args[a] != "--settle") args.insert(args.end(), {engine_args[a], engine_args[a + 1]});
+      for (const std::string& v : ov.sets) args.insert(args.end(), {"--set", v});
+      if (quiet) args.push_back("--quiet");
+      std::vector<char*> av;
+      for (std::string& v : args) av.push_back(v.data());
+      return exec_python({"compare.engine_run"}, static_cast<int>(av.size()), av.data(), "dem ensemble --engine");
+    }
     if (member >= 0) return run_member_alone(spec, eo, member, out, quiet);
     return run_ensemble(spec, eo, out, quiet);
   } catch (const SceneError& e) {
@@ -449,18 +496,54 @@ int cmd_ensemble(int argc, char** argv) {
 }
 
 int cmd_params(int argc, char** argv) {
-  ElasticInputs in{};
   std::vector<double> E = {7.5e2, 1e3, 1e4, 1e5, 1e6};
-  double q_gf = 30.0;
+  // The unit system: a scene's physics.units, or --units; found first, since the defaults and
+  // the options' values are in it.
+  Units units = Units::cgs;
+  std::string scene, units_opt;
   for (int a = 0; a < argc; ++a) {
     const std::string k = argv[a];
     if (k == "--help" || k == "-h") {
       std::fputs(kParamsHelp, stdout);
       return 0;
     }
+    if (!k.empty() && k[0] != '-') {
+      if (!scene.empty()) return bad("params: more than one scene given (\"" + scene + "\", \"" + k + "\")");
+      scene = k;
+    } else if (k == "--units") {
+      if (a + 1 >= argc) return bad("option --units needs a value (see dem params --help)");
+      units_opt = argv[++a];
+      if (units_opt != "cgs" && units_opt != "si") return bad("--units: \"" + units_opt + "\" is neither cgs nor si");
+    } else {
+      ++a;  // an option and its value: read below
+    }
+  }
+  if (!scene.empty() && !units_opt.empty()) return bad("params: give a scene or --units, not both");
+  if (!scene.empty()) {
+    try {
+      units = load_scene(scene, SceneOverrides{}).units;
+    } catch (const SceneError& e) {
+      return bad(e.what());
+    }
+  } else if (units_opt == "si") {
+    units = Units::si;
+  }
+  const bool si = units == Units::si;
+  const UnitNames u = unit_names(units);
+  ElasticInputs in{};
+  in.r = default_length(units, 1.0);
+  in.rho = si ? 2650.0 : 2.65;
+  in.g = si ? 9.8 : 980.0;
+  // The line load: 30 gf/cm, in dyn/cm or N/m (1 gf/cm = 980.665 dyn/cm = 0.980665 N/m).
+  const double gf_per_cm = si ? 0.980665 : 980.665;
+  double q = 30.0 * gf_per_cm;
+  for (int a = 0; a < argc; ++a) {
+    const std::string k = argv[a];
+    if (!k.empty() && k[0] != '-') continue;  // the scene
     if (a + 1 >= argc) return bad("option " + k + " needs a value (see dem params --help)");
     const char* v = argv[++a];
     double x;
+    if (k == "--units") continue;
     if (k == "--E") {
       E.clear();
       std::string s = v;
@@ -479,20 +562,25 @@ int cmd_params(int argc, char** argv) {
     if (k == "--nu") { if (!(x >= 0 && x < 0.5)) return bad("--nu must be in [0, 0.5)"); in.nu = x; }
     else if (k == "--r") { if (!(x > 0)) return bad("--r must be > 0"); in.r = x; }
     else if (k == "--rho") { if (!(x > 0)) return bad("--rho must be > 0"); in.rho = x; }
-    else if (k == "--q") { if (!(x > 0)) return bad("--q must be > 0"); q_gf = x; }
+    else if (k == "--q") { if (!(x > 0)) return bad("--q must be > 0"); q = x; }
     else if (k == "--s") { if (!(x > 0)) return bad("--s must be > 0"); in.s = x; }
     else if (k == "--g") { if (!(x > 0)) return bad("--g must be > 0"); in.g = x; }
     else return bad("unknown option " + k + " (see dem params --help)");
   }
-  in.q = q_gf * 980.665;
+  in.q = q;
+  // E in kgf/cm^2 (the paper's unit) as dyn/cm^2 or Pa (1 kgf/cm^2 = 98066.5 Pa).
+  const double e_unit = si ? kKgfPerCm2 * 0.1 : kKgfPerCm2;
   const double rg = in.rho * in.g;
-  std::printf("Table 1: nu = %g, r = %g cm, rho = %g g/cm^3, q = %g gf/cm, s = %g, g = %g cm/s^2\n", in.nu, in.r,
-              in.rho, q_gf, in.s, in.g);
+  std::printf("Table 1 (%s): nu = %g, r = %g %s, rho = %g %s, q = %g %s (%g gf/cm), s = %g, g = %g %s\n",
+              to_string(units), in.nu, in.r, u.length, in.rho, u.density, q, u.force, q / gf_per_cm, in.s, in.g,
+              u.acceleration);
+  const std::string len = std::string("[") + u.length + "]", len_s = std::string("[") + u.length + " s]";
+  const std::string b_unit = std::string("b ") + len;
   std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "E [kgf/cm^2]", "K_n/(rho g)", "eta_n/(rho g)", "dt eq.26 [s]",
-              "K_s/(rho g)", "b [cm]");
-  std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "", "[cm]", "[cm s]", "", "[cm]", "");
+              "K_s/(rho g)", b_unit.c_str());
+  std::printf("%-14s %-14s %-16s %-14s %-14s %-12s\n", "", len.c_str(), len_s.c_str(), "", len.c_str(), "");
   for (double e : E) {
-    in.E = e * kKgfPerCm2;
+    in.E = e * e_unit;
     const ElasticParams p = elastic_params(in);
     std::printf("%-14.4g %-14.4g %-16.4g %-14.4g %-14.4g %-12.4g\n", e, p.kn / rg, p.eta_n / rg, p.dt_eq26, p.ks / rg,
                 p.b);

@@ -58,7 +58,7 @@ void EnergyWatch::start(const World& w, double max_gain) {
   if (!(scale > 0) || !std::isfinite(scale)) active = false;  // nothing to release: no criterion
 }
 
-std::string EnergyWatch::check(const World& w, const UnitNames& u) const {
+std::string EnergyWatch::check(const World& w, Units units) const {
   if (!active) return "";
   const double ke = w.kinetic_energy();
   const double now = ke + potential_energy(w);
@@ -70,6 +70,7 @@ std::string EnergyWatch::check(const World& w, const UnitNames& u) const {
     const double v2 = d.vx[i] * d.vx[i] + d.vy[i] * d.vy[i];
     if (v2 > vmax2) { vmax2 = v2; fast = i; }
   }
+  const UnitNames u = unit_names(units);
   std::ostringstream os;
   os.precision(4);
   os << "energy created without a source: kinetic + potential energy " << now << " exceeds the start budget "

@@ -21,8 +21,9 @@ struct EnergyWatch {
 
   // Records the start (call after the forces of the start are known).
   void start(const World& w, double max_gain);
-  // "" while the energy stays within budget; else what grew, by how much, and where.
-  std::string check(const World& w, const UnitNames& u) const;
+  // "" while the energy stays within budget; else what grew, by how much, and where (in the
+  // scene's units: their names are looked up only for that message).
+  std::string check(const World& w, Units units) const;
 };
 
 // Gravitational potential energy -sum m (g . x), elastic energy of the contact springs

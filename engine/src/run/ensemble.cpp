@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "io/files.hpp"
 #include "io/out_dir.hpp"
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
@@ -261,6 +262,22 @@ int run_member_alone(const SceneSpec& spec, const EnsembleOptions& opt, int k, c
   return m.status.rfind("error", 0) == 0 ? 4 : 0;
 }
 
+std::string prepare_engine_member(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir,
+                                  const std::string& code, double settle) {
+  const SceneSpec s = member_spec(spec, opt, k);  // checked before anything is written
+  const std::string dir = out_dir + "/" + member_name(k);
+  clear_run_outputs(dir);  // an earlier run's summary.json must not pass for this one's
+  std::filesystem::create_directories(dir);
+  std::string csv = "x,y\n";
+  for (const DiscInit& d : s.discs) csv += fmt17(d.x) + "," + fmt17(d.y) + "\n";
+  write_file_atomic(dir + "/member_start.csv", csv);
+  json id = member_identity(spec, opt, k);
+  id["engine"] = code;
+  id["settle"] = settle;
+  write_file_atomic(dir + "/member.json", id.dump(2) + "\n");
+  return dir;
+}
+
 int merge_ensemble(const std::string& out_dir, int members_wanted, bool quiet) {
   namespace fs = std::filesystem;
   std::vector<std::pair<int, fs::path>> found;
@@ -298,7 +315,9 @@ int merge_ensemble(const std::string& out_dir, int members_wanted, bool quiet) {
     Member m;
     m.index = k;
     m.status = s.value("status", std::string("?"));
-    m.fill_rest = s.contains("rest") && s["rest"].value("reached", false);
+    // null in a reference code's run (dem run --engine: the rest criterion is not evaluated)
+    m.fill_rest = s.contains("rest") && s["rest"].is_object() && s["rest"].contains("reached") &&
+                  s["rest"]["reached"].is_boolean() && s["rest"]["reached"].get<bool>();
     if (s.contains("discharge") && s["discharge"].is_object()) m.metrics = s["discharge"];
     members.push_back(std::move(m));
   }

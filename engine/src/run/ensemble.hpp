@@ -26,6 +26,14 @@ int run_ensemble(const SceneSpec& spec, const EnsembleOptions& opt, const std::s
 // the same seed and perturbation (for job arrays across machines). Exit code 0, 3 unstable, 4 failed.
 int run_member_alone(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir, bool quiet);
 
+// Member k run in a reference code (dem ensemble --member K --engine CODE): clears
+// out_dir/member_KK, writes there member_start.csv (x,y of member k's start, the scene's discs in
+// their order, perturbed exactly as run_member_alone perturbs them) and member.json (the
+// identity, with the code and the settling time: members of another code are another ensemble),
+// and returns the folder, for `compare.engine_run --member-start` to run and fill in.
+std::string prepare_engine_member(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir,
+                                  const std::string& code, double settle);
+
 // Gathers finished members (out_dir/member_KK with summary.json and member.json) into
 // out_dir/ensemble.json, the same as run_ensemble writes. Refuses members of another ensemble
 // (scene, seed, perturbation, scheme, dt) and missing ones (members_wanted: 0 = those found,

@@ -56,12 +56,13 @@ std::string duration_text(double s) {
 
 double Runner::wall_now() const { return running_ ? run_start_ + seconds_since(phase_start_) : wall_seconds; }
 
+// Runs every step: the unit names go into the failure messages only, so they are looked up there.
 std::string Runner::check(const World& w, const Phase& phase) {
-  const UnitNames u = unit_names(spec_.units);
-  if (!(w.max_overlap <= guard.overlap_limit)) return diagnose(w, guard.overlap_limit, phase.name(), u.length);
+  if (!(w.max_overlap <= guard.overlap_limit))
+    return diagnose(w, guard.overlap_limit, phase.name(), unit_names(spec_.units).length);
   if (w.steps % kCheckEvery == 0) {
-    if (!w.all_finite()) return diagnose(w, guard.overlap_limit, phase.name(), u.length);
-    if (std::string grew = guard.energy.check(w, u); !grew.empty()) return grew + " (" + phase.name() + ")";
+    if (!w.all_finite()) return diagnose(w, guard.overlap_limit, phase.name(), unit_names(spec_.units).length);
+    if (std::string grew = guard.energy.check(w, spec_.units); !grew.empty()) return grew + " (" + phase.name() + ")";
     if (w.steps % kKeepEvery == 0) last_good.keep(w.discs, w.time);  // checked: finite, within budget
   }
   return "";

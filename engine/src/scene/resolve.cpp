@@ -14,6 +14,13 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
   j["name"] = s.name;
   j["file"] = s.file;
   j["gravity"] = {s.gx, s.gy};
+  // Every number below is in the scene's unit system (physics.units): its name and the unit of
+  // each kind of quantity, as the run header prints them.
+  const UnitNames u = unit_names(s.units);
+  j["units"] = {{"system", to_string(s.units)}, {"length", u.length},       {"velocity", u.velocity},
+                {"acceleration", u.acceleration}, {"density", u.density}, {"mass", u.mass},
+                {"force", u.force},                {"energy", u.energy},   {"stiffness", u.stiffness},
+                {"time", "s"}};
   j["integrator"] = {{"scheme", to_string(s.scheme)}, {"dt", s.dt}, {"force_dt", s.force_dt}};
   j["contact"] = {{"normal_spring", to_string(s.contact.normal_spring)},
                   {"no_tension", to_string(s.contact.no_tension)},
@@ -70,7 +77,7 @@ nlohmann::json resolved_scene_json(const SceneSpec& s) {
     j["discharge"] = {{"time", d.time}, {"gate", d.gate}, {"outlet_depth", d.outlet_depth},
                       {"jam_time", d.jam_time}, {"remove_keystone", d.remove_keystone},
                       {"series_interval", d.series_interval}, {"peak_window", d.peak_window},
-                      {"snapshots", d.snapshots}};
+                      {"snapshots", d.snapshots}, {"surface_column", d.surface_column}};
   }
   if (s.shear_box.enabled) {  // paper 2 (docs/scene.md): the box's walls and plate are in "walls"
     const ShearBoxSpec& b = s.shear_box;
