@@ -123,7 +123,7 @@ class Simulation {
   py::dict contacts() const {
     const World& w = world_;
     const Discs& d = w.discs;
-    const bool moved_after_forces = w.scheme != Scheme::velocity_verlet && w.steps > 0;  // as the CSV
+    const bool moved_after_forces = !verlet_family(w.scheme) && w.steps > 0;  // as the CSV
     const World::Increments inc = w.increments();
     const auto px = [&](int i) { return moved_after_forces ? d.x[i] - inc.x[i] * inc.factor : d.x[i]; };
     const auto py_ = [&](int i) { return moved_after_forces ? d.y[i] - inc.y[i] * inc.factor : d.y[i]; };

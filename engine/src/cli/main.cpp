@@ -56,7 +56,7 @@ const char* kRunHelp =
     "  --out DIR       output directory (created, or cleared of an earlier run's files unless\n"
     "                  --resume; see docs/outputs.md)\n"
     "  --dt S          time step [s], overrides integrator.dt\n"
-    "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet, overrides integrator.scheme\n"
+    "  --scheme NAME   paper_eq18 | paper_eq19 | velocity_verlet | velocity_verlet_onset, overrides integrator.scheme\n"
     "  --end-time S    maximum simulated time [s], overrides end.time\n"
     "  --force-dt      run even if dt is above the computed stability bound\n"
     "  --threads N     threads of the force and integration loops (integrator.threads, default 1);\n"
@@ -234,7 +234,7 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
       if (!v || !number_arg(v, ov.end_time) || !(ov.end_time > 0)) return bad("--end-time needs a number > 0");
     } else if (k == "--scheme") {
       const char* v = value();
-      if (!v) return bad("--scheme needs paper_eq18, paper_eq19 or velocity_verlet");
+      if (!v) return bad("--scheme needs paper_eq18, paper_eq19, velocity_verlet or velocity_verlet_onset");
       ov.scheme = v;
     } else if (k == "--force-dt") {
       ov.force_dt = true;

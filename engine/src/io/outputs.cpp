@@ -118,7 +118,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   // Every contact is written where its forces were computed. Eqs. (18) and (19) compute the
   // forces and then move the discs in the same pass, so their discs are taken back by the
   // step's increment (World::increments); Verlet computes the forces after its move.
-  const bool moved_after_forces = w.scheme != Scheme::velocity_verlet && w.steps > 0;
+  const bool moved_after_forces = !verlet_family(w.scheme) && w.steps > 0;
   const World::Increments inc = w.increments();
   const auto px = [&](int i) { return moved_after_forces ? d.x[i] - inc.x[i] * inc.factor : d.x[i]; };
   const auto py = [&](int i) { return moved_after_forces ? d.y[i] - inc.y[i] * inc.factor : d.y[i]; };

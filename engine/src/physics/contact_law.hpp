@@ -16,9 +16,11 @@ namespace dem {
 // SHEAR = false: every pair of the scene is shear-free (no shear spring and dashpot, or mu = 0
 // with a shear spring, so the cap holds e_s at 0): the shear part is not computed (same result).
 // DASH = false: no pair has a dashpot: the dashpot terms are not computed (same result).
+// dash_n, dash_s: the increments whose rate (times inv_dt) the dashpots see; contact_law passes
+// du_n, du_s (the paper's), velocity_verlet_onset the predicted v(t + dt) dt (onset.cpp).
 template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR = true, bool DASH = true>
-inline void contact_law(const PairProps& p, double overlap, double du_n, double du_s, double inv_dt,
-                        double& en, double& es, double& fn, double& fs) {
+inline void contact_law_dash(const PairProps& p, double overlap, double du_n, double du_s, double dash_n,
+                             double dash_s, double inv_dt, double& en, double& es, double& fn, double& fs) {
   // Choices are selects, not branches: in a dense packing whether a contact slides or goes slack
   // is data the branch predictor cannot learn, and a select gives the very same values.
   // Normal: spring and dashpot in parallel.
@@ -27,7 +29,7 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
   else
     en = p.kn * overlap;
   double dn = 0;
-  if constexpr (DASH) dn = p.eta_n * du_n * inv_dt;  // (6b), (7b): the dashpot is not accumulated
+  if constexpr (DASH) dn = p.eta_n * dash_n * inv_dt;  // (6b), (7b): the dashpot is not accumulated
 
   bool slack = false;  // NoTension::elastic, (8), (12): the elastic part in tension; the contact carries nothing
   if constexpr (NT == NoTension::elastic) {
@@ -45,7 +47,7 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
     // Shear: spring and dashpot in parallel, the spring capped by Coulomb friction.
     s = es + p.ks * du_s;                       // (10a), (11a)
     double ds = 0;
-    if constexpr (DASH) ds = p.eta_s * du_s * inv_dt;  // (10b), (11b)
+    if constexpr (DASH) ds = p.eta_s * dash_s * inv_dt;  // (10b), (11b)
     if constexpr (FC != FrictionCap::none) {
       const double cap = p.mu * (FC == FrictionCap::elastic ? std::max(en, 0.0) : std::abs(fn));
       const bool slide = std::abs(s) > cap;     // (13a): capped, not reset
@@ -64,6 +66,14 @@ inline void contact_law(const PairProps& p, double overlap, double du_n, double 
   }
   if constexpr (SHEAR) es = s;
   else if constexpr (NT == NoTension::elastic) es = slack ? 0.0 : es;
+}
+
+// The law with the dashpots on the same increments as the springs: every scheme but
+// velocity_verlet_onset (the very operations of the paper's law).
+template <NormalSpring NS, NoTension NT, FrictionCap FC, bool SHEAR = true, bool DASH = true>
+inline void contact_law(const PairProps& p, double overlap, double du_n, double du_s, double inv_dt,
+                        double& en, double& es, double& fn, double& fs) {
+  contact_law_dash<NS, NT, FC, SHEAR, DASH>(p, overlap, du_n, du_s, du_n, du_s, inv_dt, en, es, fn, fs);
 }
 
 // Paper 2: inside a cluster both springs act in tension and without limit, with their dashpots.

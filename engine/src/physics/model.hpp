@@ -38,8 +38,15 @@ enum class LeverArm {
 enum class Scheme {
   paper_eq18,      // eqs. (17)-(18): v += a dt; du = v dt (symplectic Euler)
   paper_eq19,      // eqs. (17), (19): du = (du_prev + v dt) / 2
-  velocity_verlet  // half kick, drift, force, half kick; dashpots see du/dt = v(t + dt/2)
+  velocity_verlet,  // half kick, drift, force, half kick; dashpots see du/dt = v(t + dt/2)
+  // Velocity Verlet made second order in a collision (onset.cpp): the dashpots see the predicted
+  // v(t + dt), the impulse a contact or a slip starting inside the step misses is added. Needs
+  // the overlap spring; no bonds, no moving walls; its force pass runs on one thread.
+  velocity_verlet_onset
 };
+
+// Schemes of the velocity Verlet family: half kick, drift, forces, half kick (no stored increments).
+constexpr bool verlet_family(Scheme s) { return s == Scheme::velocity_verlet || s == Scheme::velocity_verlet_onset; }
 
 struct ContactOptions {
   NormalSpring normal_spring = NormalSpring::incremental;

@@ -24,6 +24,12 @@ Eigen::Vector3d one_step(Scheme scheme, double m, double k, double c, double dt,
     du = v * dt;
     x += du;
     v += 0.5 * dt * force(x, du) / m;
+  } else if (scheme == Scheme::velocity_verlet_onset) {  // du: the dashpot's predicted v(t) dt (onset.cpp)
+    const double v0 = v;
+    v += 0.5 * dt * force(x, du) / m;
+    x += v * dt;
+    du = (2 * v - v0) * dt;
+    v += 0.5 * dt * force(x, du) / m;
   } else {
     v += dt * force(x, du) / m;                                                  // (17)
     du = scheme == Scheme::paper_eq18 ? v * dt : 0.5 * (du + v * dt);            // (18) / (19)
@@ -72,6 +78,12 @@ double system_spectral_radius(Scheme scheme, const Eigen::MatrixXd& K, const Eig
       v += 0.5 * dt * acc(x, du);
       du = v * dt;
       x += du;
+      v += 0.5 * dt * acc(x, du);
+    } else if (scheme == Scheme::velocity_verlet_onset) {  // du: the dashpots' predicted v(t) dt (onset.cpp)
+      const Eigen::VectorXd v0 = v;
+      v += 0.5 * dt * acc(x, du);
+      x += v * dt;
+      du = (2 * v - v0) * dt;
       v += 0.5 * dt * acc(x, du);
     } else {
       v += dt * acc(x, du);                                                      // (17)

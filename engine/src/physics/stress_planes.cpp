@@ -24,7 +24,7 @@ std::vector<PlaneStress> plane_stresses(const World& w, const std::vector<double
   std::vector<PlaneStress> out(plane_y.size());
   for (std::size_t k = 0; k < plane_y.size(); ++k) out[k].y = plane_y[k];
   // Positions of the last force computation: eqs. 18/19 move the discs after it, Verlet before.
-  const bool moved = w.scheme != Scheme::velocity_verlet;
+  const bool moved = !verlet_family(w.scheme);
   std::vector<double> px(d.x), py(d.y);
   if (moved) {
     const World::Increments u = w.increments();

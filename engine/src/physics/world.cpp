@@ -54,6 +54,7 @@ struct World::ForceBlock {
 // (forces_then_move): each thread takes its block of discs through all their stages in one
 // parallel region, a fork and join being as dear as a small world's whole pass.
 void World::step() {
+  if (scheme == Scheme::velocity_verlet_onset) return step_onset();  // onset.cpp
   const bool verlet = scheme == Scheme::velocity_verlet;
   bool far = false;  // some disc is now skin/2 from its list position
   if (verlet) {
@@ -232,6 +233,9 @@ bool World::adjacent(int k1, int k2) const {
 }
 
 void World::prepare(bool build_lists) {
+  if (scheme == Scheme::velocity_verlet_onset &&
+      (options.normal_spring != NormalSpring::overlap || !bonds.empty() || !moving.empty()))
+    throw std::invalid_argument("velocity_verlet_onset needs the overlap spring, and no bonds or moving walls");
   select_kernel();
   geometry.link_points();
   const int slots = std::max(1, threads);
@@ -316,6 +320,7 @@ void World::size_pair_forces(std::size_t count) { pair_totals.start(count, neigh
 
 void World::init() {
   prepare();
+  if (scheme == Scheme::velocity_verlet_onset) return onset_forces(true);  // onset.cpp
   forces_then_move(Move::none, 0.0);  // forces at the start (Verlet's first half kick uses them)
 }
 
@@ -997,7 +1002,7 @@ void World::measure_increment_sums() {
 void World::mean_abs_increment(double& mx, double& my) const {
   const long n = static_cast<long>(discs.size());
   const int nt = threads_for(static_cast<int>(n));
-  if (scheme == Scheme::velocity_verlet) {
+  if (verlet_family(scheme)) {
     if (increments_measured_step_ != steps)
       throw std::logic_error("mean_abs_increment: this Verlet step did not measure its increments");
     mx = my = 0;
@@ -1037,7 +1042,8 @@ const char* to_string(FrictionCap v) {
 }
 const char* to_string(LeverArm v) { return v == LeverArm::radius ? "radius" : "contact_point"; }
 const char* to_string(Scheme v) {
-  return v == Scheme::paper_eq18 ? "paper_eq18" : v == Scheme::paper_eq19 ? "paper_eq19" : "velocity_verlet";
+  return v == Scheme::paper_eq18 ? "paper_eq18" : v == Scheme::paper_eq19 ? "paper_eq19"
+       : v == Scheme::velocity_verlet ? "velocity_verlet" : "velocity_verlet_onset";
 }
 
 }  // namespace dem

@@ -217,6 +217,16 @@ class World {
   void add_cross_forces(ForceBlock& b);   // the forces on the block's discs of its cross pairs, computed by later blocks
   bool move_block(Move move, double h, int i0, int i1);  // (16)-(19) for discs [i0, i1)
   bool move_discs(Move move, double h);   // move_block on equal blocks, one parallel region
+  // velocity_verlet_onset (onset.cpp): its step, and its force pass (one thread): the forces at
+  // t + dt with the dashpots on the predicted v(t + dt), and the impulses a contact or a slip that
+  // started inside the step missed (onset_jx, jy, jt), added with the closing half kick.
+  void step_onset();
+  // start: the forces at the run's start (World::init): the dashpots on v(t), no spring increment.
+  void onset_forces(bool start = false);
+  template <NoTension NT, FrictionCap FC, LeverArm LA>
+  void onset_forces_law(bool start);
+  std::vector<double> onset_vx_, onset_vy_, onset_om_;  // v(t) of the step's start (not state: set each step)
+  std::vector<double> onset_jx_, onset_jy_, onset_jt_;  // the step's missed impulses (x, y, moment)
   void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (world_walls.cpp)
 
   // (3), the one test of both: a pair is apart when R^2 > (r_i + r_j)^2 (a NaN counts as touching).

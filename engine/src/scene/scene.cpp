@@ -402,6 +402,7 @@ Scheme parse_scheme(const std::string& v, bool& ok) {
   if (v == "paper_eq18") return Scheme::paper_eq18;
   if (v == "paper_eq19") return Scheme::paper_eq19;
   if (v == "velocity_verlet") return Scheme::velocity_verlet;
+  if (v == "velocity_verlet_onset") return Scheme::velocity_verlet_onset;
   ok = false;
   return Scheme::paper_eq19;
 }
@@ -447,7 +448,7 @@ void read_run_tables(SceneSpec& s, Tab& root) {
   {
     Tab t(*root.table("integrator", true), "integrator", s.file);
     bool ok;
-    s.scheme = parse_scheme(t.choice("scheme", {"paper_eq18", "paper_eq19", "velocity_verlet"}), ok);
+    s.scheme = parse_scheme(t.choice("scheme", {"paper_eq18", "paper_eq19", "velocity_verlet", "velocity_verlet_onset"}), ok);
     s.dt = t.positive("dt");
     s.force_dt = t.boolean("force_dt", false);
     const long th = t.integer("threads", 1L);
@@ -661,8 +662,11 @@ void apply_overrides(SceneSpec& s, const SceneOverrides& ov) {
   if (!ov.scheme.empty()) {
     bool ok;
     s.scheme = parse_scheme(ov.scheme, ok);
-    if (!ok) throw SceneError("--scheme " + ov.scheme + ": must be paper_eq18, paper_eq19 or velocity_verlet");
+    if (!ok) throw SceneError("--scheme " + ov.scheme + ": must be paper_eq18, paper_eq19, velocity_verlet or velocity_verlet_onset");
   }
+  // Its onset fraction reads the overlap (onset.cpp): the incremental spring has no such state.
+  if (s.scheme == Scheme::velocity_verlet_onset && s.contact.normal_spring != NormalSpring::overlap)
+    throw SceneError(s.file + ": integrator.scheme = \"velocity_verlet_onset\" needs contact.normal_spring = \"overlap\"");
   if (ov.end_time > 0) s.end_time = ov.end_time;
   if (ov.force_dt) s.force_dt = true;
   if (ov.threads > 0) s.threads = ov.threads;
