@@ -39,17 +39,18 @@ def has_perf():
         return False
 
 
-def timed(cmds, env, use_perf):
-    """Runs the commands one after another; returns (wall s, cpu s) of them all."""
+def timed(cmds, env, use_perf, cwd):
+    """Runs the commands one after another in cwd (the variant's checkout: `python3 -m` puts the
+    working folder first on sys.path); returns (wall s, cpu s) of them all."""
     wall = cpu = 0.0
     for cmd in cmds:
         before = os.times()
         t0 = time.perf_counter()
         if use_perf:
-            p = subprocess.run(["perf", "stat", "-x,", "-e", "task-clock", "--", *cmd], env=env,
+            p = subprocess.run(["perf", "stat", "-x,", "-e", "task-clock", "--", *cmd], env=env, cwd=cwd,
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         else:
-            p = subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            p = subprocess.run(cmd, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         wall += time.perf_counter() - t0
         if p.returncode != 0:
             sys.exit(f"paper_job: {' '.join(map(str, cmd))} exited {p.returncode}: {p.stderr[-400:]}")
@@ -98,7 +99,7 @@ def main(argv=None):
                 load = os.getloadavg()[0]
                 cmds = [[str(x) for x in c] for c in part_commands(part, repo, str(Path(dem).resolve()), run_out,
                                                                    args.members)]
-                wall, cpu = timed(cmds, env, use_perf)
+                wall, cpu = timed(cmds, env, use_perf, repo)
                 rows.append({"repeat": r, "part": part, "variant": name, "wall_s": wall, "cpu_s": cpu, "load1": load})
                 print(f"[{r}] {part:13s} {name:8s} {wall:7.2f} s wall {cpu:7.2f} s cpu  load {load:.1f}", flush=True)
     (out / "times.json").write_text(json.dumps(rows, indent=1) + "\n")
