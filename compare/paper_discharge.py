@@ -6,10 +6,13 @@ scheme (eq. 19, dt = 1e-4 s), velocity Verlet at dt = 5e-5 s and eq. 18 at 1e-4 
 cap), to show which deviation changes the flow. Writes OUT/report.md, OUT/discharge.json and
 the pictures of each configuration's median member.
 
-    /usr/bin/python3 -m compare.paper_discharge --out out/paper_silo/discharge [--members 8]
+    /usr/bin/python3 -m compare.paper_discharge --out out/paper_silo/discharge [--members 8] [--jobs 2]
 """
 import argparse
+import concurrent.futures as cf
 import json
+import multiprocessing as mp
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -68,47 +71,98 @@ def jam_text(j):
     return f"{j['value']:.2f}" + (f" ({j['jammed']}/{n})" if n is not None else "")
 
 
+def member_commands(dem, scene, ens, members, seed, common):
+    """The runs of one configuration, each a process of its own: member K alone (`dem ensemble
+    --member K`, bit for bit member K of the ensemble, docs/ensembles.md) into ens/member_KK, and
+    the scene as written (one member, no perturbation) into ens/as_written/member_00."""
+    runs = [[dem, "ensemble", str(scene), "--out", str(ens), "--member", str(k), "--seed", str(seed), *common]
+            for k in range(members)]
+    runs.append([dem, "ensemble", str(scene), "--out", str(ens / "as_written"), "--member", "0", "--perturb", "0",
+                 *common])
+    return runs
+
+
+def gather(dem, scene, ens, members, seed, common):
+    """ensemble.json of the configuration from its members' folders (`dem ensemble merge`: the file
+    of the ensemble run in one process, byte for byte), and that of the scene as written. A merge
+    that is refused (a member that could not run leaves no summary) falls back to the ensemble run
+    in one process, whose file and message say what failed. Returns the completed process whose exit
+    code and message the record keeps."""
+    proc = subprocess.run([dem, "ensemble", "merge", str(ens), "--members", str(members), "--quiet"],
+                          capture_output=True, text=True)
+    if proc.returncode not in (0, 3, 4):
+        proc = subprocess.run([dem, "ensemble", str(scene), "--out", str(ens), "--members", str(members),
+                               "--seed", str(seed), *common], capture_output=True, text=True)
+    if subprocess.run([dem, "ensemble", "merge", str(ens / "as_written"), "--members", "1", "--quiet"],
+                      capture_output=True, text=True).returncode not in (0, 3, 4):
+        subprocess.run([dem, "ensemble", str(scene), "--out", str(ens / "as_written"), "--members", "1",
+                        "--perturb", "0", *common], capture_output=True, text=True)
+    return proc
+
+
+def draw(pictured_dir, out, tag):
+    """The pictures of a configuration's median member (run in a figure process of its own)."""
+    figures.plot_discharge_frames(pictured_dir, out / f"frames_{tag}.png")
+    figures.plot_wall_ratios(pictured_dir, out / f"ratios_{tag}.png")
+    figures.plot_flow(pictured_dir, out / f"flow_{tag}.png")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="out/paper_silo/discharge")
     ap.add_argument("--dem", default=str(REPO / "build" / "dem"))
     ap.add_argument("--members", type=int, default=8)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                    help="engine runs and figure processes at once (default: all cores)")
     args = ap.parse_args(argv)
     out = Path(args.out).resolve()
     (out / "scenes").mkdir(parents=True, exist_ok=True)
-    results = []
+    jobs = max(1, args.jobs)
+    # Every member of every configuration is one task of one pool, so that no core waits for the
+    # last member of an ensemble or for the scene as written; the configurations' pictures are
+    # drawn in figure processes meanwhile (matplotlib imported once per process).
+    plan = []
     for tag, arr, scheme, dt, contact in CONFIGS:
         scene = scene_with(arr, contact, out / "scenes")
-        ens = out / tag
         common = ["--scheme", scheme, "--dt", repr(dt), "--force-dt", "--quiet"]
-        proc = subprocess.run([args.dem, "ensemble", str(scene), "--out", str(ens), "--members", str(args.members),
-                               "--seed", str(args.seed), *common], capture_output=True, text=True)
-        # The scene as written (no perturbation): what a plain `dem run` of it gives.
-        subprocess.run([args.dem, "ensemble", str(scene), "--out", str(ens / "as_written"), "--members", "1",
-                        "--perturb", "0", *common], capture_output=True, text=True)
-        rec = {"tag": tag, "arrangement": arr.replace("_", "/"), "scheme": scheme, "dt": dt,
-               "contact": contact or "paper", "exit": proc.returncode}
-        plain = ens / "as_written" / "ensemble.json"
-        if plain.exists():
-            one = (json.loads(plain.read_text()).get("runs") or [{}])[0]
-            rec["as_written"] = one.get("discs_out_at_1s") if one.get("status") in ("discharged", "jammed", "emptied") \
-                else one.get("status", "-")
-        if (ens / "ensemble.json").exists():
-            rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
-            med = median_member(rec["ensemble"])
-            pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
-            if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
-                rec["pictured"] = med["member"]
-                figures.plot_discharge_frames(pictured.path, out / f"frames_{tag}.png")
-                figures.plot_wall_ratios(pictured.path, out / f"ratios_{tag}.png")
-                figures.plot_flow(pictured.path, out / f"flow_{tag}.png")
-        else:
-            rec["error"] = proc.stderr.strip()[-400:]
-        results.append(rec)
-        e = rec.get("ensemble", {})
-        print(f"{tag:34s} exit {proc.returncode}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
-              f"jam {e.get('jam_fraction', {}).get('value', '-')}  pattern {e.get('pattern', '-')}", flush=True)
+        plan.append((tag, arr, scheme, dt, contact, scene, out / tag, common))
+    results, drawing = [], []
+    # Figure processes fork from a server that imported matplotlib once (a fork of this process,
+    # which runs threads, could inherit a held lock); started at once, beside the first runs.
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["compare.figures", "compare.paper_discharge"])
+    with cf.ThreadPoolExecutor(max_workers=jobs) as runs, \
+            cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pictures:
+        drawing.append(pictures.submit(os.getpid))
+        pending = [[runs.submit(subprocess.run, cmd, capture_output=True, text=True)
+                    for cmd in member_commands(args.dem, scene, ens, args.members, args.seed, common)]
+                   for _, _, _, _, _, scene, ens, common in plan]
+        for (tag, arr, scheme, dt, contact, scene, ens, common), futs in zip(plan, pending):
+            cf.wait(futs)
+            proc = gather(args.dem, scene, ens, args.members, args.seed, common)
+            rec = {"tag": tag, "arrangement": arr.replace("_", "/"), "scheme": scheme, "dt": dt,
+                   "contact": contact or "paper", "exit": proc.returncode}
+            plain = ens / "as_written" / "ensemble.json"
+            if plain.exists():
+                one = (json.loads(plain.read_text()).get("runs") or [{}])[0]
+                rec["as_written"] = one.get("discs_out_at_1s") if one.get("status") in ("discharged", "jammed", "emptied") \
+                    else one.get("status", "-")
+            if (ens / "ensemble.json").exists():
+                rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
+                med = median_member(rec["ensemble"])
+                pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
+                if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
+                    rec["pictured"] = med["member"]
+                    drawing.append(pictures.submit(draw, pictured.path, out, tag))
+            else:
+                rec["error"] = proc.stderr.strip()[-400:]
+            results.append(rec)
+            e = rec.get("ensemble", {})
+            print(f"{tag:34s} exit {proc.returncode}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
+                  f"jam {e.get('jam_fraction', {}).get('value', '-')}  pattern {e.get('pattern', '-')}", flush=True)
+        for f in drawing:
+            f.result()  # a figure that failed stops the study with its error
     write_text_atomic(out / "discharge.json", json.dumps(results, indent=1) + "\n")
 
     lines = ["# The paper's silo, discharge (Kiyama & Fujimura, section 5(2))", "",

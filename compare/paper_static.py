@@ -10,6 +10,7 @@ Writes OUT/report.md, OUT/study.json and PNGs (network grids, Fig. 7 analogues).
 import argparse
 import concurrent.futures as cf
 import json
+import multiprocessing as mp
 import os
 import subprocess
 import sys
@@ -155,6 +156,22 @@ def write_report(out_root, records, dem):
     write_text_atomic(out_root / "report.md", "\n".join(lines) + "\n")
 
 
+def draw(out_root, case, records):
+    """The figures of one pictured case (scheme, dt): the networks of every run that ended (the grid
+    marks those not at rest) and Fig. 7 of the runs at rest (a moving fill's wall forces are no
+    static profile)."""
+    records = sorted(records, key=lambda r: r["s"])
+    tag = f"{case[0]}_dt{case[1]:g}"
+    mine = [r for r in records if r["status"] not in ("unstable", "error")]
+    if mine:
+        figures.plot_network_grid([out_root / r["dir"] for r in mine], out_root / f"network_{tag}.png",
+                                  labels=[r["arrangement"] for r in mine])
+    rested = [r for r in mine if verdict(r) == "rest"]
+    if rested:
+        figures.plot_side_profiles([out_root / r["dir"] for r in rested], out_root / f"fig7_{tag}.png",
+                                   labels=[r["arrangement"] for r in rested])
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="out/paper_silo", help="output folder (default out/paper_silo)")
@@ -166,26 +183,32 @@ def main(argv=None):
     if not Path(args.dem).exists():
         sys.exit(f"{args.dem}: engine not built (bash scripts/build.sh)")
     cases = [(s, sc, dt) for sc in SCHEMES for dt in STEPS for s in ARRANGEMENTS]
-    records = []
-    with cf.ThreadPoolExecutor(max_workers=args.jobs) as ex:
+    # The pictured cases first: their figures are drawn in figure processes while the other runs go
+    # on (a fork of this process, which runs threads, could inherit a held lock: a fork server that
+    # imported matplotlib once).
+    pictured = [c for c in cases if (c[1], c[2]) in (PAPER, REFERENCE)]
+    cases = pictured + [c for c in cases if c not in pictured]
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["compare.figures", "compare.paper_static"])
+    records, drawing = [], []
+    with cf.ThreadPoolExecutor(max_workers=args.jobs) as ex, \
+            cf.ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=ctx) as pictures:
+        drawing.append(pictures.submit(os.getpid))  # the fork server starts beside the first runs
         futs = [ex.submit(run_one, args.dem, s, sc, dt, out_root) for s, sc, dt in cases]
         for k, f in enumerate(cf.as_completed(futs), 1):
             r = f.result()
             records.append(r)
             print(f"[{k:2d}/{len(cases)}] {r['scheme']:16s} dt={r['dt']:<6g} {r['arrangement']:6s} {verdict(r):20s}"
                   + (f" side {r['side_mean']:.1f}" if "side_mean" in r else ""), flush=True)
+            key = (r["scheme"], r["dt"])
+            if key in (PAPER, REFERENCE):
+                mine = [q for q in records if (q["scheme"], q["dt"]) == key]
+                if len(mine) == len(ARRANGEMENTS):
+                    drawing += [pictures.submit(draw, out_root, key, mine)]
+        for d in drawing:
+            d.result()  # a figure that failed stops the study with its error
     records.sort(key=lambda r: (SCHEMES.index(r["scheme"]), r["dt"], r["s"]))
     write_text_atomic(out_root / "study.json", json.dumps(records, indent=1) + "\n")
-    for scheme, dt in (PAPER, REFERENCE):
-        tag = f"{scheme}_dt{dt:g}"
-        mine = [r for r in records if (r["scheme"], r["dt"]) == (scheme, dt) and r["status"] not in ("unstable", "error")]
-        if mine:   # networks of every run that ended (the grid marks those not at rest)
-            figures.plot_network_grid([out_root / r["dir"] for r in mine], out_root / f"network_{tag}.png",
-                                      labels=[r["arrangement"] for r in mine])
-        rested = [r for r in mine if verdict(r) == "rest"]
-        if rested:  # Fig. 7: runs at rest only (a moving fill's wall forces are no static profile)
-            figures.plot_side_profiles([out_root / r["dir"] for r in rested], out_root / f"fig7_{tag}.png",
-                                       labels=[r["arrangement"] for r in rested])
     write_report(out_root, records, args.dem)
     print(f"report: {out_root / 'report.md'}")
     return 0

@@ -1,7 +1,7 @@
 #include "io/files.hpp"
 
 #include <cmath>
-#include <cstdio>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -23,10 +23,17 @@ void write_file_atomic(const std::string& path, const std::string& text) {
   write_stream_atomic(path, [&](std::ostream& out) { out << text; });
 }
 
+Digits17 digits17(double v) {
+  Digits17 d;
+  // 32 bytes hold the longest, "-2.2250738585072014e-308" (24), and "-nan".
+  const std::to_chars_result r = std::to_chars(d.text, d.text + sizeof d.text, v, std::chars_format::general, 17);
+  d.size = static_cast<std::size_t>(r.ptr - d.text);
+  return d;
+}
+
 std::string fmt17(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  const Digits17 d = digits17(v);
+  return std::string(d.text, d.size);
 }
 
 nlohmann::ordered_json finite_or_null(double v) {

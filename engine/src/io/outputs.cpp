@@ -67,7 +67,7 @@ void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std
 
 namespace {
 
-std::string fmt(double v) { return fmt17(v); }
+Digits17 fmt(double v) { return digits17(v); }
 
 json pair_json(const PairReport& r) {
   return json{{"name", r.name},

@@ -40,9 +40,9 @@ void Thermo::sample(const World& w, const char* phase) {
     shear[g] += (fx * (wl.bx - wl.ax) + fy * (wl.by - wl.ay)) / len;
   }
   std::ostringstream o;
-  o << fmt17(w.time) << ',' << w.steps << ',' << phase << ',' << w.discs.size() << ',' << fmt17(w.kinetic_energy())
-    << ',' << contacts << ',' << wall_contacts << ',' << fmt17(w.max_overlap);
-  for (std::size_t g = 0; g < groups_.size(); ++g) o << ',' << fmt17(normal[g]) << ',' << fmt17(shear[g]);
+  o << digits17(w.time) << ',' << w.steps << ',' << phase << ',' << w.discs.size() << ',' << digits17(w.kinetic_energy())
+    << ',' << contacts << ',' << wall_contacts << ',' << digits17(w.max_overlap);
+  for (std::size_t g = 0; g < groups_.size(); ++g) o << ',' << digits17(normal[g]) << ',' << digits17(shear[g]);
   o << '\n';
   text_ += o.str();
   last_step_ = w.steps;

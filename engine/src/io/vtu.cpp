@@ -23,7 +23,7 @@ void ascii(std::ostream& o, const VtuGrid& g) {
   for (std::size_t i = 0; i < np; ++i) {
     double x, y;
     g.point(i, x, y);
-    o << fmt17(x) << ' ' << fmt17(y) << " 0\n";
+    o << digits17(x) << ' ' << digits17(y) << " 0\n";
   }
   o << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   for (std::size_t i = 0; i < np; ++i) o << i << '\n';
@@ -35,7 +35,7 @@ void ascii(std::ostream& o, const VtuGrid& g) {
   o << (g.cell_data ? "<CellData>\n" : "<PointData>\n");
   for (const VtuColumn& c : g.scalars) {
     o << "<DataArray type=\"Float64\" Name=\"" << c.name << "\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < nv; ++i) o << fmt17(c.at(i)) << '\n';
+    for (std::size_t i = 0; i < nv; ++i) o << digits17(c.at(i)) << '\n';
     o << "</DataArray>\n";
   }
   for (const VtuVector& c : g.vectors) {
@@ -43,7 +43,7 @@ void ascii(std::ostream& o, const VtuGrid& g) {
     for (std::size_t i = 0; i < nv; ++i) {
       double x, y;
       c.at(i, x, y);
-      o << fmt17(x) << ' ' << fmt17(y) << " 0\n";
+      o << digits17(x) << ' ' << digits17(y) << " 0\n";
     }
     o << "</DataArray>\n";
   }

@@ -19,7 +19,7 @@ using json = nlohmann::ordered_json;
 
 namespace {
 
-std::string fmt(double v) { return fmt17(v); }
+Digits17 fmt(double v) { return digits17(v); }
 json num_or_null(double v) { return finite_or_null(v); }
 
 // Top of the fill in a column [x0, x1]: the highest disc top among discs inside the silo.
@@ -529,7 +529,9 @@ void DischargePhase::sample(World& w, double t) {
   for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
   st.flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
           << fmt(st.moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
-          << arch.size() << ',' << (std::isnan(crown) ? std::string("") : fmt(crown)) << '\n';
+          << arch.size() << ',';
+  if (!std::isnan(crown)) st.flow << fmt(crown);  // no arch: an empty cell
+  st.flow << '\n';
 }
 
 // Snapshots at the requested times (and at the end).

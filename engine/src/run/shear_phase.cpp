@@ -111,9 +111,9 @@ void ShearPhase::sample(World& w, double strain) {
     s.sigma += p.sigma; s.tau += p.tau;
     s.sigma_check += p.sigma_check; s.tau_check += p.tau_check;
     s.sigma_inertia += p.sigma_inertia; s.tau_inertia += p.tau_inertia;
-    planes << fmt17(s.t) << ',' << fmt17(strain) << ',' << k << ',' << fmt17(p.y) << ',' << p.contacts << ','
-           << fmt17(p.sigma) << ',' << fmt17(p.tau) << ',' << fmt17(p.sigma_check) << ',' << fmt17(p.tau_check)
-           << ',' << fmt17(p.sigma_inertia) << ',' << fmt17(p.tau_inertia) << '\n';
+    planes << digits17(s.t) << ',' << digits17(strain) << ',' << k << ',' << digits17(p.y) << ',' << p.contacts << ','
+           << digits17(p.sigma) << ',' << digits17(p.tau) << ',' << digits17(p.sigma_check) << ',' << digits17(p.tau_check)
+           << ',' << digits17(p.sigma_inertia) << ',' << digits17(p.tau_inertia) << '\n';
   }
   planes_ += planes.str();
   const double np = std::max<std::size_t>(1, ps.size());
@@ -134,14 +134,14 @@ void ShearPhase::sample(World& w, double strain) {
   const ObstacleMotion fl = floor_ >= 0 ? w.moving.motion[floor_] : ObstacleMotion{};
   const RigidPlate& P = w.moving.plates[0];
   std::ostringstream series;
-  series << fmt17(s.t) << ',' << fmt17(strain) << ',' << fmt17(-w.moving.rotating[0].theta) << ','
-         << fmt17(s.sigma) << ',' << fmt17(s.tau) << ',' << fmt17(s.ratio) << ',' << fmt17(s.sigma_check) << ','
-         << fmt17(s.tau_check) << ',' << fmt17(s.sigma_inertia) << ',' << fmt17(s.tau_inertia) << ','
-         << fmt17(mp.fy / b_w) << ',' << fmt17(-mp.fx / b_w) << ',' << fmt17(P.x) << ',' << fmt17(P.y) << ','
-         << fmt17(P.vx) << ',' << fmt17(P.vy) << ',' << fmt17(ml.fx) << ',' << fmt17(ml.fy) << ','
-         << fmt17(ml.moment) << ',' << fmt17(mr.fx) << ',' << fmt17(mr.fy) << ',' << fmt17(mr.moment) << ','
-         << fmt17(fl.fx) << ',' << fmt17(fl.fy) << ',' << contacts << ',' << sliding << ','
-         << fmt17(max_bond_strain(d, w.bonds)) << ',' << fmt17(w.kinetic_energy()) << '\n';
+  series << digits17(s.t) << ',' << digits17(strain) << ',' << digits17(-w.moving.rotating[0].theta) << ','
+         << digits17(s.sigma) << ',' << digits17(s.tau) << ',' << digits17(s.ratio) << ',' << digits17(s.sigma_check) << ','
+         << digits17(s.tau_check) << ',' << digits17(s.sigma_inertia) << ',' << digits17(s.tau_inertia) << ','
+         << digits17(mp.fy / b_w) << ',' << digits17(-mp.fx / b_w) << ',' << digits17(P.x) << ',' << digits17(P.y) << ','
+         << digits17(P.vx) << ',' << digits17(P.vy) << ',' << digits17(ml.fx) << ',' << digits17(ml.fy) << ','
+         << digits17(ml.moment) << ',' << digits17(mr.fx) << ',' << digits17(mr.fy) << ',' << digits17(mr.moment) << ','
+         << digits17(fl.fx) << ',' << digits17(fl.fy) << ',' << contacts << ',' << sliding << ','
+         << digits17(max_bond_strain(d, w.bonds)) << ',' << digits17(w.kinetic_energy()) << '\n';
   series_ += series.str();
 }
 

@@ -1,0 +1,33 @@
+"""The discharge study runs every member of every configuration as one task of one pool (`dem
+ensemble --member K`, then `dem ensemble merge`) and draws the pictures in figure processes: its
+ensemble files are those of each ensemble run in one process, byte for byte, and the pictures and
+the report are all there."""
+import json
+import subprocess
+
+from compare import paper_discharge
+
+
+def test_pooled_members_give_the_ensemble_of_one_process(tmp_path, dem_binary, monkeypatch):
+    tag, arr, scheme, dt = "17_18_eq19_1e-4", "17_18", "paper_eq19", 1e-4
+    monkeypatch.setattr(paper_discharge, "CONFIGS", [(tag, arr, scheme, dt, {})])
+    out = tmp_path / "study"
+    assert paper_discharge.main(["--out", str(out), "--dem", str(dem_binary), "--members", "2",
+                                 "--seed", "3", "--jobs", "2"]) == 0
+    # The same ensembles, each run whole by the engine in one process (the study's former way).
+    scene = out / "scenes" / "discharge_17_18_paper.toml"
+    whole = tmp_path / "whole"
+    common = ["--scheme", scheme, "--dt", repr(dt), "--force-dt", "--quiet"]
+    for args in (["--out", str(whole), "--members", "2", "--seed", "3"],
+                 ["--out", str(whole / "as_written"), "--members", "1", "--perturb", "0"]):
+        done = subprocess.run([str(dem_binary), "ensemble", str(scene), *args, *common], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+    assert (out / tag / "ensemble.json").read_bytes() == (whole / "ensemble.json").read_bytes()
+    assert (out / tag / "as_written" / "ensemble.json").read_bytes() == \
+        (whole / "as_written" / "ensemble.json").read_bytes()
+    record = json.loads((out / "discharge.json").read_text())[0]
+    assert record["exit"] == 0 and record["ensemble"]["members"] == 2
+    report = (out / "report.md").read_text()
+    for kind in ("frames", "ratios", "flow"):
+        assert (out / f"{kind}_{tag}.png").stat().st_size > 0
+        assert f"![{kind}_{tag}]({kind}_{tag}.png)" in report
