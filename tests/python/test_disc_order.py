@@ -10,6 +10,7 @@ import random
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from compare import scene_toml
@@ -103,3 +104,15 @@ def test_off_keeps_the_order_and_agrees_to_round_off(scene, run_dem, tmp_path):
     assert [d["id"] for d in a] == [d["id"] for d in b]
     worst = max(max(abs(float(p["x"]) - float(q["x"])), abs(float(p["y"]) - float(q["y"]))) for p, q in zip(a, b))
     assert worst < 1e-9, worst
+
+
+def test_module_arrays_in_user_order(scene, dem_module):
+    """The Python module lists the discs by id once the engine has re-sorted them: the arrays
+    are the file's rows (radii in the file's order), ids 0..N-1 in order."""
+    _, rows, fill = scene
+    sim = dem_module.Simulation(dem_module.Scene(str(fill)))
+    sim.step(300)  # the lattice's gaps close: contacts, and the check at step 256 re-sorts
+    ids = np.asarray(sim.ids)
+    assert list(ids) == list(range(len(rows)))
+    assert np.array_equal(np.asarray(sim.radii), np.array([r[2] for r in rows]))
+    assert np.array_equal(np.asarray(sim.positions)[:, 0], np.asarray(sim.x))
