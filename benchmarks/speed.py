@@ -22,7 +22,9 @@ study (and untimed) the native engine runs the lattice scene with the paper's la
 dt = 1e-4 s for SETTLE_TIME s (the lattice's gaps close and the column rests on the floor, some
 two contacts a disc), and every code then starts from those positions, at rest, with no history.
 The lattice start barely touches in the steps timed (a few thousand contacts at 1M discs); the
-settled start is the dense packing a silo study spends its time in.
+settled start is the dense packing a silo study spends its time in. --start shuffled is the
+settled packing written as a file fill in a seeded random order (SHUFFLE_SEED): a user's file
+in any order, the case of the engine's disc re-sort (benchmarks/README.md, "Disc order").
 
 Physics: LIGGGHTS and YADE run the law all three codes share (compare/common.py SHARED_VARIANT,
 velocity Verlet) at dt = 5e-5 s (Verlet is unstable at the paper's 1e-4 s); the native engine runs
@@ -88,6 +90,26 @@ def settled_scene(base: Path, dem: str, out: Path) -> Path:
     material = scene_toml.get(scene_toml.load(base), "fill.material")
     return scene_toml.edit(base, {"fill": {"type": "file", "file": f"{packing.parent.name}/discs.csv",
                                            "material": material, "max_initial_overlap": 0.3}}, scene)
+
+
+SHUFFLE_SEED = 20240  # the shuffled start's order
+
+
+def shuffled_scene(settled: Path, out: Path) -> Path:
+    """The settled scene with its packing's rows in a seeded random order (the same discs)."""
+    import random
+    scene = out / f"{settled.stem}_shuffled.toml"
+    packing = out / f"{settled.stem}_shuffled" / "discs.csv"
+    if scene.exists() and packing.exists():
+        return scene
+    src = settled.parent / scene_toml.get(scene_toml.load(settled), "fill.file")
+    lines = src.read_text().splitlines(keepends=True)
+    rows = lines[1:]
+    random.Random(SHUFFLE_SEED).shuffle(rows)
+    packing.parent.mkdir(parents=True, exist_ok=True)
+    packing.write_text(lines[0] + "".join(rows))
+    fill = dict(scene_toml.get(scene_toml.load(settled), "fill"), file=f"{packing.parent.name}/discs.csv")
+    return scene_toml.edit(settled, {"fill": fill}, scene)
 
 
 def scene_with_phases(base: Path, settle_steps: int, discharge_steps: int, dt: float, out: Path) -> Path:
@@ -264,6 +286,8 @@ def write_report(out, table, meta):
          f"{meta['started']} ({meta['elapsed_s']:.0f} s).", "",
          ("Scenes start from packings settled before the study (--start settled): dense, about two contacts a disc."
           if meta.get("start") == "settled" else
+          "Scenes start from packings settled before the study, listed in a seeded random order (--start shuffled)."
+          if meta.get("start") == "shuffled" else
           "Scenes start from their lattices (--start lattice): in the steps timed they barely touch."), "",
          "Microseconds per particle-step (median, [min-max] over repeats) of the stepping alone; memory is the",
          "peak resident set of the process (the largest rank for mpirun) per disc. `shared` rows: the law all",
@@ -355,8 +379,9 @@ def main() -> int:
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="350 and 10k discs only")
-    ap.add_argument("--start", choices=("lattice", "settled"), default="lattice",
-                    help="10k-1M scenes: from the lattice (default) or from a packing settled before the study")
+    ap.add_argument("--start", choices=("lattice", "settled", "shuffled"), default="lattice",
+                    help="10k-1M scenes: from the lattice (default), from a packing settled before the study, "
+                         "or from that packing listed in a seeded random order")
     ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(ROOT / "build" / "dem")))
     ap.add_argument("--timeout", type=float, default=3600)
     ap.add_argument("--keep-runs", action="store_true",
@@ -390,8 +415,10 @@ def main() -> int:
     for size in sizes:
         file, settle, dis, _ = SIZES[size]
         bases[size] = SCENES / file
-        if args.start == "settled" and size != "350":  # the 350-disc silo settles within its own run
+        if args.start in ("settled", "shuffled") and size != "350":  # the 350-disc silo settles within its own run
             bases[size] = settled_scene(SCENES / file, args.dem, out)
+            if args.start == "shuffled":
+                bases[size] = shuffled_scene(bases[size], out)
         scenes[size] = scene_with_phases(bases[size], settle, dis, DT_SHARED, out / f"bench_{size}.toml")
         r = subprocess.run([args.dem, "resolve", str(scenes[size])], capture_output=True, text=True)
         if r.returncode != 0:

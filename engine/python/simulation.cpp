@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <tuple>
 
 #include "io/outputs.hpp"
 #include "io/state.hpp"
@@ -94,27 +95,41 @@ class Simulation {
 
   // A read-only view of a flat array, kept alive by this object. Steps may move the engine's
   // arrays (a discharge removes discs), so a view is read again after each step.
+  // Discs in cell order (World::resort_discs) are listed in id order, the user's: a copy then.
   py::array_t<double> view(const std::vector<double>& v, const py::object& self) const {
+    const std::vector<int> by_id = world_.discs.by_id();
+    if (!by_id.empty()) {
+      py::array_t<double> a = per_disc([&](std::size_t i) { return v[i]; }, by_id);
+      py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+      return a;
+    }
     py::array_t<double> a({static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(double))}, v.data(), self);
     py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
     return a;
   }
 
   py::array_t<double> pairs_of(const std::vector<double>& a, const std::vector<double>& b) const {
+    const std::vector<int> by_id = world_.discs.by_id();
     py::array_t<double> out({static_cast<py::ssize_t>(a.size()), py::ssize_t{2}});
     auto o = out.mutable_unchecked<2>();
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      o(i, 0) = a[i];
-      o(i, 1) = b[i];
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      const std::size_t i = by_id.empty() ? k : static_cast<std::size_t>(by_id[k]);
+      o(k, 0) = a[i];
+      o(k, 1) = b[i];
     }
     return out;
   }
 
+  // f(i) of each disc, in id order.
   template <class F>
   py::array_t<double> per_disc(F&& f) const {
+    return per_disc(f, world_.discs.by_id());
+  }
+  template <class F>
+  py::array_t<double> per_disc(F&& f, const std::vector<int>& by_id) const {
     py::array_t<double> out(static_cast<py::ssize_t>(world_.discs.size()));
     auto o = out.mutable_unchecked<1>();
-    for (std::size_t i = 0; i < world_.discs.size(); ++i) o(i) = f(i);
+    for (std::size_t k = 0; k < world_.discs.size(); ++k) o(k) = f(by_id.empty() ? k : static_cast<std::size_t>(by_id[k]));
     return out;
   }
 
@@ -127,30 +142,45 @@ class Simulation {
     const World::Increments inc = w.increments();
     const auto px = [&](int i) { return moved_after_forces ? d.x[i] - inc.x[i] * inc.factor : d.x[i]; };
     const auto py_ = [&](int i) { return moved_after_forces ? d.y[i] - inc.y[i] * inc.factor : d.y[i]; };
-    std::vector<int> kind, ci, cj;
-    std::vector<double> en, es, fn, fs;
+    struct Row {
+      int kind, i, j;
+      double en, es, fn, fs;
+    };
+    std::vector<Row> rows;
     const bool recorded = w.pair_forces_current();
     PairTotals::Cursor r;
+    // Pairs by ids with id_i < id_j (discs in cell order, World::resort_discs: as contacts.csv).
+    const auto ids = [&](int a, int b) { return std::make_pair(std::min(d.id_at(a), d.id_at(b)), std::max(d.id_at(a), d.id_at(b))); };
     for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
       const PairContact& c = w.neighbors.pairs[p];
       const double R = std::hypot(px(c.j) - px(c.i), py_(c.j) - py_(c.i));
       if (!(R <= d.r(c.i) + d.r(c.j) && R != 0)) continue;
       const PairTotals::Force* f = recorded ? w.pair_totals.at(w.neighbors.pairs, p, r) : nullptr;
-      kind.push_back(0); ci.push_back(d.id_at(c.i)); cj.push_back(d.id_at(c.j));
-      en.push_back(c.en); es.push_back(c.es);
-      fn.push_back(!recorded ? NAN : f ? f->fn : 0.0);
-      fs.push_back(!recorded ? NAN : f ? f->fs : 0.0);
+      const auto [a, b] = ids(c.i, c.j);
+      rows.push_back({0, a, b, c.en, c.es, !recorded ? NAN : f ? f->fn : 0.0, !recorded ? NAN : f ? f->fs : 0.0});
     }
     for (const Bond& c : w.bonds) {
       if (std::hypot(px(c.j) - px(c.i), py_(c.j) - py_(c.i)) == 0) continue;
-      kind.push_back(3); ci.push_back(d.id_at(c.i)); cj.push_back(d.id_at(c.j));
-      en.push_back(c.en); es.push_back(c.es); fn.push_back(c.fn); fs.push_back(c.fs);
+      const auto [a, b] = ids(c.i, c.j);
+      rows.push_back({3, a, b, c.en, c.es, c.fn, c.fs});
     }
     const int nw = static_cast<int>(w.geometry.walls.size());
     for (const WallContact& c : w.neighbors.walls) {
       if (!c.touching) continue;
-      kind.push_back(c.k < nw ? 1 : 2); ci.push_back(d.id_at(c.i)); cj.push_back(c.k < nw ? c.k : c.k - nw);
-      en.push_back(c.en); es.push_back(c.es); fn.push_back(c.fn); fs.push_back(c.fs);
+      rows.push_back({c.k < nw ? 1 : 2, d.id_at(c.i), c.k < nw ? c.k : c.k - nw, c.en, c.es, c.fn, c.fs});
+    }
+    if (!d.by_id().empty()) {  // the lists' order over ids: pairs, bonds, obstacle contacts (by id, obstacle)
+      const auto group = [](const Row& q) { return q.kind == 0 ? 0 : q.kind == 3 ? 1 : 2; };
+      const auto other = [&](const Row& q) { return q.kind == 2 ? q.j + nw : q.j; };
+      std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) {
+        return std::make_tuple(group(a), a.i, other(a)) < std::make_tuple(group(b), b.i, other(b));
+      });
+    }
+    std::vector<int> kind, ci, cj;
+    std::vector<double> en, es, fn, fs;
+    for (const Row& q : rows) {
+      kind.push_back(q.kind); ci.push_back(q.i); cj.push_back(q.j);
+      en.push_back(q.en); es.push_back(q.es); fn.push_back(q.fn); fs.push_back(q.fs);
     }
     py::dict out;
     out["kind"] = py::array_t<int>(kind.size(), kind.data());
@@ -218,7 +248,8 @@ void bind_simulation(py::module_& m) {
 step(n) steps it; fill() runs the fill to rest or end.time; run(out) runs every phase of the scene
 (fill, discharge, shear) and writes the outputs, as `dem run SCENE --out DIR --quiet`; write(out)
 writes the outputs of the world as it stands. x, y, vx, vy, omega, fx, fy, torque are read-only
-views of the engine's arrays (no copy; read them again after stepping); positions, velocities,
+views of the engine's arrays (no copy; read them again after stepping; read-only copies once the
+engine has put the discs in cell order: every array lists the discs in id order); positions, velocities,
 forces, radii, ids, contacts(), walls() and points() are copies.)")
       .def(py::init<const Scene&>(), py::arg("scene"))
       .def("step", &S::step, py::arg("n") = 1, "n time steps (the last one records the pair forces contacts() reads)")
@@ -242,9 +273,11 @@ forces, radii, ids, contacts(), walls() and points() are copies.)")
       .def_property_readonly("masses", [](const S& s) { return s.per_disc([&](std::size_t i) { return s.world_.discs.mass(i); }); },
                              "rho pi r^2 [g per cm of thickness]; copy")
       .def_property_readonly("ids", [](const S& s) {
+        const std::vector<int> by_id = s.world_.discs.by_id();
         py::array_t<int> out(static_cast<py::ssize_t>(s.world_.discs.size()));
         auto o = out.mutable_unchecked<1>();
-        for (std::size_t i = 0; i < s.world_.discs.size(); ++i) o(i) = s.world_.discs.id_at(i);
+        for (std::size_t k = 0; k < s.world_.discs.size(); ++k)
+          o(k) = s.world_.discs.id_at(by_id.empty() ? k : static_cast<std::size_t>(by_id[k]));
         return out;
       }, "the discs' ids (a disc keeps its id when others are removed); copy")
       .def("contacts", &S::contacts,

@@ -89,13 +89,22 @@ TEST(OpeningPositions, ReadBackFromMemoryFileAndCheckpoint) {
   }
 }
 
-TEST(OpeningPositions, RefusesDiscsOutOfIdOrder) {
+TEST(OpeningPositions, KeepsDiscsInCellOrderByIdAndRefusesRepeatedIds) {
+  // Discs in the engine's cell order (World::resort_discs): ids 1, 0; each position under its id.
   Discs d;
   d.add(0, 0, 0.5, 1, 0);
   d.add(1, 0, 0.5, 1, 0);
   d.make_ids();
   std::swap(d.id[0], d.id[1]);
   OpeningPositions p;
+  p.keep(d);
+  OpeningPositions::Reader r(p);
+  double x, y;
+  r.at(0, x, y);
+  EXPECT_EQ(x, 1.0);
+  r.at(1, x, y);
+  EXPECT_EQ(x, 0.0);
+  d.id[1] = d.id[0];
   EXPECT_THROW(p.keep(d), std::logic_error);
 }
 

@@ -61,3 +61,17 @@ def test_settled_scene_starts_from_a_resting_packing(dem_binary, tmp_path):
     case = study.discharge_case(phased, 5e-5, 1e-3, 1e-3, 0, 0.0)
     text = native_backend.write_inputs(case, tmp_path / "case").read_text()
     assert "max_initial_overlap = 0.3" in text
+
+
+def test_shuffled_scene_lists_the_settled_packing_in_a_random_order(dem_binary, tmp_path):
+    """--start shuffled: the same discs and walls as the settled scene, in another order."""
+    base = REPO_ROOT / "reference_inputs" / "scenes" / "bench_silo_10k.toml"
+    settled = speed.settled_scene(base, str(dem_binary), tmp_path)
+    shuffled = speed.shuffled_scene(settled, tmp_path)
+    a, b = resolved(dem_binary, settled), resolved(dem_binary, shuffled)
+    assert a["walls"] == b["walls"]
+    assert a["discs"] != b["discs"]
+    assert sorted(map(tuple, a["discs"])) == sorted(map(tuple, b["discs"]))
+    # Most discs moved: a random order, not a rotation of a few.
+    moved = sum(p != q for p, q in zip(a["discs"], b["discs"]))
+    assert moved > 0.99 * len(a["discs"])

@@ -1,5 +1,7 @@
 #include "io/outputs.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -182,38 +184,61 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   const std::string csv = dir + "/" + stem + ".csv";
   o.open(csv + ".tmp", std::ios::binary);
   o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
+  // Discs in cell order (World::resort_discs): the rows are gathered and put in the user's
+  // order, as the lists would have them over discs in id order: pairs by (id_i, id_j) with
+  // id_i < id_j (a pair seen from its other disc: the normal reversed, the forces the same),
+  // then bonds, then obstacle contacts by (id, obstacle).
+  const bool resorted = !d.by_id().empty();
+  std::vector<std::pair<std::array<long long, 3>, std::string>> rows;
+  std::ostringstream row;
+  std::ostream& out = resorted ? static_cast<std::ostream&>(row) : o;
+  const auto end_row = [&](long long group, long long a, long long b) {
+    if (!resorted) return;
+    rows.push_back({{group, a, b}, row.str()});
+    row.str("");
+  };
   PairTotals::Cursor r;
   for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
     if (!touching(p)) continue;
     const PairContact& c = w.neighbors.pairs[p];
     double fn, fs;
     totals(p, r, fn, fs);
-    const double dx = px(c.j) - px(c.i), dy = py(c.j) - py(c.i);
+    const bool flip = d.id_at(c.i) > d.id_at(c.j);
+    const int i = flip ? c.j : c.i, j = flip ? c.i : c.j;
+    const double dx = px(j) - px(i), dy = py(j) - py(i);
     const double R = std::hypot(dx, dy);
-    const double nx = dx / R, ny = dy / R, ov = d.r(c.i) + d.r(c.j) - R;
-    const double cx = px(c.i) + nx * (d.r(c.i) - 0.5 * ov), cy = py(c.i) + ny * (d.r(c.i) - 0.5 * ov);
-    o << "dd," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
-      << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
+    const double nx = dx / R, ny = dy / R, ov = d.r(i) + d.r(j) - R;
+    const double cx = px(i) + nx * (d.r(i) - 0.5 * ov), cy = py(i) + ny * (d.r(i) - 0.5 * ov);
+    out << "dd," << d.id_at(i) << ',' << d.id_at(j) << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
+        << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
+    end_row(0, d.id_at(i), d.id_at(j));
   }
   for (std::size_t p = 0; p < w.bonds.size(); ++p) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
     if (!bonded(p)) continue;
     const Bond& c = w.bonds[p];
-    const double dx = px(c.j) - px(c.i), dy = py(c.j) - py(c.i);
+    const bool flip = d.id_at(c.i) > d.id_at(c.j);
+    const int i = flip ? c.j : c.i, j = flip ? c.i : c.j;
+    const double ai = flip ? c.aj : c.ai, aj = flip ? c.ai : c.aj;
+    const double dx = px(j) - px(i), dy = py(j) - py(i);
     const double R = std::hypot(dx, dy);
-    const double nx = dx / R, ny = dy / R, at = c.ai / (c.ai + c.aj) * R;
-    o << "db," << d.id_at(c.i) << ',' << d.id_at(c.j) << ',' << fmt(px(c.i) + nx * at) << ',' << fmt(py(c.i) + ny * at)
-      << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
-      << fmt(c.fs) << '\n';
+    const double nx = dx / R, ny = dy / R, at = ai / (ai + aj) * R;
+    out << "db," << d.id_at(i) << ',' << d.id_at(j) << ',' << fmt(px(i) + nx * at) << ',' << fmt(py(i) + ny * at)
+        << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+        << fmt(c.fs) << '\n';
+    end_row(1, d.id_at(i), d.id_at(j));
   }
   for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) {
     if (!wall_touching(p)) continue;
     const WallContact& c = w.neighbors.walls[p];
     const bool is_wall = c.k < nw;
     const std::string& name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
-    o << (is_wall ? "dw," : "dp,") << d.id_at(c.i) << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
-      << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
-      << fmt(c.fs) << '\n';
+    out << (is_wall ? "dw," : "dp,") << d.id_at(c.i) << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
+        << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
+        << fmt(c.fs) << '\n';
+    end_row(2, d.id_at(c.i), c.k);
   }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& e : rows) o << e.second;
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
@@ -232,6 +257,10 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
                       const OpeningPositions* at_open) {
   const bool disp = at_open != nullptr;
+  // Row k is the disc of the k-th smallest id: the user's order, whatever the arrays' (cell order
+  // after a re-sort, World::resort_discs).
+  const std::vector<int> by_id = d.by_id();
+  const auto disc = [&](std::size_t k) { return by_id.empty() ? k : static_cast<std::size_t>(by_id[k]); };
   // Read in id order, the discs' order: a block of positions at a time (opening_positions.hpp).
   std::optional<OpeningPositions::Reader> open_at;
   if (disp) open_at.emplace(*at_open);
@@ -246,7 +275,8 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   o.open(csv + ".tmp", std::ios::binary);
   const bool angle = !d.phi.empty();  // output.rotation_angle
   o << "id,x,y,r,vx,vy,omega,material" << (disp ? ",dx,dy" : "") << (angle ? ",phi" : "") << "\n";
-  for (std::size_t i = 0; i < d.size(); ++i) {
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    const std::size_t i = disc(k);
     o << d.id_at(i) << ',' << fmt(d.x[i]) << ',' << fmt(d.y[i]) << ',' << fmt(d.r(i)) << ',' << fmt(d.vx[i]) << ','
       << fmt(d.vy[i]) << ',' << fmt(d.omega[i]) << ',' << spec.material_names[d.material(i)];
     if (disp) {
@@ -261,17 +291,17 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
   std::vector<VtuVector> vec;
-  vec.push_back({"velocity", [&](std::size_t i, double& vx, double& vy) { vx = d.vx[i]; vy = d.vy[i]; }});
-  if (disp) vec.push_back({"displacement", displacement});
-  std::vector<VtuColumn> scalars = {{"radius", [&](std::size_t i) { return d.r(i); }},
-                                 {"omega", [&](std::size_t i) { return d.omega[i]; }}};
-  if (angle) scalars.push_back({"phi", [&](std::size_t i) { return d.phi[i]; }});
+  vec.push_back({"velocity", [&](std::size_t k, double& vx, double& vy) { vx = d.vx[disc(k)]; vy = d.vy[disc(k)]; }});
+  if (disp) vec.push_back({"displacement", [&](std::size_t k, double& dx, double& dy) { displacement(disc(k), dx, dy); }});
+  std::vector<VtuColumn> scalars = {{"radius", [&](std::size_t k) { return d.r(disc(k)); }},
+                                 {"omega", [&](std::size_t k) { return d.omega[disc(k)]; }}};
+  if (angle) scalars.push_back({"phi", [&](std::size_t k) { return d.phi[disc(k)]; }});
   VtuGrid g;
   g.np = d.size();
-  g.point = [&](std::size_t i, double& x, double& y) { x = d.x[i]; y = d.y[i]; };
+  g.point = [&](std::size_t k, double& x, double& y) { x = d.x[disc(k)]; y = d.y[disc(k)]; };
   g.scalars = std::move(scalars);
   g.vectors = std::move(vec);
-  g.ints = {{"id", [&](std::size_t i) { return static_cast<long long>(d.id_at(i)); }}};
+  g.ints = {{"id", [&](std::size_t k) { return static_cast<long long>(d.id_at(disc(k))); }}};
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) { write_vtu(out, g, spec.vtu_binary(d.size())); });
 }
 
@@ -302,7 +332,8 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                    {"normal_spring", to_string(w.options.normal_spring)}, {"no_tension", to_string(w.options.no_tension)},
                    {"friction_cap", to_string(w.options.friction_cap)}, {"lever_arm", to_string(w.options.lever_arm)},
                    {"gravity", {w.gx, w.gy}}, {"units", to_string(spec.units)},
-                   {"skin", w.neighbors.skin}, {"cell", w.neighbors.cell_size()}, {"profile_bin", spec.profile_bin}};
+                   {"skin", w.neighbors.skin}, {"cell", w.neighbors.cell_size()}, {"profile_bin", spec.profile_bin},
+                   {"disc_order", to_string(w.disc_order)}};
   js["n_discs"] = d.size();
   js["steps"] = w.steps;
   js["time"] = w.time;
@@ -310,6 +341,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   js["particle_steps"] = w.particle_steps;
   js["particle_steps_per_s"] = res.wall_seconds > 0 ? w.particle_steps / res.wall_seconds : 0.0;
   js["neighbor_rebuilds"] = w.neighbors.rebuilds;
+  js["disc_resorts"] = w.resorts;  // the discs put in cell order (integrator.disc_order)
   js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(res.rest_time) : json(nullptr)},
                 {"criterion", "mean over discs of |du| and of |dv| per step < rest_factor * g * dt^2 (paper note 3)"},
                 {"rest_factor", spec.rest_factor}, {"threshold", res.rest_threshold},

@@ -160,6 +160,7 @@ void read_discs(BinaryIn& r, Discs& d) {
     if (v->size() != n && !v->empty()) r.fail("corrupt file (arrays of different lengths)");
   if (d.id.size() != n) r.fail("corrupt file (arrays of different lengths)");
   d.drop_derivable_arrays();
+  d.count_ids();  // the next id after the largest (the discs may be in cell order)
 }
 
 void write_world(BinaryOut& o, const World& w) {

@@ -65,11 +65,30 @@ struct Discs {
   std::size_t size() const { return x.size(); }
   int kind_at(std::size_t i) const { return kind.empty() ? 0 : kind[i]; }
   int id_at(std::size_t i) const { return id.empty() ? static_cast<int>(i) : id[i]; }
-  // The ids as an array (before a removal breaks id == index).
+  // The ids as an array (before a removal or a re-sort breaks id == index).
   void make_ids() {
     if (!id.empty()) return;
     id.resize(x.size());
     std::iota(id.begin(), id.end(), 0);
+    id_end_ = static_cast<int>(x.size());
+  }
+  // The id the next added disc gets: one past the largest (ids only grow; after a re-sort the
+  // last disc need not hold the largest). Call after ids are set from outside (a state read).
+  void count_ids() {
+    id_end_ = 0;
+    for (int v : id) id_end_ = std::max(id_end_, v + 1);
+  }
+  // The indices of the discs in increasing id order: the user's order, in which every output
+  // lists the discs (the arrays themselves may be in cell order, World::resort_discs). Empty
+  // while the discs already are in that order (no re-sort yet): callers read index k then.
+  std::vector<int> by_id() const {
+    bool sorted = true;
+    for (std::size_t i = 1; i < id.size() && sorted; ++i) sorted = id[i] > id[i - 1];
+    if (sorted) return {};
+    std::vector<int> order(id.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return id[a] < id[b]; });
+    return order;
   }
   // Disc i's constants.
   double r(std::size_t i) const { return kinds.r[kind_at(i)]; }
@@ -108,7 +127,7 @@ struct Discs {
   void add_position(double px, double py, double radius, double density, int mat) {
     const double m = density * 3.14159265358979323846 * radius * radius;
     set_kind(x.size(), kind_of(radius, m, 1.0 / m, 2.0 / (m * radius * radius), mat));
-    if (!id.empty()) id.push_back(id.back() + 1);  // after removals: the next id (ids only grow)
+    if (!id.empty()) id.push_back(id_end_++);  // after removals or a re-sort: the next id (ids only grow)
     x.push_back(px);
     y.push_back(py);
   }
@@ -121,6 +140,7 @@ struct Discs {
 
  private:
   std::size_t room_ = 0;  // discs reserve() made room for (the kind array's, when it is made)
+  int id_end_ = 0;        // with an id array: one past the largest id (count_ids)
   // Disc i (i == size(): the disc being added) is of kind k; the array is made, all zeros, when
   // the first disc of another kind than 0 comes.
   void set_kind(std::size_t i, int k) {

@@ -440,3 +440,27 @@ void Neighbors::compact(const RemovedDiscs& removed) {
 }
 
 }  // namespace dem
+
+namespace dem {
+
+void Neighbors::renumber(const std::vector<int>& new_index) {
+  for (PairContact& p : pairs) {
+    const int i = new_index[p.i], j = new_index[p.j];
+    p.i = std::min(i, j);
+    p.j = std::max(i, j);
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const PairContact& a, const PairContact& b) { return pair_key(a) < pair_key(b); });
+  for (WallContact& w : walls) w.i = new_index[w.i];
+  std::sort(walls.begin(), walls.end(), [](const WallContact& a, const WallContact& b) { return wall_key(a) < wall_key(b); });
+  if (x0_.size() == new_index.size()) {
+    std::vector<float> x(x0_.size()), y(y0_.size());
+    for (std::size_t i = 0; i < new_index.size(); ++i) {
+      x[new_index[i]] = x0_[i];
+      y[new_index[i]] = y0_[i];
+    }
+    x0_.swap(x);
+    y0_.swap(y);
+  }
+}
+
+}  // namespace dem

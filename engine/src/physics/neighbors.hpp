@@ -61,6 +61,10 @@ class Neighbors {
   std::size_t scratch_bytes() const;
   // Discs were removed (order kept): the lists stay sorted and the history stays attached.
   void compact(const RemovedDiscs& removed);
+  // The discs were put in a new order (disc i is now new_index[i]): the lists and the reference
+  // positions follow them. A pair whose discs swap order is stored as (j, i): its history is the
+  // same seen from either disc (e_n, e_s are symmetric in (4), (5), (15)).
+  void renumber(const std::vector<int>& new_index);
   // Forget the reference positions: the next step rebuilds (after geometry changes).
   void invalidate() { x0_.clear(); y0_.clear(); }
   // The positions of the last rebuild and the cell size: with the lists, what a checkpoint

@@ -1,5 +1,7 @@
 #include "physics/pair_totals.hpp"
 
+#include <algorithm>
+
 #include <stdexcept>
 
 namespace dem {
@@ -37,6 +39,26 @@ void PairTotals::detach(const std::vector<PairContact>& pairs) {
   std::vector<std::uint64_t>().swap(bits_);
   list_size_ = 0;
   detached_ = true;
+}
+
+void PairTotals::renumber(const std::vector<PairContact>& pairs, const std::vector<int>& new_index) {
+  detach(pairs);
+  if (!detached_) return;  // nothing recorded
+  std::vector<std::size_t> at(f_.size());
+  for (std::size_t r = 0; r < f_.size(); ++r) {
+    const int i = new_index[ij_[r][0]], j = new_index[ij_[r][1]];
+    ij_[r] = {std::min(i, j), std::max(i, j)};
+    at[r] = r;
+  }
+  std::sort(at.begin(), at.end(), [&](std::size_t a, std::size_t b) { return ij_[a] < ij_[b]; });
+  std::vector<Force> f(f_.size());
+  std::vector<std::array<int, 2>> ij(ij_.size());
+  for (std::size_t r = 0; r < at.size(); ++r) {
+    f[r] = f_[at[r]];
+    ij[r] = ij_[at[r]];
+  }
+  f_.swap(f);
+  ij_.swap(ij);
 }
 
 void PairTotals::compact(const std::vector<PairContact>& pairs, const RemovedDiscs& removed) {

@@ -52,6 +52,10 @@ class PairTotals {
   // Drops the totals of pairs with a removed disc and renumbers the discs, as Neighbors::compact
   // does to `pairs` (call with the list before it).
   void compact(const std::vector<PairContact>& pairs, const RemovedDiscs& removed);
+  // The discs were put in a new order (disc i is now new_index[i]; World::resort_discs): detached
+  // totals follow them, sorted by (i, j) again. Bound totals are detached first (`pairs`, the
+  // list they are over, before it is renumbered).
+  void renumber(const std::vector<PairContact>& pairs, const std::vector<int>& new_index);
   // Explicit records, sorted by (i, j): the detached form (state files, tests). assign is
   // start_detached(size) and a push of each.
   void assign(const std::vector<PairForce>& records);

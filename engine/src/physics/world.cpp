@@ -62,6 +62,7 @@ void World::step() {
     move_walls(Move::kick_drift_eq18, 0.5 * dt);
   }
   refresh_lists(far);                                    // the candidates of (3)
+  if (steps % DiscOrderRule::kCheckEvery == 0) check_disc_order();  // the discs in cell order when theirs has decayed
   if (steps % kRebalanceEvery == 0) balance_blocks();    // the threads' blocks (and whenever they do not fit)
   if (verlet && measure_increments) measure_increment_sums();  // the move's |v dt|, before the kick overwrites v
   const Move move = verlet ? Move::kick : scheme == Scheme::paper_eq18 ? Move::kick_drift_eq18 : Move::kick_drift_eq19;
@@ -310,6 +311,7 @@ void World::rebuild_lists() {
   }
   p.resize(o);
 }
+
 
 void World::drop_pair_forces() {
   pair_totals.clear();

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "physics/clusters.hpp"
+#include "physics/disc_order.hpp"
 #include "physics/discs.hpp"
 #include "physics/geometry.hpp"
 #include "physics/integrator.hpp"
@@ -69,6 +70,16 @@ class World {
   int vector_width_used() const { return width_; }
   int threads_for(int n) const;  // the thread count used for n discs
   double gx = 0, gy = -980; // gravity [cm/s^2]
+  // Whether the discs are put in cell order when their order has lost its locality
+  // (disc_order.hpp; integrator.disc_order): evaluated every DiscOrderRule::kCheckEvery steps.
+  // The arrays are then in the engine's order; ids (Discs::id) keep the user's, and every output
+  // lists the discs by id.
+  DiscOrder disc_order = DiscOrder::automatic;
+  long resorts = 0;  // re-sorts so far (summary.json disc_resorts)
+  // The rule now: re-sorts when the spread is above the limit (disc_order.hpp).
+  void check_disc_order();
+  // Puts the discs in cell order now (what the rule does; public for tests).
+  void resort_discs();
 
   double time = 0;
   long steps = 0;

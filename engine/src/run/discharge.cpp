@@ -438,6 +438,10 @@ Status DischargePhase::after_step(World& w) {
       st.removed_mass += w.discs.mass(i);
     }
   if (any) {
+    // The log's rows of a step in id order (the user's), whatever the arrays' order.
+    const auto first = st.removals.end() - static_cast<std::ptrdiff_t>(dead_.sorted.size());
+    if (!w.discs.id.empty())
+      std::stable_sort(first, st.removals.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
     w.remove_discs(dead_);
     st.last_removal = t;
   }
@@ -511,8 +515,10 @@ void DischargePhase::sample(World& w, double t) {
     st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
               << fmt(P.fy) << '\n';
   int inside = 0, below = 0, moved = 0;
-  OpeningPositions::Reader open_at(st.at_open);  // in id order, the discs' order: block by block
-  for (std::size_t i = 0; i < w.discs.size(); ++i) {
+  OpeningPositions::Reader open_at(st.at_open);  // in id order (by_id): block by block
+  const std::vector<int> by_id = w.discs.by_id();
+  for (std::size_t k = 0; k < w.discs.size(); ++k) {
+    const std::size_t i = by_id.empty() ? k : static_cast<std::size_t>(by_id[k]);
     (w.discs.y[i] > f_.floor ? inside : below)++;
     double x0, y0;
     open_at.at(w.discs.id_at(i), x0, y0);

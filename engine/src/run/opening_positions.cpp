@@ -19,20 +19,22 @@ void OpeningPositions::keep(const Discs& d) {
   int max_id = -1;
   for (std::size_t i = 0; i < d.size(); ++i) max_id = std::max(max_id, d.id_at(i));
   count_ = static_cast<std::uint64_t>(max_id + 1);
-  // The discs are in increasing id order (ids are given in order, removals keep it): written in
-  // blocks, gaps as NaN, without an array of all ids in memory.
+  // Written in increasing id order, in blocks, gaps as NaN, without an array of all ids in memory.
+  // Discs in cell order (World::resort_discs) are read through their id order.
+  const std::vector<int> by_id = d.by_id();
+  const auto disc = [&](std::size_t k) { return by_id.empty() ? k : static_cast<std::size_t>(by_id[k]); };
   std::vector<double> block;
   std::size_t i = 0;
   auto fill = [&](std::uint64_t first, std::uint64_t n) {
     block.assign(2 * n, NAN);
-    for (; i < d.size() && static_cast<std::uint64_t>(d.id_at(i)) < first + n; ++i) {
-      const std::uint64_t k = static_cast<std::uint64_t>(d.id_at(i)) - first;
-      block[2 * k] = d.x[i];
-      block[2 * k + 1] = d.y[i];
+    for (; i < d.size() && static_cast<std::uint64_t>(d.id_at(disc(i))) < first + n; ++i) {
+      const std::uint64_t k = static_cast<std::uint64_t>(d.id_at(disc(i))) - first;
+      block[2 * k] = d.x[disc(i)];
+      block[2 * k + 1] = d.y[disc(i)];
     }
   };
   for (std::size_t k = 1; k < d.size(); ++k)
-    if (d.id_at(k) <= d.id_at(k - 1)) throw std::logic_error("OpeningPositions::keep: discs not in increasing id order");
+    if (d.id_at(disc(k)) <= d.id_at(disc(k - 1))) throw std::logic_error("OpeningPositions::keep: ids not distinct");
   if (path_.empty()) {
     fill(0, count_);
     xy_ = std::move(block);

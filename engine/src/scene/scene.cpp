@@ -454,6 +454,7 @@ void read_run_tables(SceneSpec& s, Tab& root) {
     const long th = t.integer("threads", 1L);
     if (th < 1 || th > kMaxThreads) t.fail("threads", std::to_string(th), "must be an integer in [1, " + std::to_string(kMaxThreads) + "]");
     s.threads = static_cast<int>(th);
+    s.disc_order = t.choice("disc_order", {"auto", "off"}, "auto") == "off" ? DiscOrder::off : DiscOrder::automatic;
     t.finish();
   }
   if (const toml::table* ct = root.table("contact", false)) {
@@ -761,6 +762,8 @@ StabilityReport set_up_world(const SceneSpec& s, World& w) {
   }
   w.neighbors.skin = s.skin;
   w.neighbors.min_cell = s.cell;
+  // The shear phase keeps each disc's row by index (ShearPhase::row_): its discs keep their order.
+  w.disc_order = s.shear_box.enabled ? DiscOrder::off : s.disc_order;
   const StabilityReport rep = stability_report(w, s.material_names, default_length(s.units, kClusterTouch));
   if (s.dt > rep.dt_bound && !s.force_dt) {
     std::ostringstream os;

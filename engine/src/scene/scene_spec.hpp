@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "physics/clusters.hpp"
+#include "physics/disc_order.hpp"
 #include "physics/geometry.hpp"
 #include "physics/model.hpp"
 #include "scene/scene_error.hpp"
@@ -59,6 +60,7 @@ struct SceneSpec {
   double dt = 0;                   // [s]
   bool force_dt = false;
   int threads = 1;                 // [integrator] threads of the force and integration loops
+  DiscOrder disc_order = DiscOrder::automatic;  // [integrator] re-sort the discs into cell order (disc_order.hpp)
   ContactOptions contact;
   std::vector<std::string> material_names;
   std::vector<double> density;     // [g/cm^3]; 0 for obstacle-only materials
