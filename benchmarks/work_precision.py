@@ -286,7 +286,6 @@ def problem_static_paper(cfg, out: Path, repeats: int) -> dict:
     scene = cs.scene_with(src, base / "scene.toml", {
         "end.time": cfg["static_duration"], "end.stop_at_rest": False,
         "fill": {"type": "file", "material": "sand", "file": "packing/discs.csv", "max_initial_overlap": 0.05}})
-    runs = {}
 
     def one(scheme, dt, tag=""):
         d = base / scheme / f"dt_{dt:g}{tag}"
@@ -795,7 +794,7 @@ def conclusion(res: dict) -> list:
     tbits = [f"{g:.1%}: onset {cs.g(tg[(ONSET, g)]['loop_s'], 2)} s, Verlet {cs.g((tg.get(('velocity_verlet', g)) or {}).get('loop_s'), 2)} s, "
              f"LIGGGHTS {cs.g((tg.get(('liggghts', g)) or {}).get('loop_s'), 2)} s ({cs.g(tg[(ONSET, g)]['liggghts_over_this'], 2)}x)"
              for g in (0.01, 0.001) if (ONSET, g) in tg]
-    out.append(f"- **velocity_verlet_onset is second order** on the collisions (shared law): measured orders in e "
+    out.append("- **velocity_verlet_onset is second order** on the collisions (shared law): measured orders in e "
                + ", ".join(on) + ". Loop time to a restitution error (disc-disc): " + ("; ".join(tbits) or "not measured")
                + ". A 2-disc collision measures per-step overhead, not the force pass: the silo panels below show "
                  "what the scheme costs and gives where many contacts persist.")

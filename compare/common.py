@@ -356,6 +356,33 @@ def failed(code: str, case: str, reason: str, **kw) -> Result:
     return Result(code=code, case=case, status="failed", reason=reason, **kw)
 
 
+def mpi_prefix(ranks: int) -> list[str]:
+    """``mpirun -np N`` before a LIGGGHTS or LAMMPS command (none for one rank)."""
+    return ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] if ranks > 1 else []
+
+
+def run_translated(be, case: "Case", out_dir: Path, log_name: str, stale: tuple, timeout: float,
+                   threads: int = 1) -> "Result":
+    """A LIGGGHTS or LAMMPS run of a case (backend module ``be``: NAME, write_inputs, command,
+    read): translate, remove the dumps of an earlier run (glob patterns ``stale``), run under
+    ``run_logged`` (``threads`` > 1: MPI ranks) and read back; never raises for a failed run."""
+    import glob
+    out_dir = Path(out_dir)
+    try:
+        script = be.write_inputs(case, out_dir, threads)
+    except CaseError as e:
+        return failed(be.NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
+    for old in (f for pattern in stale for f in glob.glob(str(out_dir / pattern))):
+        os.remove(old)
+    bad, wall = run_logged(be.NAME, case.name, be.command(script, threads), out_dir, out_dir / log_name, timeout)
+    if bad is not None:
+        return bad
+    res = be.read(case, out_dir)
+    res.wall_time_s = wall
+    res.extra["ranks"] = threads
+    return res
+
+
 def run_logged(code: str, case: str, cmd: list, out_dir: Path, log: Path, timeout: float):
     """Runs a reference program in out_dir with its output in ``log`` (one thread of OpenMP a
     rank), killing its whole process group (mpirun and ranks) after ``timeout`` seconds.

@@ -50,14 +50,14 @@ from __future__ import annotations
 
 import glob
 import math
-import os
+import sys
 import re
 import subprocess
 from pathlib import Path
 
 import numpy as np
 
-from .common import (run_logged, SHARED_VARIANT, Case, CaseError, Result, Snapshot, failed, inward_normal, kinetic_energy, outlet_y, pair,
+from .common import (mpi_prefix, run_translated, SHARED_VARIANT, Case, CaseError, Result, Snapshot, failed, inward_normal, kinetic_energy, outlet_y, pair,
                      profiles_from_contacts, tangent, write_text_atomic)
 
 NAME = "lammps"
@@ -328,29 +328,13 @@ def _script(case: Case, pls: list[dict], types: dict, wall_rows: dict | None) ->
 
 
 def command(script: Path, ranks: int = 1) -> list[str]:
-    base = ["lmp", "-echo", "none", "-log", "none", "-in", script.name]
-    if ranks > 1:
-        base = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + base
-    return base
+    return mpi_prefix(ranks) + ["lmp", "-echo", "none", "-log", "none", "-in", script.name]
 
 
 def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
     """Runs the real lmp (``threads`` > 1: MPI ranks); never raises for a failed run."""
-    out_dir = Path(out_dir)
-    try:
-        script = write_inputs(case, out_dir, threads)
-    except CaseError as e:
-        return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
-    for old in (glob.glob(str(out_dir / "wall_*.dump")) + glob.glob(str(out_dir / "discs_*.dump"))
-                + glob.glob(str(out_dir / "snap_*.dump"))):
-        os.remove(old)
-    bad, wall = run_logged(NAME, case.name, command(script, threads), out_dir, out_dir / "lammps.log", timeout)
-    if bad is not None:
-        return bad
-    res = read(case, out_dir)
-    res.wall_time_s = wall
-    res.extra["ranks"] = threads
-    return res
+    return run_translated(sys.modules[__name__], case, out_dir, "lammps.log",
+                          ("wall_*.dump", "discs_*.dump", "snap_*.dump"), timeout, threads)
 
 
 # ------------------------------------------------------------------------------------ reading

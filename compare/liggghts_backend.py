@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import glob
 import math
-import os
+import sys
 import re
 import subprocess
 from pathlib import Path
@@ -52,7 +52,7 @@ from pathlib import Path
 import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
 
-from .common import (run_logged, outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
+from .common import (mpi_prefix, run_translated, outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
                      motion_steps, moved_wall,
                      inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
 
@@ -304,29 +304,13 @@ def write_outlet_stl(out_dir: Path, xlo: float, xhi: float, y: float) -> None:
 def command(script: Path, ranks: int = 1) -> list[str]:
     # stdbuf -o0: LIGGGHTS prints its ERROR lines to the screen without flushing before MPI_Abort;
     # with stdout buffered into a file they are lost and the log ends in a bare MPI_ABORT.
-    base = ["liggghts", "-echo", "none", "-in", script.name]
-    if ranks > 1:
-        base = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + base
-    return ["stdbuf", "-o0"] + base
+    return ["stdbuf", "-o0"] + mpi_prefix(ranks) + ["liggghts", "-echo", "none", "-in", script.name]
 
 
 def run(case: Case, out_dir: Path, timeout: float = 600, threads: int = 1) -> Result:
     """Runs the real liggghts (``threads`` > 1: MPI ranks); never raises for a failed run."""
-    out_dir = Path(out_dir)
-    try:
-        script = write_inputs(case, out_dir, threads)
-    except CaseError as e:
-        return failed(NAME, case.name, f"translation: {e}", out_dir=str(out_dir))
-    for old in (glob.glob(str(out_dir / "mesh_*.vtk")) + glob.glob(str(out_dir / "discs_*.dump"))
-                + glob.glob(str(out_dir / "snap_*.vt[ur]"))):
-        os.remove(old)
-    bad, wall = run_logged(NAME, case.name, command(script, threads), out_dir, out_dir / "liggghts.log", timeout)
-    if bad is not None:
-        return bad
-    res = read(case, out_dir)
-    res.wall_time_s = wall
-    res.extra["ranks"] = threads
-    return res
+    return run_translated(sys.modules[__name__], case, out_dir, "liggghts.log",
+                          ("mesh_*.vtk", "discs_*.dump", "snap_*.vt[ur]"), timeout, threads)
 
 
 def read_polydata_vtk(path: str) -> tuple[np.ndarray, list[np.ndarray], dict]:
