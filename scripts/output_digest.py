@@ -5,7 +5,7 @@
 
 Prints one line per file: its path relative to RUN_DIR and the SHA-256 of its bytes. Timing
 fields of summary.json (wall_time_s and keys holding "seconds" or "wall_time", the thread
-count, the engine version and build) are dropped before hashing, as are files that record only
+count and what the run's thread choice measured, the engine version and build) are dropped before hashing, as are files that record only
 timings or the command line (log.txt, run.log, *.png: drawn by matplotlib, whose version may differ).
 """
 import hashlib
@@ -20,7 +20,7 @@ SKIP_NAMES = {"log.txt", "run.log"}
 def scrub(v):
     if isinstance(v, dict):
         return {k: scrub(x) for k, x in v.items()
-                if not ("seconds" in k or "wall_time" in k or k.endswith("_per_s") or k in ("threads", "version", "build", "command",
+                if not ("seconds" in k or "wall_time" in k or k.endswith("_per_s") or k in ("threads", "thread_choice", "version", "build", "command",
                                                                      "engine_version", "build_id", "resume_command"))}
     if isinstance(v, list):
         return [scrub(x) for x in v]

@@ -72,7 +72,7 @@ TEST(DiscOrder, SpreadOfRowOrderAndRandomOrder) {
   a.disc_order = b.disc_order = DiscOrder::off;
   build_world(a, rows);
   build_world(b, random);
-  EXPECT_EQ(disc_order_spread(random.neighbors.pairs, random.discs.size(), rows_of(random)), 0.0)
+  EXPECT_EQ(disc_order_spread(random.neighbors.pairs, random.discs, rows_of(random)), 0.0)
       << "the loose start has no contact: no measure";
   for (long s = 0; s < 2000; ++s) {
     rows.step();
@@ -80,16 +80,16 @@ TEST(DiscOrder, SpreadOfRowOrderAndRandomOrder) {
   }
   const long ny = rows_of(random);
   ASSERT_GT(ny, 30) << "a tall bin: many rows of cells";
-  EXPECT_LT(disc_order_spread(rows.neighbors.pairs, rows.discs.size(), rows_of(rows)), 1.0);
-  const double s = disc_order_spread(random.neighbors.pairs, random.discs.size(), ny);
+  EXPECT_LT(disc_order_spread(rows.neighbors.pairs, rows.discs, rows_of(rows)), 1.0);
+  const double s = disc_order_spread(random.neighbors.pairs, random.discs, ny);
   // k pairs in contact: a random pair's gap has mean n / 3 and standard deviation n / sqrt(18),
   // so their mean is within 4 standard errors, (4 / sqrt(2 k)) n / 3, but for 1 time in 10^4.
   long k = 0;
   for (const PairContact& p : random.neighbors.pairs) k += p.en != 0 || p.es != 0;
   ASSERT_GT(k, 5);
   EXPECT_NEAR(s, ny / 3.0, 4.0 / std::sqrt(2.0 * k) * ny / 3.0) << k << " pairs in contact";
-  EXPECT_FALSE(disc_order_degraded(rows.neighbors.pairs, rows.discs.size(), rows_of(rows)));
-  EXPECT_TRUE(disc_order_degraded(random.neighbors.pairs, random.discs.size(), ny));
+  EXPECT_FALSE(disc_order_degraded(rows.neighbors.pairs, rows.discs, rows_of(rows)));
+  EXPECT_TRUE(disc_order_degraded(random.neighbors.pairs, random.discs, ny));
   EXPECT_EQ(rows.resorts, 0);
   EXPECT_EQ(random.resorts, 0);
 }
@@ -117,12 +117,46 @@ TEST(DiscOrder, ShuffledFillIsResortedOnceAndStaysInOrder) {
   }
   EXPECT_EQ(w.resorts, 1) << "the first check with contacts finds the random order, once";
   EXPECT_EQ(lattice.resorts, 0) << "a row-by-row fill is never re-sorted";
-  EXPECT_LE(disc_order_spread(w.neighbors.pairs, w.discs.size(), rows_of(w)), 1.0);
+  EXPECT_LE(disc_order_spread(w.neighbors.pairs, w.discs, rows_of(w)), 1.0);
   // The ids are the user's indices, each once.
   std::vector<int> ids(w.discs.id.begin(), w.discs.id.end());
   std::sort(ids.begin(), ids.end());
   ASSERT_EQ(ids.size(), w.discs.size());
   for (std::size_t k = 0; k < ids.size(); ++k) ASSERT_EQ(ids[k], static_cast<int>(k));
+}
+
+TEST(DiscOrder, FilePackingIsResortedAtStepZero) {
+  // A dense packing read from a file in a random order, run with the paper's law: its discs
+  // overlap (a triangular lattice of spacing 0.99 d, 14 discs a row in the 15 cm bin) but its
+  // incremental springs start without history. The rule counts the pairs that overlap, so the
+  // first step re-sorts them; a rule that counted the pairs with history would see none until
+  // the springs had grown, at the check of step 256.
+  SceneSpec spec = janssen();
+  const double r = 0.5, a = 0.99 * 2 * r;
+  for (std::size_t k = 0; k < spec.discs.size(); ++k) {
+    const long row = static_cast<long>(k / 14), col = static_cast<long>(k % 14);
+    spec.discs[k].r = r;
+    spec.discs[k].x = r + (static_cast<double>(col) + 0.5 * static_cast<double>(row % 2)) * a;
+    spec.discs[k].y = r + static_cast<double>(row) * a * std::sqrt(3.0) / 2;
+  }
+  spec = shuffled(spec);
+  spec.max_initial_overlap = 0.4;
+  spec.scheme = Scheme::paper_eq19;
+  spec.dt = 5e-5;
+  spec.contact.normal_spring = NormalSpring::incremental;
+  World w;
+  build_world(spec, w);
+  long overlapping = 0, with_history = 0;
+  for (const PairContact& p : w.neighbors.pairs) {
+    const double dx = w.discs.x[p.j] - w.discs.x[p.i], dy = w.discs.y[p.j] - w.discs.y[p.i];
+    overlapping += std::hypot(dx, dy) <= w.discs.r(p.i) + w.discs.r(p.j);
+    with_history += p.en != 0 || p.es != 0;
+  }
+  ASSERT_GT(overlapping, 1000) << "the settled packing rests on its overlaps";
+  ASSERT_EQ(with_history, 0) << "the paper's springs start at zero";
+  w.step();
+  EXPECT_EQ(w.resorts, 1) << "re-sorted at step 0";
+  EXPECT_LE(disc_order_spread(w.neighbors.pairs, w.discs, rows_of(w)), 1.0);
 }
 
 TEST(DiscOrder, SamePhysicsAsTheUserOrderToRoundOff) {

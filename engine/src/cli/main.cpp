@@ -128,13 +128,14 @@ int bad(const std::string& msg) {
 }
 
 // How libgomp's threads wait at a barrier. It reads OMP_WAIT_POLICY and GOMP_SPINCOUNT once, when
-// it is loaded, before main; unset, a thread spins 300000 times (milliseconds) before it sleeps,
-// and with other processes on the cores the spinning thread holds the core its partner needs: 2
-// threads ran 4-15x slower than 1. kSpinCount spins (microseconds) and then sleep, as
-// OMP_WAIT_POLICY=passive does at once; 1000 and 10000 spins were slower on a busy machine
+// it is loaded, before main; unset, a thread spins 300000 times (milliseconds) before it sleeps.
+// On a quiet machine spinning pays: a partner woken from sleep at each of a step's barriers makes
+// 2 threads slower than 1 at 10k discs. Beside another busy process the spinning thread holds
+// the core its partner needs; there the run's thread choice (run/thread_choice.hpp) drops to one
+// thread, and kSpinCount spins (about 0.4 ms) bound what its probes of 2 threads cost
 // (benchmarks/README.md, "Threads on a busy machine"). Unless the user set either variable, dem
 // sets GOMP_SPINCOUNT and runs itself again, once, before anything else.
-constexpr const char* kSpinCount = "100";
+constexpr const char* kSpinCount = "20000";
 void bound_barrier_spinning(char** argv) {
 #ifdef _OPENMP
   if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;

@@ -54,7 +54,10 @@ std::string run_header(const SceneSpec& s, const World& w, const StabilityReport
               to_string(s.units), u.length, u.density, u.force, u.energy);
   h += format("  scheme %s, dt = %.4g s%s, end time %g s%s, threads %d%s\n", to_string(w.scheme), w.dt,
               s.force_dt ? " (forced)" : "", s.end_time, s.stop_at_rest ? " or rest" : "", w.threads,
-              w.threads > 1 ? (" (barriers: " + barrier_wait() + ")").c_str() : "");
+              w.threads > 1 ? (std::string(" (barriers: ") + barrier_wait() +
+                               (s.thread_choice ? "; or 1, whichever is faster now: integrator.thread_choice" : "") + ")")
+                                  .c_str()
+                            : "");
   h += format("  contact: normal_spring %s, no_tension %s, friction_cap %s, lever_arm %s\n",
               to_string(w.options.normal_spring), to_string(w.options.no_tension), to_string(w.options.friction_cap),
               to_string(w.options.lever_arm));

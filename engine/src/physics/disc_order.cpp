@@ -49,22 +49,25 @@ std::vector<int> cell_order(const Discs& d, const OrderGrid& g) {
   return order;
 }
 
-double disc_order_spread(const std::vector<PairContact>& pairs, std::size_t n, long rows) {
+double disc_order_spread(const std::vector<PairContact>& pairs, const Discs& d, long rows) {
+  const std::size_t n = d.size();
   if (n == 0 || rows <= 0) return 0;
   // Integer sums: exact, the same in any order.
   long long gap = 0, count = 0;
-  for (const PairContact& p : pairs)
-    if (p.en != 0 || p.es != 0) {
-      gap += p.j - p.i;
+  for (const PairContact& p : pairs) {
+    const double dx = d.x[p.j] - d.x[p.i], dy = d.y[p.j] - d.y[p.i], sum = d.r(p.i) + d.r(p.j);
+    if (dx * dx + dy * dy <= sum * sum) {  // (3): overlapping
+      gap += p.j > p.i ? p.j - p.i : p.i - p.j;
       ++count;
     }
+  }
   if (count == 0) return 0;
   const double mean = static_cast<double>(gap) / static_cast<double>(count);
   return mean * static_cast<double>(rows) / static_cast<double>(n);
 }
 
-bool disc_order_degraded(const std::vector<PairContact>& pairs, std::size_t n, long rows) {
-  return n >= DiscOrderRule::kMinDiscs && disc_order_spread(pairs, n, rows) > DiscOrderRule::kMaxSpread;
+bool disc_order_degraded(const std::vector<PairContact>& pairs, const Discs& d, long rows) {
+  return d.size() >= DiscOrderRule::kMinDiscs && disc_order_spread(pairs, d, rows) > DiscOrderRule::kMaxSpread;
 }
 
 const char* to_string(DiscOrder o) { return o == DiscOrder::off ? "off" : "auto"; }

@@ -4,14 +4,15 @@
 // file fill of any order) they miss: 2.7x the time a step at 100k settled discs
 // (benchmarks/README.md, "Disc order").
 //
-// The measure is the mean index gap j - i (i < j) of the pairs in contact (non-zero history), in
-// units of the discs of one row of cells (n / rows): the spread. A lattice filled row by row and
+// The measure is the mean index gap j - i (i < j) of the pairs in contact, in units of the discs
+// of one row of cells (n / rows): the spread. A pair is in contact when its discs overlap now
+// (the test of eq. 3), not when it has a history: a packing read from a file starts with
+// overlaps and no history, and is measured, and re-sorted, at step 0. A lattice filled row by row and
 // the cell order both have a spread under 1 (a disc's partners are in its row of cells or the
 // next, that row's discs further on); a random order has about rows / 3 (a random pair's gap is
 // (n + 1) / 3). The rule reads only what every run of the world has at that step, whatever its
 // thread count and whether it was resumed from a state file (whose lists are built again at
-// the restart, with other candidates but the same history): the positions and the pairs in
-// contact. It is evaluated every kCheckEvery steps, at the start of the step, so the re-sorts
+// the restart, with other candidates): the positions, and of the candidates those that overlap. It is evaluated every kCheckEvery steps, at the start of the step, so the re-sorts
 // come at the same steps in all of them.
 #pragma once
 
@@ -56,10 +57,11 @@ OrderGrid order_grid(const Discs& d, double skin, double min_cell);
 // order[s] is the disc to put at index s.
 std::vector<int> cell_order(const Discs& d, const OrderGrid& g);
 
-// The spread of the pairs in contact over n discs in `rows` rows of cells (0 without such pairs).
-double disc_order_spread(const std::vector<PairContact>& pairs, std::size_t n, long rows);
+// The spread of the candidate pairs whose discs overlap, over the discs in `rows` rows of cells
+// (0 without such pairs).
+double disc_order_spread(const std::vector<PairContact>& pairs, const Discs& d, long rows);
 // Whether the discs should be put in cell order now.
-bool disc_order_degraded(const std::vector<PairContact>& pairs, std::size_t n, long rows);
+bool disc_order_degraded(const std::vector<PairContact>& pairs, const Discs& d, long rows);
 
 const char* to_string(DiscOrder o);
 

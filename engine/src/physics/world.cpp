@@ -36,7 +36,8 @@ void World::set_vector_width(int width) {
 }
 
 int World::threads_for(int n) const {
-  return std::max(1, std::min(threads, n / kMinDiscsPerThread));
+  const int t = threads_allowed > 0 ? std::min(threads, threads_allowed) : threads;
+  return std::max(1, std::min(t, n / kMinDiscsPerThread));
 }
 
 struct World::ForceBlock {

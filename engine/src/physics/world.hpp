@@ -60,6 +60,8 @@ class World {
   // Scenes with bonds or moving walls, and worlds under kMinDiscsPerThread discs a thread, run
   // serial.
   int threads = 1;
+  // At most this many of them now (a run's thread choice, run/thread_choice.hpp); 0: threads.
+  int threads_allowed = 0;
   static constexpr int kMinDiscsPerThread = 2048;
   // Doubles a vector in the pair law and the integration loops: 8 (AVX-512), 4 (AVX2) or 2
   // (SSE2), the widest the processor has (cpu_vector_width), chosen once at start-up; the same

@@ -13,7 +13,7 @@ namespace dem {
 void World::check_disc_order() {
   if (disc_order != DiscOrder::automatic || discs.size() < DiscOrderRule::kMinDiscs) return;
   const OrderGrid g = order_grid(discs, neighbors.skin, neighbors.min_cell);
-  if (disc_order_degraded(neighbors.pairs, discs.size(), g.ny)) resort_discs();
+  if (disc_order_degraded(neighbors.pairs, discs, g.ny)) resort_discs();
 }
 
 void World::resort_discs() {

@@ -77,6 +77,10 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     guard.energy.start(w, spec_.max_energy_gain);  // after begin: a discharge's budget starts with the gate open
     record.phase_start(w, phase.name());
   }
+  if (!choice_started_) {  // once a run (its phases share the measurements)
+    thread_choice.start(w, spec_.thread_choice);
+    choice_started_ = true;
+  }
   phase_start_ = Clock::now();
   run_start_ = wall_seconds;
   running_ = true;
@@ -89,7 +93,9 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
   while (status == Status::running) {
     phase.before_step(w, stopping);
     if (record.snapshot_due(w.steps + 1)) w.record_pair_forces = true;  // the snapshot's contact totals
+    const auto t_step = Clock::now();
     w.step();
+    thread_choice.after_step(w, seconds_since(t_step));
     if (std::string why = check(w, phase); !why.empty()) {
       reason = why;
       status = Status::unstable;

@@ -12,6 +12,7 @@
 #include "run/phase.hpp"
 #include "run/recorder.hpp"
 #include "run/status.hpp"
+#include "run/thread_choice.hpp"
 
 namespace dem {
 
@@ -42,6 +43,7 @@ class Runner {
   std::function<void(const Phase&)> write_checkpoint; // called at that cadence and on a stop
 
   LastGood last_good;        // kept every kKeepEvery steps after a check passed
+  ThreadChoice thread_choice;  // the threads each step runs with (integrator.thread_choice)
   Guard guard;
   double wall_seconds = 0;   // [s] of stepping, every phase and every process of the run
   std::string reason;        // why the run is unstable
@@ -54,6 +56,7 @@ class Runner {
   const SceneSpec& spec_;
   double run_start_ = 0;     // wall_seconds when the current phase's loop started
   bool running_ = false;
+  bool choice_started_ = false;
   std::chrono::steady_clock::time_point phase_start_;
 };
 

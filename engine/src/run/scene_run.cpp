@@ -97,6 +97,9 @@ RunSummary SceneRun::summary(nlohmann::ordered_json& extra) {
   s.mean_abs_du = fill.rest.mean_abs_du;
   s.mean_abs_dv = fill.rest.mean_abs_dv;
   s.wall_seconds = runner.wall_seconds;
+  const ThreadChoice& tc = runner.thread_choice;
+  extra["thread_choice"] = {{"mode", tc.enabled() ? "auto" : "off"}, {"probes", tc.probes},
+                            {"steps_one_thread", tc.steps_at[0]}, {"steps_threads", tc.steps_at[1]}};
   if (s.unstable && runner.last_good.has()) {
     good_ = runner.last_good.load();
     s.good = &good_;

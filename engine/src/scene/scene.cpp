@@ -455,6 +455,7 @@ void read_run_tables(SceneSpec& s, Tab& root) {
     if (th < 1 || th > kMaxThreads) t.fail("threads", std::to_string(th), "must be an integer in [1, " + std::to_string(kMaxThreads) + "]");
     s.threads = static_cast<int>(th);
     s.disc_order = t.choice("disc_order", {"auto", "off"}, "auto") == "off" ? DiscOrder::off : DiscOrder::automatic;
+    s.thread_choice = t.choice("thread_choice", {"auto", "off"}, "auto") == "auto";
     t.finish();
   }
   if (const toml::table* ct = root.table("contact", false)) {

@@ -60,6 +60,7 @@ struct SceneSpec {
   double dt = 0;                   // [s]
   bool force_dt = false;
   int threads = 1;                 // [integrator] threads of the force and integration loops
+  bool thread_choice = true;       // [integrator] thread_choice = "auto": a run steps with the faster of threads and 1 (run/thread_choice.hpp)
   DiscOrder disc_order = DiscOrder::automatic;  // [integrator] re-sort the discs into cell order (disc_order.hpp)
   ContactOptions contact;
   std::vector<std::string> material_names;

@@ -1,0 +1,89 @@
+#include "run/thread_choice.hpp"
+
+#include <algorithm>
+
+#include "physics/world.hpp"
+
+namespace dem {
+
+double ThreadChoice::median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+void ThreadChoice::start(World& w, bool enabled) {
+  asked_ = w.threads;
+  enabled_ = enabled && asked_ > 1;
+  w.threads_allowed = 0;  // the scene's count, until a probe says otherwise
+  state_ = State::wait;
+  waited_ = 0;
+}
+
+void ThreadChoice::begin_probe(World& w) {
+  state_ = State::settle_many;
+  window_.clear();
+  window_s_ = 0;
+  probe_s_ = 0;
+  w.threads_allowed = asked_;
+}
+
+void ThreadChoice::decide(World& w) {
+  ++probes;
+  const bool many = probe_many_ < kGain * probe_one_;
+  hold_ = probes > 1 && many == many_ ? std::min(2 * hold_, kHoldMax) : kHoldFirst;
+  many_ = many;
+  w.threads_allowed = many ? asked_ : 1;
+  held_ = 0;
+  recent_.clear();
+  recent_at_ = 0;
+  state_ = State::hold;
+}
+
+void ThreadChoice::after_step(World& w, double seconds) {
+  const int n = static_cast<int>(w.discs.size());
+  ++steps_at[w.threads_for(n) > 1 ? 1 : 0];
+  if (!enabled_) return;
+  const double per_disc = seconds / std::max(n, 1);  // a discharge loses discs as it goes
+  if (state_ == State::wait) {
+    if (++waited_ >= kFirstProbeAfter) begin_probe(w);
+    return;
+  }
+  if (state_ == State::hold) {
+    held_ += seconds;
+    if (many_) {  // the last kWindow steps, against the probe's
+      if (recent_.size() < static_cast<std::size_t>(kWindow)) recent_.push_back(per_disc);
+      else recent_[recent_at_++ % kWindow] = per_disc;
+      if (recent_.size() == static_cast<std::size_t>(kWindow) && median(recent_) > kSlower * probe_many_)
+        return begin_probe(w);
+    }
+    if (held_ >= std::max(hold_, kHoldProbes * probe_s_)) begin_probe(w);
+    return;
+  }
+  probe_s_ += seconds;
+  window_s_ += seconds;
+  switch (state_) {
+    case State::settle_many: state_ = State::many; window_s_ = 0; return;
+    case State::settle_one: state_ = State::one; window_s_ = 0; return;
+    case State::many:
+      window_.push_back(per_disc);
+      if (!window_full()) return;
+      probe_many_ = median(window_);
+      window_.clear();
+      window_s_ = 0;
+      state_ = State::settle_one;
+      w.threads_allowed = 1;
+      return;
+    case State::one:
+      window_.push_back(per_disc);
+      if (!window_full()) return;
+      probe_one_ = median(window_);
+      window_.clear();
+      window_s_ = 0;
+      return decide(w);
+    case State::wait:
+    case State::hold: return;
+  }
+}
+
+}  // namespace dem

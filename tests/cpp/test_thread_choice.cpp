@@ -1,0 +1,105 @@
+// The run's thread choice (run/thread_choice.hpp), fed step times made up here: it keeps the
+// scene's threads when they are faster, drops to one thread when they are slower, probes again
+// when its hold is over, and at once when the threads it holds slow down.
+#include <gtest/gtest.h>
+
+#include <functional>
+
+#include "physics/world.hpp"
+#include "run/thread_choice.hpp"
+
+using namespace dem;
+
+namespace {
+
+// A world of n discs asking for `threads`: the choice reads its size and its thread count only.
+World world_of(int n, int threads) {
+  World w;
+  for (int i = 0; i < n; ++i) w.discs.add(2.5 * i, 0.0, 1.0, 1.0, 0);
+  w.threads = threads;
+  return w;
+}
+
+// Steps with the made-up time t(threads the step ran with) [s], as the runner does.
+void run_steps(World& w, ThreadChoice& c, long steps, const std::function<double(int)>& t) {
+  for (long s = 0; s < steps; ++s) {
+    const int nt = w.threads_for(static_cast<int>(w.discs.size()));
+    ++w.steps;
+    c.after_step(w, t(nt));
+  }
+}
+
+constexpr int kDiscs = 3 * World::kMinDiscsPerThread;  // enough for 2 threads
+
+}  // namespace
+
+TEST(ThreadChoice, KeepsTheThreadsWhenTheyAreFaster) {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 2000, [](int nt) { return nt == 2 ? 0.006 : 0.010; });  // 1.67x
+  EXPECT_GE(c.probes, 1);
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  // The probes' one-thread windows are all the steps of one thread: a few per cent.
+  EXPECT_LT(c.steps_at[0], 0.05 * 2000) << c.steps_at[0] << " steps of one thread";
+}
+
+TEST(ThreadChoice, DropsToOneThreadWhenTheThreadsAreSlower) {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 2000, [](int nt) { return nt == 2 ? 0.020 : 0.010; });  // a busy neighbour: 2x slower
+  EXPECT_EQ(w.threads_for(kDiscs), 1);
+  // Before the first probe (72 steps) and in its two-thread windows: the rest is one thread.
+  EXPECT_GT(c.steps_at[0], 0.9 * 2000) << c.steps_at[1] << " steps of two threads";
+}
+
+TEST(ThreadChoice, AlikeIsOneThread) {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 500, [](int nt) { return nt == 2 ? 0.0098 : 0.010; });  // 2 % faster: below kGain
+  EXPECT_EQ(w.threads_for(kDiscs), 1);
+}
+
+TEST(ThreadChoice, ProbesAgainWhenTheThreadsSlowDown) {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 300, [](int nt) { return nt == 2 ? 0.006 : 0.010; });
+  ASSERT_EQ(w.threads_for(kDiscs), 2);
+  const long probes = c.probes;
+  // A neighbour takes a core: two threads now take 0.030 s a step. Far within the hold
+  // (0.5 s and more), the last kWindow steps' median sets off a probe, which drops to one thread.
+  run_steps(w, c, 40, [](int nt) { return nt == 2 ? 0.030 : 0.010; });
+  EXPECT_EQ(c.probes, probes + 1);
+  EXPECT_EQ(w.threads_for(kDiscs), 1);
+}
+
+TEST(ThreadChoice, ProbesAgainAfterItsHoldAndReturnsToTheThreads) {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 300, [](int nt) { return nt == 2 ? 0.020 : 0.010; });
+  ASSERT_EQ(w.threads_for(kDiscs), 1);
+  // The neighbour has gone: the next probe, after the hold (32 probes' time, 8.6 s of these
+  // steps), finds two threads faster.
+  run_steps(w, c, 1500, [](int nt) { return nt == 2 ? 0.006 : 0.010; });
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+}
+
+TEST(ThreadChoice, OffOrOneThreadChoosesNothing) {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice off;
+  off.start(w, false);
+  run_steps(w, off, 300, [](int nt) { return nt == 2 ? 0.020 : 0.010; });
+  EXPECT_EQ(off.probes, 0);
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  EXPECT_EQ(off.steps_at[1], 300);
+  World one = world_of(kDiscs, 1);
+  ThreadChoice c;
+  c.start(one, true);
+  run_steps(one, c, 300, [](int) { return 0.01; });
+  EXPECT_FALSE(c.enabled());
+  EXPECT_EQ(c.probes, 0);
+}
