@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import time
@@ -48,6 +49,29 @@ def engine_version() -> str:
     p = subprocess.run([dem(), "--help"], capture_output=True, text=True)
     line = (p.stdout or p.stderr or "dem").splitlines()[0]
     return line.split(" - ")[0].strip()
+
+
+# A LIGGGHTS or LAMMPS log: a line for each `run`, and after it the timing breakdown whose Output
+# row (min | avg | max) is the writing of dumps and thermo within that loop.
+LOOP_LINE = re.compile(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms")
+OUTPUT_ROW = re.compile(r"^Output\s*\|\s*[\d.eE+-]+\s*\|\s*([\d.eE+-]+)", re.M)
+
+
+def loop_times(text: str, n0: int | None = None) -> dict:
+    """What a LIGGGHTS or LAMMPS log says of its runs, summed over them: `loop_s` the loop time less
+    its output (the average over ranks of the Output row), `output_s`, `steps`, `runs`, and
+    `particle_steps`: each run's steps x the mean of its atoms at its start and end (a discharge
+    loses atoms; the first run starts with n0 atoms, or its end's count when n0 is None)."""
+    loops = LOOP_LINE.findall(text)
+    outs = [float(x) for x in OUTPUT_ROW.findall(text)]
+    ps, before = 0.0, n0
+    for _t, _procs, steps, atoms in loops:
+        start = int(atoms) if before is None else before
+        ps += int(steps) * 0.5 * (start + int(atoms))
+        before = int(atoms)
+    total = sum(float(t) for t, *_ in loops)
+    return {"loop_s": total - sum(outs), "output_s": sum(outs), "steps": sum(int(s) for _, _, s, _ in loops),
+            "runs": len(loops), "particle_steps": ps}
 
 
 # A run counts as at rest (not blown up, not self-excited) when its kinetic energy at the end is

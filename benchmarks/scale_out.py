@@ -46,6 +46,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import common_study  # noqa: E402
 from compare import scene_toml  # noqa: E402
 from compare.run_dir import RunDir  # noqa: E402
 
@@ -125,10 +126,8 @@ class PeakSampler(threading.Thread):
 
 def loop_seconds(log: Path) -> tuple[float, float]:
     """(loop time less output, output) summed over a LIGGGHTS/LAMMPS log's runs."""
-    text = log.read_text(errors="replace")
-    loops = [float(x) for x in re.findall(r"Loop time of ([\d.eE+-]+) on", text)]
-    outs = [float(x) for x in re.findall(r"^Output\s*\|\s*[\d.eE+-]+\s*\|\s*([\d.eE+-]+)", text, re.M)]
-    return sum(loops) - sum(outs), sum(outs)
+    t = common_study.loop_times(log.read_text(errors="replace"))
+    return t["loop_s"], t["output_s"]
 
 
 def run_reference(code: str, ranks: int, scene: Path, d: Path, dem: str) -> dict:

@@ -1,5 +1,5 @@
 """Speed benchmark: particle-steps per second and peak memory of the native
-engine, LIGGGHTS and YADE on the same silo scenes, settling then discharging, in one run.
+engine, LIGGGHTS, LAMMPS and YADE on the same silo scenes, settling then discharging, in one run.
 
     /usr/bin/python3 benchmarks/speed.py --out out/speed            # all sizes (~30-40 min)
     /usr/bin/python3 benchmarks/speed.py --out out/speed --quick    # 350 and 10k discs (~5 min)
@@ -8,8 +8,8 @@ Method (benchmarks/README.md): every (scene, code, threads) run is a fresh proce
 --repeats times in an interleaved order (so slow drift of the machine hits all codes alike);
 the table gives the median and the spread (min-max) of microseconds per particle-step, where a
 particle-step is one disc advanced by one step and the time is the code's own stepping time
-(native: summary.json wall_time_s, the step loop only; LIGGGHTS: "Loop time" minus its Output
-share; YADE: the time spent in O.run). Setup (reading the scene, building the lattice) and the
+(native: summary.json wall_time_s, the step loop only; LIGGGHTS and LAMMPS: the "Loop time" of
+each run (settling, discharge) minus its Output share; YADE: the time spent in O.run). Setup (reading the scene, building the lattice) and the
 writing of final outputs are excluded for every code. Peak memory is the peak resident set size
 of the run's process (for mpirun: the largest rank), measured by GNU time (/usr/bin/time, Debian
 package `time`) around the run, reported as bytes per disc.
@@ -26,7 +26,7 @@ settled start is the dense packing a silo study spends its time in. --start shuf
 settled packing written as a file fill in a seeded random order (SHUFFLE_SEED): a user's file
 in any order, the case of the engine's disc re-sort (benchmarks/README.md, "Disc order").
 
-Physics: LIGGGHTS and YADE run the law all three codes share (compare/common.py SHARED_VARIANT,
+Physics: LIGGGHTS, LAMMPS (gran/hooke/history) and YADE run the law the codes share (compare/common.py SHARED_VARIANT,
 velocity Verlet) at dt = 5e-5 s (Verlet is unstable at the paper's 1e-4 s); the native engine runs
 that same case (the comparison rows) and, as its own row, the paper's law with eq. (19) at 1e-4 s.
 """
@@ -36,7 +36,6 @@ import argparse
 import json
 import os
 import platform
-import re
 import resource
 import statistics
 import subprocess
@@ -46,7 +45,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import common_study  # noqa: E402
 from compare import scene_toml  # noqa: E402
 from compare.run_dir import RunDir  # noqa: E402
 
@@ -147,25 +148,31 @@ def _case(args):
     return c
 
 
-def _liggghts(args) -> dict:
-    from compare import liggghts_backend as lb
+def _reference(args, backend, log_name: str) -> dict:
+    """A LIGGGHTS or LAMMPS run of the case (args.threads MPI ranks), timed by its own log."""
     case = _case(args)
     out = Path(args.dir)
-    script = lb.write_inputs(case, out, args.threads)
-    log = out / "liggghts.log"
+    script = backend.write_inputs(case, out, args.threads)
+    log = out / log_name
     with open(log, "w") as f:
-        p = subprocess.run(measured(args) + lb.command(script, args.threads), cwd=out, stdout=f, stderr=subprocess.STDOUT,
-                           env=dict(os.environ, OMP_NUM_THREADS="1"))
+        p = subprocess.run(measured(args) + backend.command(script, args.threads), cwd=out, stdout=f,
+                           stderr=subprocess.STDOUT, env=dict(os.environ, OMP_NUM_THREADS="1"))
     text = log.read_text(errors="replace")
-    m = re.search(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
-    if p.returncode != 0 or not m:
-        return {"error": f"liggghts exit {p.returncode}: " + " | ".join(text.strip().splitlines()[-3:])}
-    loop, steps, atoms_end = float(m.group(1)), int(m.group(3)), int(m.group(4))
-    o = re.search(r"^Output\s*\|\s*[\d.eE+-]+\s*\|\s*([\d.eE+-]+)\s*\|\s*([\d.eE+-]+)", text, re.M)
-    out_s = float(o.group(2)) if o else 0.0  # the average over ranks of the Output time
-    n0 = len(case.discs)
-    return {"loop_s": loop - out_s, "output_s": out_s, "particle_steps": steps * 0.5 * (n0 + atoms_end),
-            "steps": steps, "status": "ok"}
+    t = common_study.loop_times(text, len(case.discs))
+    if p.returncode != 0 or not t["runs"]:
+        return {"error": f"{backend.__name__} exit {p.returncode}: " + " | ".join(text.strip().splitlines()[-3:])}
+    return {"loop_s": t["loop_s"], "output_s": t["output_s"], "particle_steps": t["particle_steps"],
+            "steps": t["steps"], "status": "ok"}
+
+
+def _liggghts(args) -> dict:
+    from compare import liggghts_backend
+    return _reference(args, liggghts_backend, "liggghts.log")
+
+
+def _lammps(args) -> dict:
+    from compare import lammps_backend
+    return _reference(args, lammps_backend, "lammps.log")
 
 
 def _yade(args) -> dict:
@@ -191,7 +198,7 @@ def measured(args) -> list[str]:
 
 def worker(args) -> None:
     t0 = time.monotonic()
-    fn = {"native": _native, "liggghts": _liggghts, "yade": _yade}[args.code]
+    fn = {"native": _native, "liggghts": _liggghts, "lammps": _lammps, "yade": _yade}[args.code]
     try:
         rec = fn(args)
     except Exception as e:  # noqa: BLE001 - reported as a failed point, never a crash of the study
@@ -213,7 +220,7 @@ def worker(args) -> None:
 # and logs that say how it ran. The rest (disc, contact and snapshot files, dumps, the case's copy
 # of the packing) is some 0.5 GB a point at 1M discs, 17 GB for two studies; --keep-runs keeps it.
 KEEP_SUFFIXES = {".json", ".log", ".toml", ".py", ".md"}
-KEEP_NAMES = {"peak_rss_kb", "in.liggghts", "log.liggghts"}
+KEEP_NAMES = {"peak_rss_kb", "in.liggghts", "log.liggghts", "in.lammps"}
 
 
 def prune_run(d: Path) -> int:
@@ -280,8 +287,9 @@ def write_report(out, table, meta):
                 return t
         return None
 
-    L = ["# Speed benchmark: native engine, LIGGGHTS, YADE", "",
-         f"Machine: {meta['machine']}; {meta['cpus']} CPUs; LIGGGHTS {meta['liggghts']}, YADE {meta['yade']}, "
+    L = ["# Speed benchmark: native engine, LIGGGHTS, LAMMPS, YADE", "",
+         f"Machine: {meta['machine']}; {meta['cpus']} CPUs; LIGGGHTS {meta['liggghts']}, LAMMPS {meta['lammps']}, "
+         f"YADE {meta['yade']}, "
          f"dem {meta['dem_version']}. {meta['repeats']} repeats per point, interleaved; run "
          f"{meta['started']} ({meta['elapsed_s']:.0f} s).", "",
          ("Scenes start from packings settled before the study (--start settled): dense, about two contacts a disc."
@@ -293,12 +301,12 @@ def write_report(out, table, meta):
          "peak resident set of the process (the largest rank for mpirun) per disc. `shared` rows: the law all",
          f"codes share with velocity Verlet at dt = {DT_SHARED:g} s; `paper` row: native, the paper's law and eq. (19) at",
          f"dt = {DT_PAPER:g} s. Ratios are code / native (shared law, same thread count: 1 thread against serial",
-         "LIGGGHTS / YADE -j1, 2 threads against mpirun -np 2 / YADE -j2).", "",
+         "LIGGGHTS / LAMMPS / YADE -j1, 2 threads against mpirun -np 2 / YADE -j2).", "",
          "| discs | code | law | threads | us / particle-step | spread | ratio to native | bytes / disc | runs ok |",
          "|---|---|---|---|---|---|---|---|---|"]
     for size in meta["sizes"]:
         for code, scheme in (("native", "paper_eq19"), ("native", "shared_verlet"), ("liggghts", "shared_verlet"),
-                             ("yade", "shared_verlet")):
+                             ("lammps", "shared_verlet"), ("yade", "shared_verlet")):
             for th in (1, 2):
                 t = find(size, code, scheme, th)
                 if not t:
@@ -375,7 +383,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="out/speed")
     ap.add_argument("--sizes", default="350,10k,100k,1m")
-    ap.add_argument("--codes", default="native,liggghts,yade")
+    ap.add_argument("--codes", default="native,liggghts,lammps,yade")
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="350 and 10k discs only")
@@ -433,7 +441,7 @@ def main() -> int:
                 points.append(("native", size, th, None, None))
                 # the paper's law at its own dt: half the steps cover the same simulated time
                 points.append(("native", size, th, "paper_eq19", DT_PAPER))
-            for code in ("liggghts", "yade"):
+            for code in ("liggghts", "lammps", "yade"):
                 if code in codes:
                     points.append((code, size, th, None, None))
     records = []
@@ -455,6 +463,7 @@ def main() -> int:
     meta = {"machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
             "liggghts": version_of(["liggghts", "-h"]) if "liggghts" in codes else "-",
             "yade": version_of(["yade", "--version"]) if "yade" in codes else "-",
+            "lammps": version_of(["lmp", "-h"]) if "lammps" in codes else "-",
             "dem_version": "git " + version_of(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]), "repeats": args.repeats, "sizes": sizes,
             "started": time.strftime("%Y-%m-%d %H:%M"), "start": args.start, "elapsed_s": time.monotonic() - t0, "ceiling": ceiling}
     (out / "results.json").write_text(json.dumps({"meta": meta, "table": table, "records": records}, indent=1))
