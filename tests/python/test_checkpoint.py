@@ -26,7 +26,8 @@ FILL_FILES = ["discs.csv", "contacts.csv", "wall_profiles.csv", "discs.vtu", "co
 DISCHARGE_FILES = FILL_FILES + ["removals.csv", "flow_series.csv", "wall_series.csv", "wall_totals_series.csv",
                                 "discharge_discs.pvd", "discharge_contacts.pvd", "snapshots.pvd"]
 SHEAR_FILES = FILL_FILES + ["shear_series.csv", "shear_planes.csv", "snapshots/index.json", "snapshots.pvd"]
-TIMING = ("wall_time_s", "particle_steps_per_s", "command")  # and the command line, which --resume changes
+TIMING = ("wall_time_s", "particle_steps_per_s", "command", "thread_choice")  # the command line: --resume changes it;
+# thread_choice: what this process measured and chose (timings)
 
 
 def dem(dem_binary, *args, **kw):

@@ -74,7 +74,7 @@ def test_thread_choice_in_summary(dem_binary, tmp_path):
     for choice in ("auto", "off"):
         out = tmp_path / choice
         p = subprocess.run([str(dem_binary), "run", str(BASE), "--out", str(out), "--threads", "2", "--quiet",
-                            "--end-time", "0.05", "--set", f"integrator.thread_choice={choice}"],
+                            "--end-time", "0.2", "--set", f"integrator.thread_choice={choice}"],
                            capture_output=True, text=True, timeout=300)
         assert p.returncode == 0, p.stderr
         s = json.loads((out / "summary.json").read_text())
