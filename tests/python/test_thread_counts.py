@@ -51,14 +51,12 @@ def test_one_two_three_threads_same_bytes(scene, scheme, run_dem, tmp_path):
         assert not differ, f"{threads} threads: {differ}"
 
 
-@pytest.mark.parametrize("env, shown", [({}, "GOMP_SPINCOUNT=20000"),
+@pytest.mark.parametrize("env, shown", [({}, "libgomp's default"),
                                         ({"OMP_WAIT_POLICY": "active"}, "OMP_WAIT_POLICY=active"),
                                         ({"GOMP_SPINCOUNT": "7"}, "GOMP_SPINCOUNT=7")],
-                         ids=["unset", "policy_kept", "spincount_kept"])
-def test_barrier_wait_bounded_unless_chosen(dem_binary, tmp_path, env, shown):
-    """libgomp reads its wait setting at load: dem sets GOMP_SPINCOUNT and runs itself again
-    when the user set neither variable (main.cpp, bound_barrier_spinning); the header says what
-    the threads run with."""
+                         ids=["unset", "policy", "spincount"])
+def test_header_says_how_threads_wait(dem_binary, tmp_path, env, shown):
+    """The header says how the threads wait at a barrier: libgomp's default, or what the user set."""
     import os
     clean = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
     p = subprocess.run([str(dem_binary), "run", str(BASE), "--out", str(tmp_path / "run"), "--threads", "2",
@@ -84,4 +82,4 @@ def test_thread_choice_in_summary(dem_binary, tmp_path):
         if choice == "off":
             assert tc["steps_threads"] == s["steps"] and tc["probes"] == 0, tc
         else:
-            assert tc["probes"] >= 1 and tc["steps_threads"] >= 72, tc  # threads until its first probe
+            assert tc["probes"] >= 1 and tc["steps_threads"] >= 9, tc  # its first probe's window of threads

@@ -127,26 +127,6 @@ int bad(const std::string& msg) {
   return 2;
 }
 
-// How libgomp's threads wait at a barrier. It reads OMP_WAIT_POLICY and GOMP_SPINCOUNT once, when
-// it is loaded, before main; unset, a thread spins 300000 times (milliseconds) before it sleeps.
-// On a quiet machine spinning pays: a partner woken from sleep at each of a step's barriers makes
-// 2 threads slower than 1 at 10k discs. Beside another busy process the spinning thread holds
-// the core its partner needs; there the run's thread choice (run/thread_choice.hpp) drops to one
-// thread, and kSpinCount spins (about 0.4 ms) bound what its probes of 2 threads cost
-// (benchmarks/README.md, "Threads on a busy machine"). Unless the user set either variable, dem
-// sets GOMP_SPINCOUNT and runs itself again, once, before anything else.
-constexpr const char* kSpinCount = "20000";
-void bound_barrier_spinning(char** argv) {
-#ifdef _OPENMP
-  if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
-  if (setenv("GOMP_SPINCOUNT", kSpinCount, 1) != 0) return;
-  execv("/proc/self/exe", argv);  // returns only if it failed: libgomp's default then
-  unsetenv("GOMP_SPINCOUNT");
-#else
-  (void)argv;
-#endif
-}
-
 bool number_arg(const char* s, double& v) {
   char* end = nullptr;
   v = std::strtod(s, &end);
@@ -626,7 +606,6 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
-  if (cmd == "run" || cmd == "ensemble" || cmd == "compare") bound_barrier_spinning(argv);
   g_program = argv[0];
   if (cmd == "--version" || cmd == "version") {
     std::printf("dem %s (%s)\n", DEM_VERSION, DEM_BUILD_ID);

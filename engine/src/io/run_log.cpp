@@ -34,7 +34,7 @@ std::string format(const char* f, ...) {
   return s;
 }
 
-// The wait setting libgomp runs with (cli/main.cpp bounds its spinning), for the header.
+// The wait setting libgomp runs with, for the header.
 std::string barrier_wait() {
   for (const char* v : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT"})
     if (const char* x = std::getenv(v)) return std::string(v) + "=" + x;

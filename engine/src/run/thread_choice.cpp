@@ -16,8 +16,7 @@ void ThreadChoice::start(World& w, bool enabled) {
   asked_ = w.threads;
   enabled_ = enabled && asked_ > 1;
   w.threads_allowed = 0;  // the scene's count, until a probe says otherwise
-  state_ = State::wait;
-  waited_ = 0;
+  if (enabled_) begin_probe(w);
 }
 
 void ThreadChoice::begin_probe(World& w) {
@@ -45,10 +44,6 @@ void ThreadChoice::after_step(World& w, double seconds) {
   ++steps_at[w.threads_for(n) > 1 ? 1 : 0];
   if (!enabled_) return;
   const double per_disc = seconds / std::max(n, 1);  // a discharge loses discs as it goes
-  if (state_ == State::wait) {
-    if (++waited_ >= kFirstProbeAfter) begin_probe(w);
-    return;
-  }
   if (state_ == State::hold) {
     held_ += seconds;
     if (many_) {  // the last kWindow steps, against the probe's
@@ -81,7 +76,6 @@ void ThreadChoice::after_step(World& w, double seconds) {
       window_.clear();
       window_s_ = 0;
       return decide(w);
-    case State::wait:
     case State::hold: return;
   }
 }

@@ -1,9 +1,11 @@
 // The thread count a run steps with, chosen by measurement (integrator.thread_choice = "auto").
 // Every thread count gives the same bits (world.hpp, threads), so the choice changes the speed
-// of a run, never its results. Two threads pay off on a quiet machine (1.5-2x); beside another
-// busy process a thread waits at every barrier for its partner to get a core back, and two
-// threads ran 1.3-2.7x slower than one (benchmarks/README.md, "Threads on a busy machine"). So
-// the run measures both now and then and steps with the faster.
+// of a run, never its results. libgomp's threads wait at a barrier by spinning some
+// milliseconds (GOMP_SPINCOUNT, 300000 unless set): on a quiet machine that makes 2 threads
+// 1.6x as fast as one on the settled 100k silo, where waits that sleep soon made them slower
+// than one; beside another busy process the spinning thread holds the core its partner needs,
+// and 2 threads ran 1.8-2.9x slower than one (benchmarks/README.md, "Threads on a busy
+// machine"). So the run measures both now and then and steps with the faster.
 #pragma once
 
 #include <array>
@@ -21,23 +23,21 @@ class ThreadChoice {
   // milliseconds); the median step time of each window, per disc. The scene's threads are kept when they are faster by
   // kGain at least (alike, one thread leaves a core to the machine's other work).
   static constexpr int kWindow = 8;
-  static constexpr double kWindowSeconds = 0.02;
+  static constexpr double kWindowSeconds = 0.01;
   static constexpr double kGain = 0.95;
   // Between probes the choice holds for at least kHoldFirst seconds of stepping and kHoldProbes
   // probes' time; the hold doubles while probes confirm the choice, up to kHoldMax, and starts
   // again from kHoldFirst when one overturns it.
   static constexpr double kHoldFirst = 0.5, kHoldMax = 32.0;  // [s]
   static constexpr int kHoldProbes = 32;
-  // The first probe comes after this many steps of the scene's threads: the threads' blocks of a
-  // run from rest are set by discs alone at its start, and by its contacts from step 64 on
-  // (World::kRebalanceEvery); 2 threads on the first ones are no faster than 1.
-  static constexpr long kFirstProbeAfter = 72;
   // Holding the scene's threads, a probe starts at once when the median of the last kWindow
   // steps is kSlower times the probe's (another process took a core).
   static constexpr double kSlower = 1.5;
 
   // Before the run's first step: whether to choose at all (integrator.thread_choice, more than
-  // one thread asked).
+  // one thread asked). A probe starts at once: the threads' blocks of a run from rest are set by
+  // discs alone until step 64 (World::kRebalanceEvery), which costs 2 threads some of their gain
+  // (12.8 against 4.5 ms a step at 1M discs), not all of it.
   void start(World& w, bool enabled);
   // After each step, with its wall time: the thread count of the next steps (World::threads_allowed).
   void after_step(World& w, double seconds);
@@ -47,11 +47,10 @@ class ThreadChoice {
   std::array<long, 2> steps_at{};  // steps with one thread, with the scene's threads
 
  private:
-  enum class State { wait, settle_many, many, settle_one, one, hold };
+  enum class State { settle_many, many, settle_one, one, hold };
   bool enabled_ = false;
   int asked_ = 1;                  // the scene's thread count
-  State state_ = State::wait;
-  long waited_ = 0;                 // steps before the first probe
+  State state_ = State::settle_many;
   std::vector<double> window_;      // per-disc step times of the current window
   double window_s_ = 0;             // [s] its steps' time
   bool window_full() const { return window_.size() >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds; }
