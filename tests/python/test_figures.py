@@ -816,3 +816,34 @@ def test_figures_are_written_in_the_format_their_suffix_names(tmp_path):
     with pytest.raises(ValueError, match="png, .pdf or .svg"):
         figures.plot_network(str(run), str(tmp_path / "network.jpeg"))
     assert not list(tmp_path.glob("network.jpeg*"))
+
+
+def _figure(transparent):
+    """A small figure with lines, a filled area, text and a colour map (drawn the same each call)."""
+    fig, ax = figures.plt.subplots(figsize=(3, 2))
+    x = np.linspace(0, 1, 50)
+    ax.plot(x, np.sin(6 * x), color="tab:blue")
+    ax.fill_between(x, 0, x, color="tab:orange", alpha=0.5)
+    ax.imshow(np.outer(x, x), extent=(0, 0.3, 0, 0.3), cmap="viridis")
+    ax.set_title("t = 0.10 s")
+    if transparent:
+        fig.patch.set_alpha(0.0)
+        ax.patch.set_alpha(0.0)
+    return fig
+
+
+@pytest.mark.parametrize("transparent", [False, True])
+def test_png_has_the_pixels_of_savefig(tmp_path, transparent):
+    """_save writes the pixels matplotlib's own savefig writes at 150 dpi: RGB when every pixel is
+    opaque, RGBA (the alpha kept) otherwise."""
+    from PIL import Image
+    ours = figures._save(_figure(transparent), str(tmp_path / "ours.png"))
+    fig = _figure(transparent)
+    fig.savefig(tmp_path / "theirs.png", dpi=150)
+    figures.plt.close(fig)
+    a, b = Image.open(ours), Image.open(tmp_path / "theirs.png")
+    assert a.size == b.size == (3 * 150, 2 * 150)
+    assert a.mode == ("RGBA" if transparent else "RGB")
+    expected = np.asarray(b.convert(a.mode))
+    np.testing.assert_array_equal(np.asarray(a), expected)
+    assert not list(tmp_path.glob("*.tmp"))
