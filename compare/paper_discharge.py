@@ -144,7 +144,7 @@ def main(argv=None):
     # Figure processes fork from a server that imported matplotlib once (a fork of this process,
     # which runs threads, could inherit a held lock); started at once, beside the first runs.
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["compare.figures", "compare.paper_discharge"])
+    ctx.set_forkserver_preload(["compare.figures"])
     with cf.ThreadPoolExecutor(max_workers=jobs) as runs, \
             cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pictures:
         drawing.append(pictures.submit(os.getpid))
