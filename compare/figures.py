@@ -374,7 +374,9 @@ def _write_png(fig, path, dpi):
 
 def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):
     """subplots_adjust with the margins and gaps in inches (a layout computed once, in place of
-    constrained or tight layout, which measure every text of the figure at each draw)."""
+    constrained or tight layout, which measure every text of the figure at each draw). Axes titles
+    are then given y=1.0: a title whose height is left to matplotlib is moved above whatever the
+    axes draw at their top, which measures every tick label at each draw."""
     w, h = fig.get_size_inches()
     gs = fig.axes[0].get_subplotspec().get_gridspec() if fig.axes else None
     ncols, nrows = (gs.ncols, gs.nrows) if gs is not None else (1, 1)
@@ -477,7 +479,7 @@ def plot_network(run_dir, out_png, title=None):
                      f"t = {float(summary.get('time', float('nan'))):.4g} s")
     title = (textwrap.fill(head, 7 * 12) + "\ncontact forces e_n n + e_s t: "
              f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=10, y=1.0)
     # A fixed layout (inches): the title's lines above, the tick and axis labels.
     _fixed_layout(fig, left=0.65, right=0.2, bottom=0.55, top=0.2 + 0.19 * (title.count("\n") + 1))
     return _save(fig, out_png)
@@ -525,7 +527,7 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
         label = labels[k] if labels else scene_name(run["summary"])
         rest = _rest_text(run["summary"])
         ax.set_title(f"{label}: {rest}", fontsize=9,
-                     color="black" if rest == "at rest" else "firebrick")
+                     color="black" if rest == "at rest" else "firebrick", y=1.0)
     fig.suptitle(title, fontsize=11, y=1 - 0.08 / fig.get_size_inches()[1], va="top")
     return _save(fig, out_png)
 
@@ -899,13 +901,13 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     title = textwrap.fill(head, chars) + "\n" + textwrap.fill(note, chars)
     # A fixed layout (inches): the title's lines, each panel's title, the tick labels of the
     # outer panels only (all panels share their limits), the colour bar at the right.
-    top = 0.2 + 0.19 * (title.count("\n") + 1) + 0.3
+    top = 0.15 + 0.19 * (title.count("\n") + 1) + 0.25
     left, bottom, right, gap_w, gap_h = 0.35, 0.3, 1.0, 0.12, 0.34
     fig, axes = plt.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True,
                              figsize=(width, panel * aspect * nrows + top + bottom + gap_h * (nrows - 1)))
     _fixed_layout(fig, left, right, bottom, top, gap_w, gap_h)
     for axis in (axes[0, 0].xaxis, axes[0, 0].yaxis):     # a few round ticks, shared by all panels
-        axis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=4, steps=[1, 2, 5, 10]))
+        axis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=6, steps=[1, 2, 5, 10]))
     lw = 0.55
     for k, ax in enumerate(axes.flat):
         if k >= len(frames):
@@ -931,7 +933,7 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6, labelbottom=k // ncols == nrows - 1 or k + ncols >= len(frames),
                        labelleft=k % ncols == 0)
-        ax.set_title(f"t = {t:.2f} s", fontsize=10, pad=3)
+        ax.set_title(f"t = {t:.2f} s", fontsize=10, pad=3, y=1.0)
         ax.text(x0 + pad, y0 + pad, f"{len(moved)} discs, dead {np.sum(dead) / n_initial:.0%}",
                 fontsize=6.5, va="bottom", ha="left")
     w, h = fig.get_size_inches()
@@ -1035,7 +1037,7 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
                 ax.text(0.005, (slit[0] + slit[1]) / 2, " slit", va="center", fontsize=8,
                         transform=ax.get_yaxis_transform())
         ax.set_title(f"{title}, normal force / static per bin: " + "; ".join(notes),
-                     fontsize=9, loc="left")
+                     fontsize=9, loc="left", y=1.0)
     y_lo, y_hi = axes[-2].get_position().y0, axes[0].get_position().y1
     cax = fig.add_axes([1 - 1.0 / fig_w, y_lo + 0.05 * (y_hi - y_lo), 0.16 / fig_w, 0.9 * (y_hi - y_lo)])
     bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=log_norm, cmap=cmap), cax=cax)
@@ -1067,7 +1069,7 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     ax.grid(True, alpha=0.4)
     ax.legend(fontsize=8, ncol=4, loc="lower right", bbox_to_anchor=(1.0, 1.0), frameon=False,
               borderaxespad=0.1, handlelength=1.5, columnspacing=1.0, handletextpad=0.4)
-    ax.set_title("total normal force on each wall / its static value", fontsize=9, loc="left")
+    ax.set_title("total normal force on each wall / its static value", fontsize=9, loc="left", y=1.0)
     ax.set_xlim(0.0, t_end if t_end > 0 else 1.0)
     fig.suptitle(head, fontsize=10, y=1 - 0.1 / fig_h, va="top")
     return _save(fig, out_png)
@@ -1132,7 +1134,7 @@ def plot_flow(run_dir, out_png):
         sec = ax_out.secondary_yaxis("right", functions=(lambda m: m / unit, lambda n: n * unit))
         sec.set_ylabel("removed discs")
     ax_out.set_ylabel("removed mass [g per cm]")
-    ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left")
+    ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left", y=1.0)
     ax_out.legend(fontsize=8, loc="upper left")
 
     present = flow["discs_in_silo"] + flow["discs_below"]
@@ -1149,7 +1151,7 @@ def plot_flow(run_dir, out_png):
     h2, l2 = twin.get_legend_handles_labels()
     ax_n.legend(h1 + h2, l1 + l2, fontsize=8, loc="center left")
     ax_n.set_title(f"(b) discs; dead fraction at the end "
-                   f"{_fmt(info.get('dead_fraction_end'), '.2f')}", fontsize=10, loc="left")
+                   f"{_fmt(info.get('dead_fraction_end'), '.2f')}", fontsize=10, loc="left", y=1.0)
 
     sink = info.get("surface_sink_time") or {}
     for column, key in (("left", "left_wall"), ("centre", "centre"), ("right", "right_wall")):
@@ -1165,7 +1167,7 @@ def plot_flow(run_dir, out_png):
     ax_s.set_xlabel("time since opening [s]")
     ax_s.legend(fontsize=8, loc="lower left")
     ax_s.set_title(f"(c) top surface in the wall and centre columns: "
-                   f"{info.get('pattern', '?')}", fontsize=10, loc="left")
+                   f"{info.get('pattern', '?')}", fontsize=10, loc="left", y=1.0)
 
     ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
               label="crown height (left)")
@@ -1182,7 +1184,7 @@ def plot_flow(run_dir, out_png):
     ax_a.set_xlabel("time since opening [s]")
     no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
     ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
-                   fontsize=10, loc="left")
+                   fontsize=10, loc="left", y=1.0)
     for ax in axes.flat:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_end)
