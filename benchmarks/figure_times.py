@@ -1,10 +1,10 @@
 """CPU seconds of one run's pictures, each on its own, in one process.
 
-    PYTHONPATH=CHECKOUT /usr/bin/python3 benchmarks/figure_times.py RUN_DIR [--out DIR] [--repeats 3]
+    /usr/bin/python3 benchmarks/figure_times.py RUN_DIR [--checkout DIR] [--out DIR] [--repeats 3]
 
 RUN_DIR is a discharge run (`build/dem run reference_inputs/scenes/discharge_17_18.toml --out
-RUN_DIR --quiet`); CHECKOUT is the checkout whose compare/ draws (this one, or an older one to
-compare with). Each repeat is a fresh process: `time.process_time` around importing
+RUN_DIR --quiet`); --checkout is the checkout whose compare/ draws (default this one; an older
+one to compare with), the folder the drawing process runs in. Each repeat is a fresh process: `time.process_time` around importing
 compare.figures and around each of the five pictures of `compare.figures run` (written into DIR,
 default a temporary folder). Prints one line a repeat.
 """
@@ -39,11 +39,15 @@ def main(argv=None):
     ap.add_argument("run_dir")
     ap.add_argument("--out")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--checkout", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     args = ap.parse_args(argv)
     out = args.out or tempfile.mkdtemp(prefix="figure_times_")
     os.makedirs(out, exist_ok=True)
     for _ in range(args.repeats):
-        subprocess.run([sys.executable, "-c", CHILD, os.path.abspath(args.run_dir), out], check=True)
+        # `python3 -c` puts its working folder first on sys.path: the checkout's compare/ is imported
+        subprocess.run([sys.executable, "-c", CHILD, os.path.abspath(args.run_dir), os.path.abspath(out)],
+                       cwd=args.checkout, env=dict(os.environ, PYTHONPATH=os.path.abspath(args.checkout)),
+                       check=True)
     print(f"load average (1 min) {os.getloadavg()[0]:.1f}")
     return 0
 
