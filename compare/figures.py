@@ -334,8 +334,8 @@ def _save(fig, out_png):
     """Save a figure at 150 dpi in the format its suffix names (.png, .pdf or .svg), creating
     the folder, and close it. The file is written to NAME.tmp in the same folder and renamed when
     complete (a killed run leaves no half file). A PNG is drawn by Agg and encoded by PIL at zlib
-    level 3, as RGB when every pixel is opaque (the same pixels as savefig's RGBA at level 6, in
-    about half the encoding time)."""
+    level 3, as RGB when every pixel is opaque: the pixels of savefig, which encodes RGBA at
+    level 6."""
     fmt = FORMATS.get(os.path.splitext(out_png)[1].lower())
     if fmt is None:
         plt.close(fig)
@@ -374,9 +374,9 @@ def _write_png(fig, path, dpi):
 
 def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):
     """subplots_adjust with the margins and gaps in inches (a layout computed once, in place of
-    constrained or tight layout, which measure every text of the figure at each draw). Axes titles
-    are then given y=1.0: a title whose height is left to matplotlib is moved above whatever the
-    axes draw at their top, which measures every tick label at each draw."""
+    constrained or tight layout, which measure every text of the figure at each draw). The figures
+    laid out so give their axes titles y=1.0: a title whose height is left to matplotlib is moved
+    above whatever the axes draw at their top, which measures every tick label at each draw."""
     w, h = fig.get_size_inches()
     gs = fig.axes[0].get_subplotspec().get_gridspec() if fig.axes else None
     ncols, nrows = (gs.ncols, gs.nrows) if gs is not None else (1, 1)
@@ -606,7 +606,7 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
         note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
     title = textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
                           f"{common_caption(summaries)}", 11 * 11) + "\n" + note
-    fig.suptitle(title, fontsize=11, y=1 - 0.1 / 7, va="top")
+    fig.suptitle(title, fontsize=11, y=1 - 0.1 / fig.get_size_inches()[1], va="top")
     # A fixed layout (inches): the title's lines, the tick and axis labels.
     _fixed_layout(fig, left=0.75, right=0.25, bottom=0.6, top=0.25 + 0.2 * (title.count("\n") + 1),
                   wspace=0.3)
@@ -1188,7 +1188,7 @@ def plot_flow(run_dir, out_png):
     for ax in axes.flat:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_end)
-    fig.suptitle(title, fontsize=11, y=1 - 0.1 / 8, va="top")
+    fig.suptitle(title, fontsize=11, y=1 - 0.1 / fig.get_size_inches()[1], va="top")
     return _save(fig, out_png)
 
 
