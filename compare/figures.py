@@ -46,6 +46,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+import PIL.Image  # noqa: E402
 
 from compare import run_dir as _run_dir  # noqa: E402
 # The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
@@ -331,7 +333,9 @@ FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
 def _save(fig, out_png):
     """Save a figure at 150 dpi in the format its suffix names (.png, .pdf or .svg), creating
     the folder, and close it. The file is written to NAME.tmp in the same folder and renamed when
-    complete (a killed run leaves no half file)."""
+    complete (a killed run leaves no half file). A PNG is drawn by Agg and encoded by PIL at zlib
+    level 3, as RGB when every pixel is opaque: the pixels of savefig, which encodes RGBA at
+    level 6."""
     fmt = FORMATS.get(os.path.splitext(out_png)[1].lower())
     if fmt is None:
         plt.close(fig)
@@ -341,13 +345,46 @@ def _save(fig, out_png):
         os.makedirs(folder, exist_ok=True)
     tmp = f"{out_png}.tmp"
     try:
-        fig.savefig(tmp, dpi=150, format=fmt)
+        if fmt == "png":
+            _write_png(fig, tmp, SAVE_DPI)
+        else:
+            fig.savefig(tmp, dpi=SAVE_DPI, format=fmt)
         os.replace(tmp, out_png)
     finally:
         plt.close(fig)
         if os.path.exists(tmp):
             os.remove(tmp)
     return out_png
+
+
+SAVE_DPI = 150
+PNG_COMPRESS_LEVEL = 3
+
+
+def _write_png(fig, path, dpi):
+    """Draw fig with Agg at dpi and write its pixels as PNG (RGB if all opaque, else RGBA)."""
+    fig.set_dpi(dpi)
+    canvas = FigureCanvasAgg(fig) if not isinstance(fig.canvas, FigureCanvasAgg) else fig.canvas
+    canvas.draw()
+    rgba = np.asarray(canvas.buffer_rgba())
+    opaque = bool(np.all(rgba[..., 3] == 255))
+    image = PIL.Image.fromarray(np.ascontiguousarray(rgba[..., :3]) if opaque else np.array(rgba))
+    image.save(path, format="png", compress_level=PNG_COMPRESS_LEVEL, dpi=(dpi, dpi))
+
+
+def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):
+    """subplots_adjust with the margins and gaps in inches (a layout computed once, in place of
+    constrained or tight layout, which measure every text of the figure at each draw). The figures
+    laid out so give their axes titles y=1.0: a title whose height is left to matplotlib is moved
+    above whatever the axes draw at their top, which measures every tick label at each draw."""
+    w, h = fig.get_size_inches()
+    gs = fig.axes[0].get_subplotspec().get_gridspec() if fig.axes else None
+    ncols, nrows = (gs.ncols, gs.nrows) if gs is not None else (1, 1)
+    cell_w = (w - left - right - wspace * (ncols - 1)) / ncols
+    cell_h = (h - top - bottom - hspace * (nrows - 1)) / nrows
+    fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
+                        wspace=wspace / cell_w if ncols > 1 else 0.0,
+                        hspace=hspace / cell_h if nrows > 1 else 0.0)
 
 
 def network_bounds(run, pad_fraction=0.04):
@@ -440,10 +477,11 @@ def plot_network(run_dir, out_png, title=None):
     ax.set_ylabel("Y [cm]")
     head = title or (f"{run_caption(summary)}: {len(discs['r'])} discs, "
                      f"t = {float(summary.get('time', float('nan'))):.4g} s")
-    ax.set_title(f"{head}\ncontact forces e_n n + e_s t: "
-                 f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights",
-                 fontsize=10)
-    fig.tight_layout()
+    title = (textwrap.fill(head, 7 * 12) + "\ncontact forces e_n n + e_s t: "
+             f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights")
+    ax.set_title(title, fontsize=10, y=1.0)
+    # A fixed layout (inches): the title's lines above, the tick and axis labels.
+    _fixed_layout(fig, left=0.65, right=0.2, bottom=0.55, top=0.2 + 0.19 * (title.count("\n") + 1))
     return _save(fig, out_png)
 
 
@@ -466,9 +504,15 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
     ncols = min(ncols, len(runs))
     nrows = -(-len(runs) // ncols)
     panel = 4.2                                              # inches per panel width
+    title = (textwrap.fill(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1982, Fig. 6), "
+                           f"{common_caption([r['summary'] for r in runs])}", int(panel * ncols * 11))
+             + f"\ndisc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; X, Y in cm")
+    top, bottom, hspace = 0.45 + 0.2 * (title.count("\n") + 1), 0.3, 0.45
     fig, axes = plt.subplots(nrows, ncols, squeeze=False,
-                             figsize=(panel * ncols, panel * min(max(span_y / span_x, 0.4), 2.5)
-                                      * nrows + 0.9))
+                             figsize=(panel * ncols, (panel - 0.5) * min(max(span_y / span_x, 0.4), 2.5)
+                                      * nrows + top + bottom + hspace * (nrows - 1)))
+    # A fixed layout (inches): the title's lines, each panel's title and tick labels.
+    _fixed_layout(fig, left=0.4, right=0.15, bottom=bottom, top=top, wspace=0.35, hspace=hspace)
     for k, ax in enumerate(axes.flat):
         if k >= len(runs):
             ax.axis("off")
@@ -483,12 +527,8 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
         label = labels[k] if labels else scene_name(run["summary"])
         rest = _rest_text(run["summary"])
         ax.set_title(f"{label}: {rest}", fontsize=9,
-                     color="black" if rest == "at rest" else "firebrick")
-    fig.suptitle(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1982, Fig. 6), "
-                 f"{common_caption([r['summary'] for r in runs])}\n"
-                 f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; "
-                 "X, Y in cm", fontsize=11)
-    fig.tight_layout()
+                     color="black" if rest == "at rest" else "firebrick", y=1.0)
+    fig.suptitle(title, fontsize=11, y=1 - 0.08 / fig.get_size_inches()[1], va="top")
     return _save(fig, out_png)
 
 
@@ -564,9 +604,12 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
             "the paper's Fig. 7 shows P_y per contact")
     if unpaired:
         note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
-    fig.suptitle("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
-                 f"{common_caption(summaries)}\n" + note, fontsize=11)
-    fig.tight_layout()
+    title = textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
+                          f"{common_caption(summaries)}", 11 * 11) + "\n" + note
+    fig.suptitle(title, fontsize=11, y=1 - 0.1 / fig.get_size_inches()[1], va="top")
+    # A fixed layout (inches): the title's lines, the tick and axis labels.
+    _fixed_layout(fig, left=0.75, right=0.25, bottom=0.6, top=0.25 + 0.2 * (title.count("\n") + 1),
+                  wspace=0.3)
     return _save(fig, out_png)
 
 
@@ -848,8 +891,23 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     nrows = -(-len(frames) // ncols)
     panel = 3.2
     aspect = (y1 - y0) / (x1 - x0)
-    fig, axes = plt.subplots(nrows, ncols, squeeze=False, layout="constrained",
-                             figsize=(panel * ncols + 0.9, panel * aspect * nrows + 1.0))
+    width = panel * ncols + 1.3
+    chars = int(width * 12)                    # characters per title line at 10 pt
+    head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
+            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
+    note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
+            f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
+            f"(discs removed); dead = share of the {n_initial} discs at opening")
+    title = textwrap.fill(head, chars) + "\n" + textwrap.fill(note, chars)
+    # A fixed layout (inches): the title's lines, each panel's title, the tick labels of the
+    # outer panels only (all panels share their limits), the colour bar at the right.
+    top = 0.15 + 0.19 * (title.count("\n") + 1) + 0.25
+    left, bottom, right, gap_w, gap_h = 0.35, 0.3, 1.0, 0.12, 0.34
+    fig, axes = plt.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True,
+                             figsize=(width, panel * aspect * nrows + top + bottom + gap_h * (nrows - 1)))
+    _fixed_layout(fig, left, right, bottom, top, gap_w, gap_h)
+    for axis in (axes[0, 0].xaxis, axes[0, 0].yaxis):     # a few round ticks, shared by all panels
+        axis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=6, steps=[1, 2, 5, 10]))
     lw = 0.55
     for k, ax in enumerate(axes.flat):
         if k >= len(frames):
@@ -873,25 +931,22 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
-        ax.tick_params(labelsize=6)
-        ax.set_title(f"t = {t:.2f} s", fontsize=10)
+        ax.tick_params(labelsize=6, labelbottom=k // ncols == nrows - 1 or k + ncols >= len(frames),
+                       labelleft=k % ncols == 0)
+        ax.set_title(f"t = {t:.2f} s", fontsize=10, pad=3, y=1.0)
         ax.text(x0 + pad, y0 + pad, f"{len(moved)} discs, dead {np.sum(dead) / n_initial:.0%}",
                 fontsize=6.5, va="bottom", ha="left")
-    bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=axes,
-                       shrink=0.8, pad=0.01, aspect=30)
+    w, h = fig.get_size_inches()
+    cax = fig.add_axes([1 - (right - 0.12) / w, bottom / h + 0.1 * (1 - (top + bottom) / h),
+                        0.14 / w, 0.8 * (1 - (top + bottom) / h)])
+    bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), cax=cax)
     ticks = [v for v in (1, 2, 3, 5, 10, 20, 30, 50, 100) if norm.vmin <= v <= norm.vmax]
     bar.set_ticks(ticks)
     bar.set_ticklabels([f"{v:g}" for v in ticks])
     bar.ax.minorticks_off()
     bar.set_label("displacement since opening [radii]; grey: < 1 (dead)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    width = int(fig.get_figwidth() * 12)          # characters per title line at 10 pt
-    head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
-            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
-    note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
-            f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
-            f"(discs removed); dead = share of the {n_initial} discs at opening")
-    fig.suptitle(textwrap.fill(head, width) + "\n" + textwrap.fill(note, width), fontsize=10)
+    fig.suptitle(title, fontsize=10, y=1 - 0.12 / h, va="top")
     return _save(fig, out_png)
 
 
@@ -946,9 +1001,18 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
                                               vmax=math.log10(hi))
     cmap = plt.get_cmap("RdBu_r").copy()
     cmap.set_bad("0.72")
-    fig, axes = plt.subplots(len(strips) + 1, 1, sharex=True, layout="constrained",
+    head = textwrap.fill(f"{_discharge_head(summary)}: wall forces relative to static "
+                         f"(cf. Kiyama & Fujimura 1982, Fig. 10)", 11 * 12)
+    head += (f"\nsummary peak ratios: bottom {_fmt(info.get('peak_ratio_bottom'))} (windowed "
+             f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side {_fmt(info.get('peak_ratio_side'))} "
+             f"(windowed {_fmt(info.get('peak_ratio_side_windowed'))})")
+    fig, axes = plt.subplots(len(strips) + 1, 1, sharex=True,
                              figsize=(11, 2.7 * len(strips) + 2.9),
                              gridspec_kw={"height_ratios": [3] * len(strips) + [2.3]})
+    # A fixed layout (inches): the title's lines, a title above each panel, the colour bar at the
+    # right of the heat maps.
+    fig_w, fig_h = fig.get_size_inches()
+    _fixed_layout(fig, left=0.65, right=1.15, bottom=0.45, top=0.3 + 0.19 * (head.count("\n") + 1), hspace=0.3)
     t_end = 0.0
     for ax, (title, group, coord) in zip(axes, strips):
         notes = []
@@ -973,9 +1037,10 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
                 ax.text(0.005, (slit[0] + slit[1]) / 2, " slit", va="center", fontsize=8,
                         transform=ax.get_yaxis_transform())
         ax.set_title(f"{title}, normal force / static per bin: " + "; ".join(notes),
-                     fontsize=9, loc="left")
-    bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=log_norm, cmap=cmap), ax=axes[:-1],
-                       shrink=0.9, pad=0.01, aspect=35)
+                     fontsize=9, loc="left", y=1.0)
+    y_lo, y_hi = axes[-2].get_position().y0, axes[0].get_position().y1
+    cax = fig.add_axes([1 - 1.0 / fig_w, y_lo + 0.05 * (y_hi - y_lo), 0.16 / fig_w, 0.9 * (y_hi - y_lo)])
+    bar = fig.colorbar(matplotlib.cm.ScalarMappable(norm=log_norm, cmap=cmap), cax=cax)
     ticks = [r for r in (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 30) if lo <= r <= hi]
     bar.set_ticks([math.log10(r) for r in ticks])
     bar.set_ticklabels([f"{r:g}" for r in ticks])
@@ -1003,16 +1068,10 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     ax.set_xlabel("time since opening [s]")
     ax.grid(True, alpha=0.4)
     ax.legend(fontsize=8, ncol=4, loc="lower right", bbox_to_anchor=(1.0, 1.0), frameon=False,
-              borderaxespad=0.1)
-    ax.set_title("total normal force on each wall / its static value", fontsize=9, loc="left")
+              borderaxespad=0.1, handlelength=1.5, columnspacing=1.0, handletextpad=0.4)
+    ax.set_title("total normal force on each wall / its static value", fontsize=9, loc="left", y=1.0)
     ax.set_xlim(0.0, t_end if t_end > 0 else 1.0)
-    fig.suptitle(
-        f"{_discharge_head(summary)}: wall forces relative to static "
-        f"(cf. Kiyama & Fujimura 1982, Fig. 10)\nsummary peak ratios: bottom "
-        f"{_fmt(info.get('peak_ratio_bottom'))} (windowed "
-        f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side "
-        f"{_fmt(info.get('peak_ratio_side'))} (windowed "
-        f"{_fmt(info.get('peak_ratio_side_windowed'))})", fontsize=10)
+    fig.suptitle(head, fontsize=10, y=1 - 0.1 / fig_h, va="top")
     return _save(fig, out_png)
 
 
@@ -1039,7 +1098,15 @@ def plot_flow(run_dir, out_png):
     t_end = max([float(duration) if isinstance(duration, (int, float)) else 0.0]
                 + list(flow["t"][-1:]) + list(removals["t"][-1:])) or 1.0
 
-    fig, axes = plt.subplots(2, 2, sharex=True, layout="constrained", figsize=(12, 8))
+    title = textwrap.fill(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
+                          f"{_fmt(info.get('n_initial'), 'd')} discs out "
+                          f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
+                          f"{_fmt(info.get('jams'), 'd')} jams", 12 * 11)
+    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
+    # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
+    # each.
+    _fixed_layout(fig, left=0.75, right=0.75, bottom=0.5, top=0.42 + 0.2 * (title.count("\n") + 1),
+                  wspace=1.45, hspace=0.45)
     (ax_out, ax_n), (ax_s, ax_a) = axes
 
     cumulative = np.cumsum(removals["mass"])
@@ -1067,7 +1134,7 @@ def plot_flow(run_dir, out_png):
         sec = ax_out.secondary_yaxis("right", functions=(lambda m: m / unit, lambda n: n * unit))
         sec.set_ylabel("removed discs")
     ax_out.set_ylabel("removed mass [g per cm]")
-    ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left")
+    ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left", y=1.0)
     ax_out.legend(fontsize=8, loc="upper left")
 
     present = flow["discs_in_silo"] + flow["discs_below"]
@@ -1084,7 +1151,7 @@ def plot_flow(run_dir, out_png):
     h2, l2 = twin.get_legend_handles_labels()
     ax_n.legend(h1 + h2, l1 + l2, fontsize=8, loc="center left")
     ax_n.set_title(f"(b) discs; dead fraction at the end "
-                   f"{_fmt(info.get('dead_fraction_end'), '.2f')}", fontsize=10, loc="left")
+                   f"{_fmt(info.get('dead_fraction_end'), '.2f')}", fontsize=10, loc="left", y=1.0)
 
     sink = info.get("surface_sink_time") or {}
     for column, key in (("left", "left_wall"), ("centre", "centre"), ("right", "right_wall")):
@@ -1100,7 +1167,7 @@ def plot_flow(run_dir, out_png):
     ax_s.set_xlabel("time since opening [s]")
     ax_s.legend(fontsize=8, loc="lower left")
     ax_s.set_title(f"(c) top surface in the wall and centre columns: "
-                   f"{info.get('pattern', '?')}", fontsize=10, loc="left")
+                   f"{info.get('pattern', '?')}", fontsize=10, loc="left", y=1.0)
 
     ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
               label="crown height (left)")
@@ -1117,14 +1184,11 @@ def plot_flow(run_dir, out_png):
     ax_a.set_xlabel("time since opening [s]")
     no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
     ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
-                   fontsize=10, loc="left")
+                   fontsize=10, loc="left", y=1.0)
     for ax in axes.flat:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_end)
-    fig.suptitle(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
-                 f"{_fmt(info.get('n_initial'), 'd')} discs out "
-                 f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
-                 f"{_fmt(info.get('jams'), 'd')} jams", fontsize=11)
+    fig.suptitle(title, fontsize=11, y=1 - 0.1 / fig.get_size_inches()[1], va="top")
     return _save(fig, out_png)
 
 

@@ -100,11 +100,24 @@ def gather(dem, scene, ens, members, seed, common):
     return proc
 
 
-def draw(pictured_dir, out, tag):
-    """The pictures of a configuration's median member (run in a figure process of its own)."""
-    figures.plot_discharge_frames(pictured_dir, out / f"frames_{tag}.png")
-    figures.plot_wall_ratios(pictured_dir, out / f"ratios_{tag}.png")
-    figures.plot_flow(pictured_dir, out / f"flow_{tag}.png")
+# The pictures of a configuration's median member, each drawn as a task of its own in a figure
+# process (the three of the last configuration are drawn side by side).
+PICTURES = (("frames", "plot_discharge_frames"), ("ratios", "plot_wall_ratios"), ("flow", "plot_flow"))
+
+
+def draw(pictured_dir, out, tag, kind=None):
+    """One picture (kind: frames, ratios or flow) of a configuration's median member, or all three;
+    run in a figure process."""
+    for name, plot in PICTURES:
+        if kind in (None, name):
+            getattr(figures, plot)(pictured_dir, out / f"{name}_{tag}.png")
+
+
+def run_order(plan):
+    """The configurations in the order their members are started: the longest runs first (the
+    smaller time step, more steps a run), so that the configurations that end last are short ones
+    and the last pictures start early; CONFIGS order within a time step."""
+    return sorted(range(len(plan)), key=lambda k: plan[k][3])
 
 
 def main(argv=None):
@@ -120,49 +133,59 @@ def main(argv=None):
     (out / "scenes").mkdir(parents=True, exist_ok=True)
     jobs = max(1, args.jobs)
     # Every member of every configuration is one task of one pool, so that no core waits for the
-    # last member of an ensemble or for the scene as written; the configurations' pictures are
+    # last member of an ensemble or for the scene as written; each configuration's pictures are
     # drawn in figure processes meanwhile (matplotlib imported once per process).
     plan = []
     for tag, arr, scheme, dt, contact in CONFIGS:
         scene = scene_with(arr, contact, out / "scenes")
         common = ["--scheme", scheme, "--dt", repr(dt), "--force-dt", "--quiet"]
         plan.append((tag, arr, scheme, dt, contact, scene, out / tag, common))
-    results, drawing = [], []
+    results, drawing = {}, []
     # Figure processes fork from a server that imported matplotlib once (a fork of this process,
     # which runs threads, could inherit a held lock); started at once, beside the first runs.
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["compare.figures", "compare.paper_discharge"])
+    ctx.set_forkserver_preload(["compare.figures"])
     with cf.ThreadPoolExecutor(max_workers=jobs) as runs, \
             cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pictures:
         drawing.append(pictures.submit(os.getpid))
-        pending = [[runs.submit(subprocess.run, cmd, capture_output=True, text=True)
-                    for cmd in member_commands(args.dem, scene, ens, args.members, args.seed, common)]
-                   for _, _, _, _, _, scene, ens, common in plan]
-        for (tag, arr, scheme, dt, contact, scene, ens, common), futs in zip(plan, pending):
-            cf.wait(futs)
-            proc = gather(args.dem, scene, ens, args.members, args.seed, common)
-            rec = {"tag": tag, "arrangement": arr.replace("_", "/"), "scheme": scheme, "dt": dt,
-                   "contact": contact or "paper", "exit": proc.returncode}
-            plain = ens / "as_written" / "ensemble.json"
-            if plain.exists():
-                one = (json.loads(plain.read_text()).get("runs") or [{}])[0]
-                rec["as_written"] = one.get("discs_out_at_1s") if one.get("status") in ("discharged", "jammed", "emptied") \
-                    else one.get("status", "-")
-            if (ens / "ensemble.json").exists():
-                rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
-                med = median_member(rec["ensemble"])
-                pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
-                if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
-                    rec["pictured"] = med["member"]
-                    drawing.append(pictures.submit(draw, pictured.path, out, tag))
-            else:
-                rec["error"] = proc.stderr.strip()[-400:]
-            results.append(rec)
-            e = rec.get("ensemble", {})
-            print(f"{tag:34s} exit {proc.returncode}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
-                  f"jam {e.get('jam_fraction', {}).get('value', '-')}  pattern {e.get('pattern', '-')}", flush=True)
+        waiting = {}           # configuration index -> its runs not yet ended
+        for k in run_order(plan):
+            tag, arr, scheme, dt, contact, scene, ens, common = plan[k]
+            for cmd in member_commands(args.dem, scene, ens, args.members, args.seed, common):
+                waiting.setdefault(k, set()).add(runs.submit(subprocess.run, cmd, capture_output=True, text=True))
+        pending = set().union(*waiting.values())
+        # Each configuration is merged and its pictures started as soon as its last run ends, while
+        # the runs of the others go on.
+        while waiting:
+            done, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for k in [k for k, futs in waiting.items() if not futs & pending]:
+                del waiting[k]
+                tag, arr, scheme, dt, contact, scene, ens, common = plan[k]
+                proc = gather(args.dem, scene, ens, args.members, args.seed, common)
+                rec = {"tag": tag, "arrangement": arr.replace("_", "/"), "scheme": scheme, "dt": dt,
+                       "contact": contact or "paper", "exit": proc.returncode}
+                plain = ens / "as_written" / "ensemble.json"
+                if plain.exists():
+                    one = (json.loads(plain.read_text()).get("runs") or [{}])[0]
+                    rec["as_written"] = one.get("discs_out_at_1s") \
+                        if one.get("status") in ("discharged", "jammed", "emptied") else one.get("status", "-")
+                if (ens / "ensemble.json").exists():
+                    rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
+                    med = median_member(rec["ensemble"])
+                    pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
+                    if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
+                        rec["pictured"] = med["member"]
+                        drawing += [pictures.submit(draw, pictured.path, out, tag, name) for name, _ in PICTURES]
+                else:
+                    rec["error"] = proc.stderr.strip()[-400:]
+                results[k] = rec
+                e = rec.get("ensemble", {})
+                print(f"{tag:34s} exit {proc.returncode}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
+                      f"jam {e.get('jam_fraction', {}).get('value', '-')}  pattern {e.get('pattern', '-')}",
+                      flush=True)
         for f in drawing:
             f.result()  # a figure that failed stops the study with its error
+    results = [results[k] for k in range(len(plan))]
     write_text_atomic(out / "discharge.json", json.dumps(results, indent=1) + "\n")
 
     lines = ["# The paper's silo, discharge (Kiyama & Fujimura, section 5(2))", "",

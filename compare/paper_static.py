@@ -189,7 +189,7 @@ def main(argv=None):
     pictured = [c for c in cases if (c[1], c[2]) in (PAPER, REFERENCE)]
     cases = pictured + [c for c in cases if c not in pictured]
     ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["compare.figures", "compare.paper_static"])
+    ctx.set_forkserver_preload(["compare.figures"])
     records, drawing = [], []
     with cf.ThreadPoolExecutor(max_workers=args.jobs) as ex, \
             cf.ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=ctx) as pictures:

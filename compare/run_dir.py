@@ -138,15 +138,24 @@ def read_csv(path, columns, empty=None, extra=False):
     else:
         header = names_out = names
     index = {name: k for k, name in enumerate(header)}
+    for line, row in rows:
+        if len(row) != len(header):
+            raise RunDirError(path, f"line {line}: expected {len(header)} fields "
+                                    f"({','.join(header)}), found {len(row)}")
     data = {}
     for name in names_out:
         k = index[name]
-        values = []
         text, integer = name in TEXT_COLUMNS, name in INT_COLUMNS
+        if not text:
+            # The whole column at once (numpy converts each cell as int() or float() does); a cell
+            # it refuses (empty, or not a number) is read again one by one below, for the message.
+            try:
+                data[name] = np.array([row[k] for _, row in rows], dtype=int if integer else float)
+                continue
+            except ValueError:
+                pass
+        values = []
         for line, row in rows:
-            if len(row) != len(header):
-                raise RunDirError(path, f"line {line}: expected {len(header)} fields "
-                                        f"({','.join(header)}), found {len(row)}")
             cell = row[k]
             if not text and empty is not None and cell == "" and not integer:
                 cell = empty

@@ -816,3 +816,69 @@ def test_figures_are_written_in_the_format_their_suffix_names(tmp_path):
     with pytest.raises(ValueError, match="png, .pdf or .svg"):
         figures.plot_network(str(run), str(tmp_path / "network.jpeg"))
     assert not list(tmp_path.glob("network.jpeg*"))
+
+
+def _figure(transparent):
+    """A small figure with lines, a filled area, text and a colour map (drawn the same each call)."""
+    fig, ax = figures.plt.subplots(figsize=(3, 2))
+    x = np.linspace(0, 1, 50)
+    ax.plot(x, np.sin(6 * x), color="tab:blue")
+    ax.fill_between(x, 0, x, color="tab:orange", alpha=0.5)
+    ax.imshow(np.outer(x, x), extent=(0, 0.3, 0, 0.3), cmap="viridis")
+    ax.set_title("t = 0.10 s")
+    if transparent:
+        fig.patch.set_alpha(0.0)
+        ax.patch.set_alpha(0.0)
+    return fig
+
+
+@pytest.mark.parametrize("transparent", [False, True])
+def test_png_has_the_pixels_of_savefig(tmp_path, transparent):
+    """_save writes the pixels matplotlib's own savefig writes at 150 dpi: RGB when every pixel is
+    opaque, RGBA (the alpha kept) otherwise."""
+    from PIL import Image
+    ours = figures._save(_figure(transparent), str(tmp_path / "ours.png"))
+    fig = _figure(transparent)
+    fig.savefig(tmp_path / "theirs.png", dpi=150)
+    figures.plt.close(fig)
+    a, b = Image.open(ours), Image.open(tmp_path / "theirs.png")
+    assert a.size == b.size == (3 * 150, 2 * 150)
+    assert a.mode == ("RGBA" if transparent else "RGB")
+    expected = np.asarray(b.convert(a.mode))
+    np.testing.assert_array_equal(np.asarray(a), expected)
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def _text_boxes(fig):
+    """Window extents of the figure's title and its axes' titles, tick labels and axis labels."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    texts = [fig._suptitle] if fig._suptitle is not None else []
+    for ax in fig.axes:
+        if not ax.axison:
+            continue
+        texts += [ax.title, ax._left_title, ax.xaxis.label, ax.yaxis.label]
+        for axis in (ax.xaxis, ax.yaxis):           # the ticks drawn: those inside the view limits
+            texts += [tick.label1 for tick in axis._update_ticks()] + [tick.label2 for tick in axis._update_ticks()]
+    return [(t.get_text(), t.get_window_extent(renderer)) for t in texts if t.get_visible() and t.get_text()]
+
+
+@pytest.mark.parametrize("plot", ["frames", "ratios", "flow"])
+def test_fixed_layouts_keep_the_titles_inside_and_apart(tmp_path, monkeypatch, plot):
+    """The discharge figures' fixed layouts: every title and label lies inside the figure, and the
+    figure's title overlaps no axes title, also when it is long enough to be wrapped."""
+    kept = capture_figures(monkeypatch)
+    run = make_discharge_run(tmp_path / "run", name="a discharge scene with a name long enough " * 3)
+    {"frames": figures.plot_discharge_frames, "ratios": figures.plot_wall_ratios,
+     "flow": figures.plot_flow}[plot](str(run), str(tmp_path / "x.png"))
+    fig = kept[0]
+    width, height = fig.canvas.get_width_height()
+    boxes = _text_boxes(fig)
+    for text, box in boxes:
+        assert box.x0 >= -1 and box.x1 <= width + 1 and box.y0 >= -1 and box.y1 <= height + 1, text
+    head = fig._suptitle.get_window_extent(fig.canvas.get_renderer())
+    assert "\n" in fig._suptitle.get_text()             # the long name wrapped the title
+    for ax in fig.axes:
+        for title in (ax.title, ax._left_title):
+            if title.get_text():
+                assert not head.overlaps(title.get_window_extent(fig.canvas.get_renderer())), title.get_text()

@@ -31,3 +31,32 @@ def test_pooled_members_give_the_ensemble_of_one_process(tmp_path, dem_binary, m
     for kind in ("frames", "ratios", "flow"):
         assert (out / f"{kind}_{tag}.png").stat().st_size > 0
         assert f"![{kind}_{tag}]({kind}_{tag}.png)" in report
+
+
+def test_longest_runs_start_first():
+    """The configurations at the smaller time step (twice the steps a run) start first, each step's
+    configurations in CONFIGS order."""
+    plan = [c for c in paper_discharge.CONFIGS]
+    small = [k for k, c in enumerate(plan) if c[3] == 5e-5]
+    large = [k for k, c in enumerate(plan) if c[3] == 1e-4]
+    assert small and large and len(small) + len(large) == len(plan)
+    assert paper_discharge.run_order(plan) == small + large
+
+
+def test_configurations_ending_out_of_order_keep_their_place(tmp_path, dem_binary, monkeypatch):
+    """The configuration listed second runs first (its step is smaller) and ends first: it is merged
+    and pictured then, and the records and the report keep the order of CONFIGS."""
+    configs = [("17_18_eq19_1e-4", "17_18", "paper_eq19", 1e-4, {}),
+               ("17_18_verlet_5e-5", "17_18", "velocity_verlet", 5e-5, {})]
+    monkeypatch.setattr(paper_discharge, "CONFIGS", configs)
+    out = tmp_path / "study"
+    assert paper_discharge.main(["--out", str(out), "--dem", str(dem_binary), "--members", "1",
+                                 "--jobs", "2"]) == 0
+    records = json.loads((out / "discharge.json").read_text())
+    assert [r["tag"] for r in records] == [c[0] for c in configs]
+    report = (out / "report.md").read_text()
+    rows = [line.split(" | ")[0].lstrip("| ") for line in report.splitlines() if line.startswith("| 17_18_")]
+    assert rows == [c[0] for c in configs]
+    for tag, *_ in configs:
+        for kind in ("frames", "ratios", "flow"):
+            assert (out / f"{kind}_{tag}.png").stat().st_size > 0
