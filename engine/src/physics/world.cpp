@@ -629,6 +629,7 @@ void World::pair_contacts(ForceBlock& blk) {
   // One kind of disc: one pair of materials, its constants fetched once.
   const PairProps* law_props = ONE_KIND ? &props[kmat[0] * n_mat + kmat[0]] : props.data();
   const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
+  const double lim1 = sum1 * sum1;  // apart() of one kind of disc: R^2 > lim1, its square taken once
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
   TotalsWriter totals{blk.record, RECORD ? pair_totals.bits() : nullptr};  // RECORD only
@@ -650,14 +651,16 @@ void World::pair_contacts(ForceBlock& blk) {
         stop = ++next_cross != cross_end ? next_cross->q : p1;
         continue;
       }
-      for (; p < stop && n < PairBlock::kSize; ++p) {
+      // To the next cross pair or a full block: one bound, so that the loop tests one index.
+      const std::size_t end = std::min(stop, p + static_cast<std::size_t>(PairBlock::kSize - n));
+      for (; p < end; ++p) {
         PairContact& c = pc[CROSS ? cross[p] : p];
         const int i = c.i, j = c.j;
         const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
         const double ri = kr[ki], rj = kr[kj];
         const double dx = x[j] - x[i], dy = y[j] - y[i];
         const double R2 = dx * dx + dy * dy, sum = ri + rj;
-        if (apart(R2, sum)) {  // (3): apart; the contact and its history end
+        if (ONE_KIND ? R2 > lim1 : apart(R2, sum)) {  // (3): apart; the contact and its history end
           c.en = c.es = 0;
           if constexpr (CROSS) cross_f[p].touching = false;
           continue;
