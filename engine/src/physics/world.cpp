@@ -504,14 +504,15 @@ std::size_t World::touching_pairs(std::size_t p0, std::size_t p1) const {
 // store that a later pair reads, so the compiler runs it two pairs at a time (SSE2) and the
 // pairs' square roots and divisions overlap. The same operations, in the same order, as the
 // law applied pair by pair: the same bits. One kind of disc: r_i + r_j is `sum1` (not gathered
-// pair by pair).
+// pair by pair). `uf`: the factor of the stored increments (World::increments: dt for eq. 18 and
+// Verlet, which store v), applied here a vector at a time rather than in the gather.
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, int n, const PairProps* __restrict props,
-                                                                 double inv_dt, double sum1) {
+                                                                 double inv_dt, double sum1, double uf) {
   for (int k = 0; k < n; ++k) {
     const double R = std::sqrt(b.R2[k]);
     const UnitNormal nrm = unit_normal(b.dx[k], b.dy[k], R);  // (4)
-    const double ddx = b.ddx[k], ddy = b.ddy[k];
+    const double ddx = b.dui[k] * uf - b.duj[k] * uf, ddy = b.dvi[k] * uf - b.dvj[k] * uf;  // du_i - du_j of (5)
     const double du_n = normal_increment(ddx, ddy, nrm);       // (5a)
     const double overlap = (ONE_KIND ? sum1 : b.sum[k]) - R;
     double du_s = 0;
@@ -519,10 +520,11 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
       // (5b) with the arms r - overlap/2 (one kind: sum1 / 2 is r exactly)
       const double ai = (ONE_KIND ? 0.5 * sum1 : b.arm_i[k]) - 0.5 * overlap;
       const double aj = (ONE_KIND ? 0.5 * sum1 : b.arm_j[k]) - 0.5 * overlap;
-      du_s = shear_increment(ddx, ddy, nrm, ai * b.rot_i[k], aj * b.rot_j[k]);
+      du_s = shear_increment(ddx, ddy, nrm, ai * (b.rot_i[k] * uf), aj * (b.rot_j[k] * uf));
       b.arm_i[k] = ai; b.arm_j[k] = aj;
     } else if constexpr (SHEAR) {
-      du_s = shear_increment(ddx, ddy, nrm, b.rot_i[k], b.rot_j[k]);  // (5b)
+      const double ri = ONE_KIND ? 0.5 * sum1 : b.arm_i[k], rj = ONE_KIND ? 0.5 * sum1 : b.arm_j[k];
+      du_s = shear_increment(ddx, ddy, nrm, ri * (b.rot_i[k] * uf), rj * (b.rot_j[k] * uf));  // (5b): r dphi
     }
     double fn, fs;
     contact_law<NS, NT, FC, SHEAR, DASH>(props[ONE_KIND ? 0 : b.prop[k]], overlap, du_n, du_s, inv_dt, b.en[k],
@@ -539,19 +541,20 @@ static inline __attribute__((always_inline)) void pair_block_law(PairBlock& b, i
 // operations give the same bits at any width, and no contraction into FMA (-ffp-contract=off,
 // and the AVX2 version does not enable FMA).
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
-static void pair_block_law_sse2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1) {
-  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+static void pair_block_law_sse2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt, double sum1,
+                                double uf) {
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1, uf);
 }
 #if defined(__x86_64__) && defined(__GNUC__)
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX2 static void pair_block_law_avx2(PairBlock& b, int n, const PairProps* __restrict props, double inv_dt,
-                                                double sum1) {
-  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+                                                double sum1, double uf) {
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1, uf);
 }
 template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const PairProps* __restrict props,
-                                                    double inv_dt, double sum1) {
-  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1);
+                                                    double inv_dt, double sum1, double uf) {
+  pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1, uf);
 }
 #endif
 // The block law at W doubles a vector (a row of the kernel table holds each width's).
@@ -630,6 +633,7 @@ void World::pair_contacts(ForceBlock& blk) {
   // One kind of disc: one pair of materials, its constants fetched once.
   const PairProps* law_props = ONE_KIND ? &props[kmat[0] * n_mat + kmat[0]] : props.data();
   const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
+  const double lim1 = sum1 * sum1;  // apart() of one kind of disc: R^2 > lim1, its square taken once
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
   TotalsWriter totals{blk.record, RECORD ? pair_totals.bits() : nullptr};  // RECORD only
@@ -651,14 +655,16 @@ void World::pair_contacts(ForceBlock& blk) {
         stop = ++next_cross != cross_end ? next_cross->q : p1;
         continue;
       }
-      for (; p < stop && n < PairBlock::kSize; ++p) {
+      // To the next cross pair or a full block: one bound, so that the loop tests one index.
+      const std::size_t end = std::min(stop, p + static_cast<std::size_t>(PairBlock::kSize - n));
+      for (; p < end; ++p) {
         PairContact& c = pc[CROSS ? cross[p] : p];
         const int i = c.i, j = c.j;
         const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
         const double ri = kr[ki], rj = kr[kj];
         const double dx = x[j] - x[i], dy = y[j] - y[i];
         const double R2 = dx * dx + dy * dy, sum = ri + rj;
-        if (apart(R2, sum)) {  // (3): apart; the contact and its history end
+        if (ONE_KIND ? R2 > lim1 : apart(R2, sum)) {  // (3): apart; the contact and its history end
           c.en = c.es = 0;
           if constexpr (CROSS) cross_f[p].touching = false;
           continue;
@@ -666,22 +672,19 @@ void World::pair_contacts(ForceBlock& blk) {
         b.pair[n] = static_cast<int>(p - p0);
         b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
         if constexpr (!ONE_KIND) b.sum[n] = sum;
-        b.ddx[n] = ux[i] * uf - ux[j] * uf;  // du_i - du_j of (5)
-        b.ddy[n] = uy[i] * uf - uy[j] * uf;
-        if constexpr (SHEAR && LA == LeverArm::contact_point) {  // the arms need the overlap: pair_block_law
-          b.rot_i[n] = uphi[i] * uf;
-          b.rot_j[n] = uphi[j] * uf;
+        b.dui[n] = ux[i]; b.duj[n] = ux[j];  // (5), times uf in the law
+        b.dvi[n] = uy[i]; b.dvj[n] = uy[j];
+        if constexpr (SHEAR) {  // r dphi of (5b) in the law (the contact point's arms need the overlap)
+          b.rot_i[n] = uphi[i];
+          b.rot_j[n] = uphi[j];
           if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
-        } else if constexpr (SHEAR) {
-          b.rot_i[n] = ri * (uphi[i] * uf);  // r_i dphi_i of (5b)
-          b.rot_j[n] = rj * (uphi[j] * uf);
         }
         if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
         b.en[n] = c.en; b.es[n] = c.es;
         ++n;
       }
     }
-    law(b, n, law_props, inv_dt, sum1);
+    law(b, n, law_props, inv_dt, sum1, uf);
     // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
     // is never the current i): the same additions in the same order, without a store and a
     // reload of fx[i], fy[i], torque[i] between two pairs of one disc.

@@ -28,9 +28,11 @@ struct alignas(64) PairBlock {
   int gap[kSize];   // a recorded pass: offsets of the touching pairs another block computes (cross pairs)
   int prop[kSize];  // index of the pair's constants (several kinds of disc)
   double dx[kSize], dy[kSize], R2[kSize], sum[kSize];  // (3): x_j - x_i, y_j - y_i, R^2, r_i + r_j (several kinds)
-  double ddx[kSize], ddy[kSize], rot_i[kSize], rot_j[kSize];  // (5): du_i - du_j, r_i dphi_i, r_j dphi_j
-  // LeverArm::contact_point: rot_i, rot_j hold dphi_i, dphi_j; arm_i, arm_j the radii in (several
-  // kinds) and the lever arms r - overlap/2 out.
+  // (5): the increments du_i, du_j, dv_i, dv_j, dphi_i, dphi_j as increments() stores them (the law
+  // multiplies them by its factor: eight pairs a vector instead of one at a time).
+  double dui[kSize], duj[kSize], dvi[kSize], dvj[kSize], rot_i[kSize], rot_j[kSize];
+  // arm_i, arm_j: the radii in (several kinds); LeverArm::contact_point: the lever arms r -
+  // overlap/2 out.
   double arm_i[kSize], arm_j[kSize];
   double en[kSize], es[kSize];  // history in, history out
   double overlap[kSize], fn[kSize], fs[kSize], fx[kSize], fy[kSize];  // out: fx, fy on i
@@ -192,7 +194,7 @@ class World {
   };
   // A stage of a force pass on one block, and the pair law on a block of pairs (PairBlock).
   using Stage = void (World::*)(ForceBlock&);
-  using PairLaw = void (*)(PairBlock&, int n, const PairProps* props, double inv_dt, double sum1);
+  using PairLaw = void (*)(PairBlock&, int n, const PairProps* props, double inv_dt, double sum1, double uf);
   // A row of the kernel table: the stages compiled for one law and feature set (kernels.hpp).
   struct Kernel {
     KernelKey key;
