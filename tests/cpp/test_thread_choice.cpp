@@ -54,6 +54,18 @@ TEST(ThreadChoice, DropsToOneThreadWhenTheThreadsAreSlower) {
   EXPECT_GT(c.steps_at[0], 0.97 * 2000) << c.steps_at[1] << " steps of two threads";
 }
 
+TEST(ThreadChoice, AbandonsASlowWindowOfThreads) {
+  // Two threads 5x slower than one (spinning beside a busy neighbour): each probe spends
+  // kAbandon steps with them, not a window of kWindow.
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 3000, [](int nt) { return nt == 2 ? 0.050 : 0.010; });
+  EXPECT_EQ(w.threads_for(kDiscs), 1);
+  ASSERT_GE(c.probes, 2);
+  EXPECT_EQ(c.steps_at[1], ThreadChoice::kAbandon * c.probes);
+}
+
 TEST(ThreadChoice, AlikeIsOneThread) {
   World w = world_of(kDiscs, 2);
   ThreadChoice c;

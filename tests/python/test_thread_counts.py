@@ -82,4 +82,4 @@ def test_thread_choice_in_summary(dem_binary, tmp_path):
         if choice == "off":
             assert tc["steps_threads"] == s["steps"] and tc["probes"] == 0, tc
         else:
-            assert tc["probes"] >= 1 and tc["steps_threads"] >= 9, tc  # its first probe's window of threads
+            assert tc["probes"] >= 1 and tc["steps_threads"] >= 1, tc  # its first probe's threads

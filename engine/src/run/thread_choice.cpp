@@ -20,11 +20,12 @@ void ThreadChoice::start(World& w, bool enabled) {
 }
 
 void ThreadChoice::begin_probe(World& w) {
-  state_ = State::settle_many;
+  state_ = State::settle_one;
   window_.clear();
   window_s_ = 0;
   probe_s_ = 0;
-  w.threads_allowed = asked_;
+  slow_ = 0;
+  w.threads_allowed = 1;
 }
 
 void ThreadChoice::decide(World& w) {
@@ -58,21 +59,35 @@ void ThreadChoice::after_step(World& w, double seconds) {
   probe_s_ += seconds;
   window_s_ += seconds;
   switch (state_) {
-    case State::settle_many: state_ = State::many; window_s_ = 0; return;
     case State::settle_one: state_ = State::one; window_s_ = 0; return;
-    case State::many:
-      window_.push_back(per_disc);
-      if (!window_full()) return;
-      probe_many_ = median(window_);
-      window_.clear();
-      window_s_ = 0;
-      state_ = State::settle_one;
-      w.threads_allowed = 1;
-      return;
     case State::one:
       window_.push_back(per_disc);
       if (!window_full()) return;
       probe_one_ = median(window_);
+      window_.clear();
+      window_s_ = 0;
+      state_ = State::settle_many;
+      w.threads_allowed = asked_;
+      return;
+    case State::settle_many:
+    case State::many:
+      // kAbandon steps in a row kSlowStep times one thread's: the threads lose (a busy neighbour
+      // makes their steps several times one thread's); the window stops there.
+      slow_ = per_disc > kSlowStep * probe_one_ ? slow_ + 1 : 0;
+      if (slow_ >= kAbandon) {
+        probe_many_ = per_disc;
+        window_.clear();
+        window_s_ = 0;
+        return decide(w);
+      }
+      if (state_ == State::settle_many) {
+        state_ = State::many;
+        window_s_ = 0;
+        return;
+      }
+      window_.push_back(per_disc);
+      if (!window_full()) return;
+      probe_many_ = median(window_);
       window_.clear();
       window_s_ = 0;
       return decide(w);

@@ -17,14 +17,19 @@ class World;
 
 class ThreadChoice {
  public:
-  // A probe: a window with the scene's threads, then one with one thread (each after one step
+  // A probe: a window with one thread, then one with the scene's threads (each after one step
   // not counted: the first step after a switch pays for new blocks and cold caches), each of
   // kWindow steps and kWindowSeconds at least (the other processes' time slices are
-  // milliseconds); the median step time of each window, per disc. The scene's threads are kept when they are faster by
+  // milliseconds); the median step time of each window, per disc. The threads' window stops
+  // after kAbandon steps in a row (the uncounted one included) that take kSlowStep times one
+  // thread's median: beside a busy process a step of 2 spinning threads takes several times one
+  // thread's, and a full window of them would cost a short run more than the choice saves. The scene's threads are kept when they are faster by
   // kGain at least (alike, one thread leaves a core to the machine's other work).
   static constexpr int kWindow = 8;
   static constexpr double kWindowSeconds = 0.01;
   static constexpr double kGain = 0.95;
+  static constexpr int kAbandon = 2;
+  static constexpr double kSlowStep = 2.0;
   // Between probes the choice holds for at least kHoldFirst seconds of stepping and kHoldProbes
   // probes' time; the hold doubles while probes confirm the choice, up to kHoldMax, and starts
   // again from kHoldFirst when one overturns it.
@@ -47,10 +52,11 @@ class ThreadChoice {
   std::array<long, 2> steps_at{};  // steps with one thread, with the scene's threads
 
  private:
-  enum class State { settle_many, many, settle_one, one, hold };
+  enum class State { settle_one, one, settle_many, many, hold };
   bool enabled_ = false;
   int asked_ = 1;                  // the scene's thread count
-  State state_ = State::settle_many;
+  State state_ = State::settle_one;
+  int slow_ = 0;                    // steps in a row of the threads' window past kSlowStep
   std::vector<double> window_;      // per-disc step times of the current window
   double window_s_ = 0;             // [s] its steps' time
   bool window_full() const { return window_.size() >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds; }
