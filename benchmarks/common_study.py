@@ -51,6 +51,18 @@ def engine_version() -> str:
     return line.split(" - ")[0].strip()
 
 
+def set_autogroup_nice(pid, nice: int) -> None:
+    """Gives process pid's autogroup the niceness `nice` (root). With autogroups on (Debian's
+    default), the kernel shares the cores between sessions first: a process's own nice counts only
+    within its session, and mpirun starts its ranks in sessions of their own."""
+    try:
+        f = Path(f"/proc/{pid}/autogroup")
+        if f"nice {nice}" not in f.read_text():
+            f.write_text(str(nice))
+    except OSError:
+        pass
+
+
 # A LIGGGHTS or LAMMPS log: a line for each `run`, and after it the timing breakdown whose Output
 # row (min | avg | max) is the writing of dumps and thermo within that loop.
 LOOP_LINE = re.compile(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms")

@@ -83,17 +83,9 @@ BOOST = None   # --boost: the autogroup niceness given to every process of a run
 
 
 def boost(pid: str) -> None:
-    """Gives process pid's autogroup the niceness BOOST. With autogroups on (Debian's default), the
-    kernel shares the cores between sessions first: a process's own nice counts only within its
-    session, and mpirun starts its ranks in sessions of their own."""
-    if BOOST is None:
-        return
-    try:
-        f = Path(f"/proc/{pid}/autogroup")
-        if f"nice {BOOST}" not in f.read_text():
-            f.write_text(str(BOOST))
-    except OSError:
-        pass
+    """Gives process pid's autogroup the niceness BOOST (common_study.set_autogroup_nice)."""
+    if BOOST is not None:
+        common_study.set_autogroup_nice(pid, BOOST)
 
 
 class PeakSampler(threading.Thread):

@@ -34,6 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import common_study  # noqa: E402
 import speed  # noqa: E402
 
 DEFAULT_SETTINGS = "1,2,2:spin=100,2:spin=300000,2:fixed"
@@ -55,19 +56,12 @@ def environment(setting: str) -> tuple[int, dict, list[str]]:
     return int(threads), env, extra
 
 
-def set_autogroup_nice(pid: int, nice: int) -> None:
-    try:
-        Path(f"/proc/{pid}/autogroup").write_text(str(nice))
-    except OSError:
-        pass
-
-
 def run_point(dem: str, scene: Path, out: Path, setting: str, limit: float, boost: int | None) -> dict:
     threads, env, extra = environment(setting)
     cmd = [dem, "run", str(scene), "--out", str(out), "--quiet", "--threads", str(threads), *extra]
     p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if boost is not None:
-        set_autogroup_nice(p.pid, boost)
+        common_study.set_autogroup_nice(p.pid, boost)
     try:
         _, err = p.communicate(timeout=limit)
     except subprocess.TimeoutExpired:
@@ -94,7 +88,7 @@ def main() -> int:
     out = Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     if args.boost is not None:
-        set_autogroup_nice(os.getpid(), args.boost)
+        common_study.set_autogroup_nice(os.getpid(), args.boost)
     sizes, settings, conditions = args.sizes.split(","), args.settings.split(","), args.conditions.split(",")
     for s in settings:
         environment(s)  # bad settings fail before any run
@@ -116,7 +110,7 @@ def main() -> int:
                     if cond == "busy":
                         hog = subprocess.Popen(["taskset", "-c", "0", "sh", "-c", "while :; do :; done"])
                         if args.boost is not None:
-                            set_autogroup_nice(hog.pid, args.boost)
+                            common_study.set_autogroup_nice(hog.pid, args.boost)
                         time.sleep(0.2)
                     try:
                         rec = run_point(args.dem, scenes[size], out / "runs" / f"{cond}_{size}_{setting.replace(':', '_').replace('=', '')}_r{rep}",
