@@ -82,6 +82,7 @@ def main() -> int:
     ap.add_argument("--conditions", default="quiet,busy")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--limit", type=float, default=60.0, help="seconds after which a run is stopped")
+    ap.add_argument("--scale", type=int, default=1, help="runs K times the speed study's steps (longer runs)")
     ap.add_argument("--boost", type=int, help="autogroup niceness of the study's processes (root)")
     ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(ROOT / "build" / "dem")))
     args = ap.parse_args()
@@ -95,6 +96,7 @@ def main() -> int:
     scenes = {}
     for size in sizes:  # the speed study's settled shared-law case, written as the comparison layer writes it
         _, settle, dis, _ = speed.SIZES[size]
+        settle, dis = settle * args.scale, dis * args.scale
         settled = speed.settled_scene(speed.SCENES / speed.SIZES[size][0], args.dem, out)
         phases = speed.scene_with_phases(settled, settle, dis, speed.DT_SHARED, out / f"bench_{size}.toml")
         from compare import native_backend

@@ -66,6 +66,22 @@ TEST(ThreadChoice, AbandonsASlowWindowOfThreads) {
   EXPECT_EQ(c.steps_at[1], ThreadChoice::kAbandon * c.probes);
 }
 
+TEST(ThreadChoice, KeepsTheThreadsThroughAnotherProcesssTimeSlices) {
+  // Two threads 1.7x as fast as one on a small scene (0.1 ms steps), but every 50th step another
+  // process takes a thread's core for 8 ms, two steps of 4 ms: too short to abandon a window
+  // (kWindowSeconds), too few to move its median.
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  long step = 0;
+  run_steps(w, c, 100000, [&](int nt) {
+    const bool slice = ++step % 50 < 2;
+    return nt == 2 ? (slice ? 0.004 : 0.0001) : 0.00017;
+  });
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  EXPECT_LT(c.steps_at[0], 0.02 * 100000) << c.steps_at[0] << " steps of one thread";
+}
+
 TEST(ThreadChoice, AlikeIsOneThread) {
   World w = world_of(kDiscs, 2);
   ThreadChoice c;

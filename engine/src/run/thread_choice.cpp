@@ -19,12 +19,21 @@ void ThreadChoice::start(World& w, bool enabled) {
   if (enabled_) begin_probe(w);
 }
 
+double ThreadChoice::close_window() {
+  const double m = median(window_);
+  window_steps_ = static_cast<int>(window_.size());
+  window_.clear();
+  window_s_ = 0;
+  return m;
+}
+
 void ThreadChoice::begin_probe(World& w) {
   state_ = State::settle_one;
   window_.clear();
   window_s_ = 0;
   probe_s_ = 0;
   slow_ = 0;
+  slow_s_ = 0;
   w.threads_allowed = 1;
 }
 
@@ -47,11 +56,11 @@ void ThreadChoice::after_step(World& w, double seconds) {
   const double per_disc = seconds / std::max(n, 1);  // a discharge loses discs as it goes
   if (state_ == State::hold) {
     held_ += seconds;
-    if (many_) {  // the last kWindow steps, against the probe's
-      if (recent_.size() < static_cast<std::size_t>(kWindow)) recent_.push_back(per_disc);
-      else recent_[recent_at_++ % kWindow] = per_disc;
-      if (recent_.size() == static_cast<std::size_t>(kWindow) && median(recent_) > kSlower * probe_many_)
-        return begin_probe(w);
+    if (many_) {  // the last steps, as many as the probe's window of threads, against its median
+      const std::size_t size = static_cast<std::size_t>(std::max(window_steps_, kWindow));
+      if (recent_.size() < size) recent_.push_back(per_disc);
+      else recent_[recent_at_++ % size] = per_disc;
+      if (recent_.size() == size && median(recent_) > kSlower * probe_many_) return begin_probe(w);
     }
     if (held_ >= std::max(hold_, kHoldProbes * probe_s_)) begin_probe(w);
     return;
@@ -63,21 +72,23 @@ void ThreadChoice::after_step(World& w, double seconds) {
     case State::one:
       window_.push_back(per_disc);
       if (!window_full()) return;
-      probe_one_ = median(window_);
-      window_.clear();
-      window_s_ = 0;
+      probe_one_ = close_window();
       state_ = State::settle_many;
       w.threads_allowed = asked_;
       return;
     case State::settle_many:
-    case State::many:
-      // kAbandon steps in a row kSlowStep times one thread's: the threads lose (a busy neighbour
-      // makes their steps several times one thread's); the window stops there.
-      slow_ = per_disc > kSlowStep * probe_one_ ? slow_ + 1 : 0;
-      if (slow_ >= kAbandon) {
-        probe_many_ = per_disc;
+    case State::many: {
+      // kAbandon steps in a row, and kWindowSeconds, at kSlowStep times one thread's: the threads
+      // lose (a busy neighbour makes their steps several times one thread's); the window stops
+      // there. Not two short steps alone: one time slice taken from a thread by another process
+      // (milliseconds) makes a step or two of a small scene slow, and the machine keeps that core.
+      const bool slow = per_disc > kSlowStep * probe_one_;
+      slow_ = slow ? slow_ + 1 : 0;
+      slow_s_ = slow ? slow_s_ + seconds : 0;
+      if (slow_ >= kAbandon && slow_s_ >= kWindowSeconds) {
         window_.clear();
         window_s_ = 0;
+        probe_many_ = per_disc;
         return decide(w);
       }
       if (state_ == State::settle_many) {
@@ -87,10 +98,9 @@ void ThreadChoice::after_step(World& w, double seconds) {
       }
       window_.push_back(per_disc);
       if (!window_full()) return;
-      probe_many_ = median(window_);
-      window_.clear();
-      window_s_ = 0;
+      probe_many_ = close_window();
       return decide(w);
+    }
     case State::hold: return;
   }
 }

@@ -21,10 +21,11 @@ class ThreadChoice {
   // not counted: the first step after a switch pays for new blocks and cold caches), each of
   // kWindow steps and kWindowSeconds at least (the other processes' time slices are
   // milliseconds); the median step time of each window, per disc. The threads' window stops
-  // after kAbandon steps in a row (the uncounted one included) that take kSlowStep times one
-  // thread's median: beside a busy process a step of 2 spinning threads takes several times one
-  // thread's, and a full window of them would cost a short run more than the choice saves. The scene's threads are kept when they are faster by
-  // kGain at least (alike, one thread leaves a core to the machine's other work).
+  // after kAbandon steps in a row (the uncounted one included), and kWindowSeconds of them,
+  // that take kSlowStep times one thread's median: beside a busy process a step of 2 spinning
+  // threads takes several times one thread's, and a full window of such large steps would cost
+  // a short run more than the choice saves. The scene's threads are kept when they are faster
+  // by kGain at least (alike, one thread leaves a core to the machine's other work).
   static constexpr int kWindow = 8;
   static constexpr double kWindowSeconds = 0.01;
   static constexpr double kGain = 0.95;
@@ -35,8 +36,9 @@ class ThreadChoice {
   // again from kHoldFirst when one overturns it.
   static constexpr double kHoldFirst = 0.5, kHoldMax = 32.0;  // [s]
   static constexpr int kHoldProbes = 32;
-  // Holding the scene's threads, a probe starts at once when the median of the last kWindow
-  // steps is kSlower times the probe's (another process took a core).
+  // Holding the scene's threads, a probe starts at once when the median of the last steps, as
+  // many as the probe's window of threads had (kWindow at least), is kSlower times the probe's
+  // (another process took a core).
   static constexpr double kSlower = 1.5;
 
   // Before the run's first step: whether to choose at all (integrator.thread_choice, more than
@@ -57,8 +59,10 @@ class ThreadChoice {
   int asked_ = 1;                  // the scene's thread count
   State state_ = State::settle_one;
   int slow_ = 0;                    // steps in a row of the threads' window past kSlowStep
+  double slow_s_ = 0;               // [s] their time
   std::vector<double> window_;      // per-disc step times of the current window
   double window_s_ = 0;             // [s] its steps' time
+  int window_steps_ = 0;            // the steps of the last window closed
   bool window_full() const { return window_.size() >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds; }
   double probe_many_ = 0, probe_one_ = 0;  // the last probe's medians [s per disc]
   bool many_ = true;                // holding the scene's threads
@@ -68,6 +72,7 @@ class ThreadChoice {
   std::vector<double> recent_;      // the last kWindow per-disc step times while holding
   std::size_t recent_at_ = 0;
   static double median(std::vector<double> v);
+  double close_window();  // the window's median; the window emptied
   void begin_probe(World& w);
   void decide(World& w);
 };
