@@ -10,10 +10,7 @@ import math
 import numpy as np
 
 from compare import run_dir as _run_dir
-# The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
-from compare.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: F401
-                             PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
-                             WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
+from compare.run_dir import RunDir, RunDirError
 
 # The paper's plot scale: one disc diameter stands for 50/pi (about 16) disc weights.
 DIAMETER_IN_DISC_WEIGHTS = 50.0 / math.pi
