@@ -175,6 +175,8 @@ def read_csv(path, columns, empty=None, extra=False):
     return data
 
 
+# The largest file read by _plain_rows (16 MiB: a 10k-disc contacts.csv is about 2 MB).
+PLAIN_MAX_BYTES = 16 << 20
 # Characters that make a CSV file other than plain comma-separated cells: quotes, and the
 # whitespace (other than the line feed) that str.strip would take off a cell, or a NUL.
 _NOT_PLAIN = re.compile('[" \t\r\x00\x0b\x0c\x1c-\x1f]')
@@ -184,8 +186,12 @@ def _plain_rows(path):
     """The rows of a plain file (ASCII, no quotes, no whitespace but line feeds) as read_csv's
     reader gives them, (line number, cells), split on commas: the same cells as csv.reader and
     str.strip give, without a Python call a cell. None for any other file (or one that cannot be
-    read): read_csv reads it with csv.reader, and says what is wrong with it."""
+    read): read_csv reads it with csv.reader, and says what is wrong with it. A file over
+    PLAIN_MAX_BYTES goes to csv.reader too: its text and lines held beside its cells would add to
+    the peak memory (a 1M-disc contacts.csv)."""
     try:
+        if os.path.getsize(path) > PLAIN_MAX_BYTES:
+            return None
         with open(path, newline="") as f:
             text = f.read()
     except (OSError, UnicodeDecodeError):
