@@ -14,7 +14,7 @@ and whether they agree. Only runs that came to rest count; the others are named 
 """
 import numpy as np
 
-from compare import figures
+from compare import figure_data as figures   # reading and side-wall profiles, no matplotlib
 
 CORNER_SPAN = 0.10      # lowest share of the side-wall contacts' depth span: "near the bottom"
 

@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare import figures, paper_claims, scene_toml
+from compare import paper_claims, scene_toml
 from compare.common import write_text_atomic
 from compare.run_dir import RunDir
 
@@ -107,7 +107,8 @@ PICTURES = (("frames", "plot_discharge_frames"), ("ratios", "plot_wall_ratios"),
 
 def draw(pictured_dir, out, tag, kind=None):
     """One picture (kind: frames, ratios or flow) of a configuration's median member, or all three;
-    run in a figure process."""
+    run in a figure process (the study's own process imports no matplotlib)."""
+    from compare import figures
     for name, plot in PICTURES:
         if kind in (None, name):
             getattr(figures, plot)(pictured_dir, out / f"{name}_{tag}.png")

@@ -16,7 +16,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare import figures, paper_claims
+from compare import paper_claims
 from compare.common import write_text_atomic
 from compare.run_dir import RunDir, RunDirError
 
@@ -160,6 +160,7 @@ def draw(out_root, case, records):
     """The figures of one pictured case (scheme, dt): the networks of every run that ended (the grid
     marks those not at rest) and Fig. 7 of the runs at rest (a moving fill's wall forces are no
     static profile)."""
+    from compare import figures   # here, in the figure processes: the study's own process imports no matplotlib
     records = sorted(records, key=lambda r: r["s"])
     tag = f"{case[0]}_dt{case[1]:g}"
     mine = [r for r in records if r["status"] not in ("unstable", "error")]

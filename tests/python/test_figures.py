@@ -882,3 +882,64 @@ def test_fixed_layouts_keep_the_titles_inside_and_apart(tmp_path, monkeypatch, p
         for title in (ax.title, ax._left_title):
             if title.get_text():
                 assert not head.overlaps(title.get_window_extent(fig.canvas.get_renderer())), title.get_text()
+
+
+# --------------------------------------------------------------------------- discs at their pixels
+
+# A figure of 4 x 3 inches laid out by _fixed_layout: the axes span 1..3.5 inches across and
+# 0.5..2.5 inches up, and show X 0..10, Y 0..8 (no equal aspect: the box is the layout's).
+LAYOUT = {"size": (4.0, 3.0), "left": 1.0, "right": 0.5, "bottom": 0.5, "top": 0.5, "xlim": (0.0, 10.0),
+          "ylim": (0.0, 8.0)}
+FACE = (0.8, 0.2, 0.1, 1.0)
+
+
+def _disc_png(path, x, y, r):
+    """One disc (face FACE, edge grey) drawn by _draw_discs in the LAYOUT figure, saved by _save."""
+    fig, ax = figures.plt.subplots(figsize=LAYOUT["size"])
+    figures._fixed_layout(fig, LAYOUT["left"], LAYOUT["right"], LAYOUT["bottom"], LAYOUT["top"])
+    ax.set_xlim(*LAYOUT["xlim"])
+    ax.set_ylim(*LAYOUT["ylim"])
+    figures._draw_discs(ax, {"x": np.array([x]), "y": np.array([y]), "r": np.array([r])}, [FACE], "0.5", 0.3)
+    return figures._save(fig, str(path))
+
+
+def _pixel_of(x, y):
+    """The PNG's (row, column) of data point (x, y) from LAYOUT alone, at the saved 150 dpi."""
+    dpi, (w, h) = figures.SAVE_DPI, LAYOUT["size"]
+    (x0, x1), (y0, y1) = LAYOUT["xlim"], LAYOUT["ylim"]
+    box_w, box_h = w - LAYOUT["left"] - LAYOUT["right"], h - LAYOUT["bottom"] - LAYOUT["top"]
+    px = (LAYOUT["left"] + (x - x0) / (x1 - x0) * box_w) * dpi
+    py = (LAYOUT["bottom"] + (y - y0) / (y1 - y0) * box_h) * dpi      # up from the bottom edge
+    return int(h * dpi - py), int(px)
+
+
+def _check_disc_pixels(png, x, y, r):
+    """The disc's face colour at its centre and half a radius from it (4 ways); the white axes
+    background one radius and a half away (4 ways)."""
+    from PIL import Image
+    pixels = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    face = np.round(np.array(FACE[:3]) * 255)
+    for dx, dy in ((0, 0), (0.5, 0), (-0.5, 0), (0, 0.5), (0, -0.5)):
+        row, col = _pixel_of(x + dx * r, y + dy * r)
+        assert np.abs(pixels[row, col] - face).max() <= 2, (dx, dy, pixels[row, col])
+    for dx, dy in ((1.5, 0), (-1.5, 0), (0, 1.5), (0, -1.5)):
+        row, col = _pixel_of(x + dx * r, y + dy * r)
+        assert (pixels[row, col] == 255).all(), (dx, dy, pixels[row, col])
+
+
+def test_a_disc_lies_at_the_pixels_the_layout_gives(tmp_path):
+    """A disc drawn by _draw_discs and written by _save covers the pixels that the fixed layout
+    (margins in inches, the axes' limits, 150 dpi) maps it to, and no others nearby."""
+    for x, y, r in ((2.0, 6.0, 0.8), (7.5, 2.5, 1.0)):
+        _check_disc_pixels(_disc_png(tmp_path / "disc.png", x, y, r), x, y, r)
+
+
+@pytest.mark.parametrize("wrong", ["y flipped", "one radius off in x"])
+def test_the_disc_pixel_check_fails_a_misplaced_disc(tmp_path, wrong):
+    """The check above fails a picture whose disc is drawn mirrored in Y (an image row order
+    turned over) or one radius off in X (an extent off by one radius)."""
+    x, y, r = 2.0, 6.0, 0.8
+    drawn = (x, LAYOUT["ylim"][1] - y, r) if wrong == "y flipped" else (x + r, y, r)
+    png = _disc_png(tmp_path / "disc.png", *drawn)
+    with pytest.raises(AssertionError):
+        _check_disc_pixels(png, x, y, r)

@@ -190,3 +190,29 @@ def test_columns_are_read_by_their_header(tmp_path):
     assert read_csv(tmp_path / "a.csv", ("x", "y"), extra=True)["extra"].tolist() == [9.0]
     (tmp_path / "b.csv").write_text("1,2\n")                           # no header: the columns in order
     assert read_csv(tmp_path / "b.csv", ("x", "y"))["y"].tolist() == [2.0]
+
+
+def test_plain_files_read_as_csv_reader_reads_them(tmp_path, monkeypatch):
+    """A plain file (no quotes, no whitespace but line feeds) is split on commas without csv.reader:
+    the same arrays, dtypes and messages as the file with spaces (read by csv.reader and strip)."""
+    columns = ("t", "wall", "bin", "normal")
+    plain = "t,wall,bin,normal\n0,left,0,1.5\n\n0.005,right,3,-2e-3\n0.01,bottom_a,12,\n"
+    spaced = plain.replace(",", ", ")
+    for name, text in (("plain.csv", plain), ("spaced.csv", spaced)):
+        (tmp_path / name).write_text(text)
+    a = read_csv(tmp_path / "plain.csv", columns, empty=float("nan"))
+    b = read_csv(tmp_path / "spaced.csv", columns, empty=float("nan"))
+    assert a["wall"].tolist() == ["left", "right", "bottom_a"] and a["bin"].tolist() == [0, 3, 12]
+    import compare.run_dir
+    monkeypatch.setattr(compare.run_dir, "PLAIN_MAX_BYTES", 10)          # the plain file by csv.reader
+    c = read_csv(tmp_path / "plain.csv", columns, empty=float("nan"))
+    for k in columns:
+        assert a[k].dtype == b[k].dtype == c[k].dtype, k
+        np.testing.assert_array_equal(a[k], b[k])
+        np.testing.assert_array_equal(a[k], c[k])
+    monkeypatch.undo()
+    # A short row: the same line number (the empty line counted) both ways.
+    for name, text in (("plain.csv", plain), ("spaced.csv", spaced)):
+        (tmp_path / name).write_text(text + ("1,left,2\n" if name == "plain.csv" else "1, left, 2\n"))
+        with pytest.raises(RunDirError, match=rf"{name}: line 6: expected 4 fields"):
+            read_csv(tmp_path / name, columns, empty=float("nan"))
