@@ -188,7 +188,8 @@ TEST(OnsetSlip, ObliqueDiscDiscSpinIsSecondOrder) {
   ASSERT_FALSE(ref.restuck);
   const double p_on = spin_order(w_ref, false, "onset");
   const double p_wrong = spin_order(w_ref, true, "onset, f_n dropped");
-  std::printf("oblique disc-disc spin: order %.2f; with the kept f_n dropped %.2f\n", p_on, p_wrong);
+  std::printf("oblique disc-disc spin: reference %.17g rad/s; order %.2f; with the kept f_n dropped %.2f\n", w_ref,
+              p_on, p_wrong);
   EXPECT_GT(p_on, 1.8) << "the slip onset between discs must be second order";
   EXPECT_LT(p_on, 2.5);
   EXPECT_LT(p_wrong, 1.3) << "without the cap at the step's start the slip onset is first order";

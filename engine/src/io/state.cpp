@@ -184,7 +184,10 @@ void write_world(BinaryOut& o, const World& w) {
   w.each_recorded_pair([&](int i, int j, double fn, double fs) { o.put(PairForce{i, j, fn, fs}); });
   o.vec(w.force_blocks);
   write_paper2(o, w);
-  o.vec(w.onset_normals.records());  // velocity_verlet_onset, friction_cap total: each touching pair's f_n
+  // velocity_verlet_onset, friction_cap total: each touching pair's f_n (as o.vec, without a copy)
+  const PairNormals& fn = w.onset_normals;
+  o.put<std::uint64_t>(fn.size());
+  o.out.write(reinterpret_cast<const char*>(fn.begin()), static_cast<std::streamsize>(fn.size() * sizeof(PairNormals::Record)));
 }
 
 void read_world(BinaryIn& r, World& w, bool onset_normals) {

@@ -175,8 +175,14 @@ void World::onset_forces_law(bool start) {
   // friction_cap = "total": the cap at a step's start is mu |f_n(t)|, f_n(t) what the law gave
   // the pair at the last step's end (onset_normals, read and replaced in list order).
   constexpr bool kTotalCap = FC == FrictionCap::total;
-  std::size_t last_at = 0;
-  if constexpr (kTotalCap) onset_normals.start_pass();
+  const PairNormals::Record* last_at = onset_normals.begin();
+  const PairNormals::Record* const last_end = onset_normals.end();
+  PairNormals::Record* kept = nullptr;
+  PairNormals::Record* kept_end = nullptr;
+  if constexpr (kTotalCap) {
+    kept = onset_normals.start_pass();
+    kept_end = onset_normals.room_end();
+  }
   for (std::size_t q = 0; q < pairs.size(); ++q) {
     PairContact& c = pairs[q];
     const int i = c.i, j = c.j;
@@ -204,14 +210,20 @@ void World::onset_forces_law(bool start) {
     // total, from the pair's kept f_n, unknown (-1) where it did not touch at the last step's end.
     double cap0;
     if constexpr (kTotalCap) {
-      const double* fn0 = onset_normals.last(i, j, last_at);
-      cap0 = fn0 ? coulomb_cap<FC>(p, c.en, *fn0) : -1.0;
+      const PairNormals::Record* r0 = PairNormals::last(last_at, last_end, i, j);
+      cap0 = r0 ? coulomb_cap<FC>(p, c.en, r0->fn) : -1.0;
     } else {
       cap0 = p.mu * std::max(c.en, 0.0);
     }
     double fn, fs, jn, js;
     onset_contact<NT, FC>(p, overlap, du_n, du_s, dash_n, dash_s, h, cap0, c.en, c.es, fn, fs, jn, js);
-    if constexpr (kTotalCap) onset_normals.keep(i, j, fn);
+    if constexpr (kTotalCap) {
+      if (__builtin_expect(kept == kept_end, 0)) {
+        kept = onset_normals.grow(kept);
+        kept_end = onset_normals.room_end();
+      }
+      *kept++ = PairNormals::Record{i, j, fn};
+    }
     worst = std::max(worst, overlap);
     const ContactForce f = contact_force(fn, fs, nrm);  // (15a), (15b): on i
     d.fx[i] += f.x; d.fy[i] += f.y;
@@ -228,7 +240,7 @@ void World::onset_forces_law(bool start) {
       bits[q >> 6] |= std::uint64_t{1} << (q & 63);
     }
   }
-  if constexpr (kTotalCap) onset_normals.end_pass();
+  if constexpr (kTotalCap) onset_normals.end_pass(kept);
   // Discs on walls and points (fixed: prepare() refuses moving ones), as wall_contacts: geometry
   // first, a new contact inheriting the history of a lost neighbour (a wall and its end point).
   auto& wl = neighbors.walls;

@@ -12,9 +12,10 @@
 namespace dem {
 
 // Records of the pairs that touched at the end of the last force pass, sorted by (i, j): 16 bytes
-// a touching pair, nothing for a scene that does not use them. Only touching pairs are recorded,
-// and a touching pair is in every neighbour list, so a list build changes no record; removals and
-// re-sorts renumber them as they do the lists; state files and checkpoints carry them.
+// a touching pair (twice: the last pass's and the one being written), nothing for a scene that
+// does not use them. Only touching pairs are recorded, and a touching pair is in every neighbour
+// list, so a list build changes no record; removals and re-sorts renumber them as they do the
+// lists; state files and checkpoints carry them.
 class PairNormals {
  public:
   struct Record {  // i < j
@@ -22,21 +23,25 @@ class PairNormals {
     double fn;
   };
 
-  const std::vector<Record>& records() const { return now_; }
-  std::size_t size() const { return now_.size(); }
+  std::size_t size() const { return n_; }
+  const Record* begin() const { return now_.data(); }
+  const Record* end() const { return now_.data() + n_; }
+  std::vector<Record> records() const { return {begin(), end()}; }
   bool allocated() const { return now_.capacity() > 0 || next_.capacity() > 0; }
 
-  // A force pass in list order: the f_n the pair (i, j) had at the end of the last pass (nullptr:
-  // it did not touch then), with one cursor `at` from 0; the pass keeps this step's with keep
-  // and replaces the last step's with end_pass.
-  const double* last(int i, int j, std::size_t& at) const {
-    const std::size_t n = now_.size();
-    while (at < n && (now_[at].i < i || (now_[at].i == i && now_[at].j < j))) ++at;
-    return at < n && now_[at].i == i && now_[at].j == j ? &now_[at].fn : nullptr;
+  // A force pass in list order reads the last pass's records with a cursor (`last`) and writes
+  // its own through raw pointers (the pass's loop keeps them in registers): from start_pass() up
+  // to room_end(), grow() when full, end_pass(at) with the position after the last one written.
+  // The f_n the pair (i, j) had at the end of the last pass (nullptr: it did not touch then);
+  // `at` from begin(), asked in (i, j) order.
+  static const Record* last(const Record*& at, const Record* end, int i, int j) {
+    while (at < end && (at->i < i || (at->i == i && at->j < j))) ++at;
+    return at < end && at->i == i && at->j == j ? at : nullptr;
   }
-  void start_pass() { next_.clear(); }
-  void keep(int i, int j, double fn) { next_.push_back(Record{i, j, fn}); }
-  void end_pass() { now_.swap(next_); }
+  Record* start_pass();
+  Record* room_end() { return next_.data() + next_.size(); }
+  Record* grow(Record* at);  // the records before `at` kept; the new position of `at`
+  void end_pass(const Record* at);
 
   void clear();  // frees both
   // Drops the records of pairs with a removed disc and renumbers the discs (order kept).
@@ -47,8 +52,9 @@ class PairNormals {
   void assign(std::vector<Record> records);
 
  private:
-  std::vector<Record> now_;   // the last pass's
-  std::vector<Record> next_;  // this pass's, as it runs (its buffer kept between passes)
+  std::vector<Record> now_;   // the last pass's records: [0, n_)
+  std::vector<Record> next_;  // this pass's buffer (its size is its room)
+  std::size_t n_ = 0;
 };
 
 }  // namespace dem
