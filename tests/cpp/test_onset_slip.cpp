@@ -230,7 +230,7 @@ void build_sliding_silo(World& w) {
 std::vector<std::array<double, 3>> normals_by_id(const World& w) {
   std::vector<std::array<double, 3>> out;
   for (const PairNormals::Record& q : w.onset_normals.records()) {
-    const int a = w.discs.id_at(q.i), b = w.discs.id_at(q.j);
+    const int a = w.discs.id_at(q.i()), b = w.discs.id_at(q.j());
     out.push_back({static_cast<double>(std::min(a, b)), static_cast<double>(std::max(a, b)), q.fn});
   }
   std::sort(out.begin(), out.end());

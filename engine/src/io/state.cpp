@@ -232,8 +232,7 @@ void read_world(BinaryIn& r, World& w, bool onset_normals) {
   if (onset_normals) r.vec(fn);
   for (std::size_t k = 0; k < fn.size(); ++k) {
     const PairNormals::Record& q = fn[k];
-    if (q.i < 0 || q.i >= q.j || static_cast<std::size_t>(q.j) >= n ||
-        (k > 0 && (fn[k - 1].i > q.i || (fn[k - 1].i == q.i && fn[k - 1].j >= q.j))))
+    if (q.i() < 0 || q.i() >= q.j() || static_cast<std::size_t>(q.j()) >= n || (k > 0 && fn[k - 1].key >= q.key))
       r.fail("corrupt pair normal-force record");
   }
   w.onset_normals.assign(std::move(fn));

@@ -210,7 +210,7 @@ void World::onset_forces_law(bool start) {
     // total, from the pair's kept f_n, unknown (-1) where it did not touch at the last step's end.
     double cap0;
     if constexpr (kTotalCap) {
-      const PairNormals::Record* r0 = PairNormals::last(last_at, last_end, i, j);
+      const PairNormals::Record* r0 = PairNormals::last(last_at, last_end, PairNormals::key(i, j));
       cap0 = r0 ? coulomb_cap<FC>(p, c.en, r0->fn) : -1.0;
     } else {
       cap0 = p.mu * std::max(c.en, 0.0);
@@ -222,7 +222,7 @@ void World::onset_forces_law(bool start) {
         kept = onset_normals.grow(kept);
         kept_end = onset_normals.room_end();
       }
-      *kept++ = PairNormals::Record{i, j, fn};
+      *kept++ = PairNormals::Record{PairNormals::key(i, j), fn};
     }
     worst = std::max(worst, overlap);
     const ContactForce f = contact_force(fn, fs, nrm);  // (15a), (15b): on i

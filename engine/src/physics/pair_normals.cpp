@@ -36,9 +36,9 @@ void PairNormals::compact(const RemovedDiscs& removed) {
   std::size_t o = 0;
   for (std::size_t k = 0; k < n_; ++k) {
     const Record q = now_[k];
-    const int i = removed.new_index(q.i), j = removed.new_index(q.j);
+    const int i = removed.new_index(q.i()), j = removed.new_index(q.j());
     if (i < 0 || j < 0) continue;
-    now_[o++] = Record{i, j, q.fn};
+    now_[o++] = Record{key(i, j), q.fn};  // order kept: i, j only lose the removed discs below them
   }
   n_ = o;
 }
@@ -46,12 +46,11 @@ void PairNormals::compact(const RemovedDiscs& removed) {
 void PairNormals::renumber(const std::vector<int>& new_index) {
   for (std::size_t k = 0; k < n_; ++k) {
     Record& q = now_[k];
-    const int i = new_index[q.i], j = new_index[q.j];
-    q.i = std::min(i, j);  // f_n is the same seen from either disc
-    q.j = std::max(i, j);
+    const int i = new_index[q.i()], j = new_index[q.j()];
+    q.key = key(std::min(i, j), std::max(i, j));  // f_n is the same seen from either disc
   }
   std::sort(now_.begin(), now_.begin() + static_cast<std::ptrdiff_t>(n_),
-            [](const Record& a, const Record& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; });
+            [](const Record& a, const Record& b) { return a.key < b.key; });
 }
 
 void PairNormals::assign(std::vector<Record> records) {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "physics/discs.hpp"
@@ -18,10 +19,15 @@ namespace dem {
 // lists; state files and checkpoints carry them.
 class PairNormals {
  public:
-  struct Record {  // i < j
-    int i, j;
+  struct Record {
+    std::uint64_t key;  // i << 32 | j, i < j: the pair list's order is the keys' (one compare)
     double fn;
+    int i() const { return static_cast<int>(key >> 32); }
+    int j() const { return static_cast<int>(key & 0xffffffffu); }
   };
+  static std::uint64_t key(int i, int j) {
+    return static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32 | static_cast<std::uint32_t>(j);
+  }
 
   std::size_t size() const { return n_; }
   const Record* begin() const { return now_.data(); }
@@ -32,11 +38,11 @@ class PairNormals {
   // A force pass in list order reads the last pass's records with a cursor (`last`) and writes
   // its own through raw pointers (the pass's loop keeps them in registers): from start_pass() up
   // to room_end(), grow() when full, end_pass(at) with the position after the last one written.
-  // The f_n the pair (i, j) had at the end of the last pass (nullptr: it did not touch then);
-  // `at` from begin(), asked in (i, j) order.
-  static const Record* last(const Record*& at, const Record* end, int i, int j) {
-    while (at < end && (at->i < i || (at->i == i && at->j < j))) ++at;
-    return at < end && at->i == i && at->j == j ? at : nullptr;
+  // The record of the pair with key k at the end of the last pass (nullptr: it did not touch
+  // then); `at` from begin(), asked in key order.
+  static const Record* last(const Record*& at, const Record* end, std::uint64_t k) {
+    while (at < end && at->key < k) ++at;
+    return at < end && at->key == k ? at : nullptr;
   }
   Record* start_pass();
   Record* room_end() { return next_.data() + next_.size(); }
