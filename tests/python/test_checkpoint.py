@@ -1,6 +1,7 @@
 """Checkpoints and resume (docs/outputs.md, "Checkpoints"): a run killed with SIGKILL at random
 points and resumed with --resume ends bit-identical to the run never stopped, for a fill to rest,
-a discharge and a shear (paper 2's box with bonded clusters); SIGINT / SIGTERM stop after the current step with a checkpoint, all outputs
+a discharge, a shear (paper 2's box with bonded clusters) and a discharge under
+velocity_verlet_onset with the shared law (its pairs' kept f_n); SIGINT / SIGTERM stop after the current step with a checkpoint, all outputs
 and status "interrupted" (exit 130 / 143); a checkpoint of another scene, engine version or
 option set is refused with exit 2."""
 import json
@@ -79,12 +80,31 @@ def lowered_floor(folder):
                                      "end.stop_at_rest": False}, Path(folder) / "floor.toml")
 
 
+ONSET = {"integrator.scheme": "velocity_verlet_onset", "integrator.dt": 1e-5, "integrator.force_dt": True,
+         "contact.normal_spring": "overlap", "contact.no_tension": "total", "contact.friction_cap": "total",
+         "pairs[0].mu": 0.2}
+
+
+def onset_discharge(folder, dem_binary):
+    """A discharge under velocity_verlet_onset and the shared law (friction_cap "total", friction
+    low enough that contacts slide), from the state of a 0.1 s fill (start.from): in the flow, slips
+    start between discs at nearly every step, so the pairs' kept f_n (the cap at a step's start of
+    the slip correction) must come back from the checkpoint, through the removals."""
+    fill = scene_toml.edit(SILO, {**ONSET, "end.time": 0.1, "end.stop_at_rest": False}, Path(folder) / "onset_fill.toml")
+    state = Path(folder) / "onset_fill.state"
+    p = dem(dem_binary, "run", fill, "--out", Path(folder) / "onset_fill", "--quiet", "--save-state", state)
+    assert p.returncode == 0, p.stderr
+    return scene_toml.edit(DISCHARGE, {**ONSET, "discharge.time": 0.3, "discharge.snapshots": [0.0, 0.1, 0.2, 0.3]},
+                           Path(folder) / "onset.toml", add={"start.from": str(state)})
+
+
 @pytest.fixture(scope="module")
 def full_runs(tmp_path_factory, dem_binary):
     """The uninterrupted runs (no checkpoints), their final states and wall times."""
     tmp = tmp_path_factory.mktemp("full")
     wall = {}
-    for name, scene in (("silo", SILO), ("discharge", DISCHARGE), ("shear", SHEAR), ("floor", lowered_floor(tmp))):
+    for name, scene in (("silo", SILO), ("discharge", DISCHARGE), ("shear", SHEAR), ("floor", lowered_floor(tmp)),
+                        ("onset", onset_discharge(tmp, dem_binary))):
         t0 = time.monotonic()
         p = dem(dem_binary, "run", scene, "--out", tmp / name, "--quiet", "--save-state", tmp / f"{name}.state")
         wall[name] = time.monotonic() - t0
@@ -97,11 +117,12 @@ def full_runs(tmp_path_factory, dem_binary):
     ("discharge", DISCHARGE, DISCHARGE_FILES, 0.005),
     ("shear", SHEAR, SHEAR_FILES, 0.02),
     ("floor", None, FILL_FILES, 0.005),
+    ("onset", None, DISCHARGE_FILES, 0.01),
 ])
 def test_killed_and_resumed_run_is_bit_identical(tmp_path, dem_binary, full_runs, case, scene, files, every):
     """SIGKILL at random times (a fraction of the uninterrupted run's wall time), resume, compare."""
     full, wall = full_runs
-    scene = scene or full / "floor.toml"
+    scene = scene or full / f"{case}.toml"
     rng = random.Random(7)
     killed = attempts = 0
     while killed < 3 and attempts < 12:

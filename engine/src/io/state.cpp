@@ -6,13 +6,17 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "io/files.hpp"
 
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '6'};  // the format's version: a state file loads only in its own
+constexpr char kMagic[8] = {'D', 'E', 'M', 'S', 'T', 'A', 'T', '7'};  // the format's version
+// Version 6 lacks the onset scheme's kept f_n (World::onset_normals), written last: read without
+// them (the first step after it makes no slip correction on a disc pair).
+constexpr char kVersion6 = '6';
 
 // The wall contacts in their memory layout with the padding after `touching` zeroed, so that
 // equal states give equal files.
@@ -180,9 +184,13 @@ void write_world(BinaryOut& o, const World& w) {
   w.each_recorded_pair([&](int i, int j, double fn, double fs) { o.put(PairForce{i, j, fn, fs}); });
   o.vec(w.force_blocks);
   write_paper2(o, w);
+  // velocity_verlet_onset, friction_cap total: each touching pair's f_n (as o.vec, without a copy)
+  const PairNormals& fn = w.onset_normals;
+  o.put<std::uint64_t>(fn.size());
+  o.out.write(reinterpret_cast<const char*>(fn.begin()), static_cast<std::streamsize>(fn.size() * sizeof(PairNormals::Record)));
 }
 
-void read_world(BinaryIn& r, World& w) {
+void read_world(BinaryIn& r, World& w, bool onset_normals) {
   w.time = r.get<double>();
   w.steps = r.get<long>();
   const double dt = r.get<double>();
@@ -220,6 +228,14 @@ void read_world(BinaryIn& r, World& w) {
         (t + 1 == w.force_blocks.size() && static_cast<std::size_t>(w.force_blocks[t]) != n))
       r.fail("corrupt thread blocks");
   read_paper2(r, w);
+  std::vector<PairNormals::Record> fn;
+  if (onset_normals) r.vec(fn);
+  for (std::size_t k = 0; k < fn.size(); ++k) {
+    const PairNormals::Record& q = fn[k];
+    if (q.i() < 0 || q.i() >= q.j() || static_cast<std::size_t>(q.j()) >= n || (k > 0 && fn[k - 1].key >= q.key))
+      r.fail("corrupt pair normal-force record");
+  }
+  w.onset_normals.assign(std::move(fn));
 }
 
 void save_state(const World& w, const std::string& path) {
@@ -235,9 +251,10 @@ void load_state(World& w, const std::string& path) {
   BinaryIn r{in, path};
   if (!in) r.fail("cannot open the state file");
   char magic[8];
-  if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof magic) != 0)
+  if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof magic - 1) != 0 ||
+      (magic[7] != kMagic[7] && magic[7] != kVersion6))
     r.fail("not a dem state file (or another format version)");
-  read_world(r, w);
+  read_world(r, w, magic[7] != kVersion6);
   w.neighbors.invalidate();
   w.prepare();  // rebuild lists; the restored history is merged in
 }

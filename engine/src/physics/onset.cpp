@@ -17,9 +17,12 @@
 //     the dashpots alone; the missed impulse (onset_impulse) is added with the closing half kick;
 //  3. a contact that stuck at t and slides at t + dt started to slide at the fraction theta where
 //     the spring met the cap (both linear over the step); the impulse becomes the trapezoid of
-//     each part (slip_impulse). Known exactly where the cap at t is: discs on walls and points
-//     (their f_n is kept) and disc pairs under friction_cap = "elastic" (e_n, overlap spring).
-//     Disc pairs under friction_cap = "total" keep no f_n: no slip correction there.
+//     each part (slip_impulse). The cap at t is the law's own: discs on walls and points keep
+//     their f_n; disc pairs under friction_cap = "elastic" have it from e_n (overlap spring),
+//     under friction_cap = "total" from the f_n the pass kept for each touching pair
+//     (World::onset_normals, pair_normals.hpp). The very value, not one rebuilt from the state:
+//     a sliding contact's |e_s| is the last cap to the bit, and a cap off by O(dt^2) would give
+//     it a spurious impulse of O(dt) at every step.
 // The pass runs on one thread (the same bits at every thread count); the move is Verlet's.
 #include <algorithm>
 #include <cmath>
@@ -169,6 +172,17 @@ void World::onset_forces_law(bool start) {
   } else if (pair_totals.allocated()) {
     drop_pair_forces();
   }
+  // friction_cap = "total": the cap at a step's start is mu |f_n(t)|, f_n(t) what the law gave
+  // the pair at the last step's end (onset_normals, read and replaced in list order).
+  constexpr bool kTotalCap = FC == FrictionCap::total;
+  const PairNormals::Record* last_at = onset_normals.begin();
+  const PairNormals::Record* const last_end = onset_normals.end();
+  PairNormals::Record* kept = nullptr;
+  PairNormals::Record* kept_end = nullptr;
+  if constexpr (kTotalCap) {
+    kept = onset_normals.start_pass();
+    kept_end = onset_normals.room_end();
+  }
   for (std::size_t q = 0; q < pairs.size(); ++q) {
     PairContact& c = pairs[q];
     const int i = c.i, j = c.j;
@@ -192,11 +206,24 @@ void World::onset_forces_law(bool start) {
     const double dash_n = normal_increment(pdx, pdy, nrm);
     const double dash_s = shear_increment(pdx, pdy, nrm, ai * pred(d.omega, onset_om_, i), aj * pred(d.omega, onset_om_, j));
     const PairProps& p = pair(d.material(i), d.material(j));
-    // The cap at the step's start: e_n is K_n times that overlap (friction_cap elastic); the
-    // total f_n is not kept for a pair.
-    const double cap0 = FC == FrictionCap::elastic ? p.mu * std::max(c.en, 0.0) : -1.0;
+    // The cap at the step's start: friction_cap elastic, from e_n (K_n times that overlap);
+    // total, from the pair's kept f_n, unknown (-1) where it did not touch at the last step's end.
+    double cap0;
+    if constexpr (kTotalCap) {
+      const PairNormals::Record* r0 = PairNormals::last(last_at, last_end, PairNormals::key(i, j));
+      cap0 = r0 ? coulomb_cap<FC>(p, c.en, r0->fn) : -1.0;
+    } else {
+      cap0 = p.mu * std::max(c.en, 0.0);
+    }
     double fn, fs, jn, js;
     onset_contact<NT, FC>(p, overlap, du_n, du_s, dash_n, dash_s, h, cap0, c.en, c.es, fn, fs, jn, js);
+    if constexpr (kTotalCap) {
+      if (__builtin_expect(kept == kept_end, 0)) {
+        kept = onset_normals.grow(kept);
+        kept_end = onset_normals.room_end();
+      }
+      *kept++ = PairNormals::Record{PairNormals::key(i, j), fn};
+    }
     worst = std::max(worst, overlap);
     const ContactForce f = contact_force(fn, fs, nrm);  // (15a), (15b): on i
     d.fx[i] += f.x; d.fy[i] += f.y;
@@ -213,6 +240,7 @@ void World::onset_forces_law(bool start) {
       bits[q >> 6] |= std::uint64_t{1} << (q & 63);
     }
   }
+  if constexpr (kTotalCap) onset_normals.end_pass(kept);
   // Discs on walls and points (fixed: prepare() refuses moving ones), as wall_contacts: geometry
   // first, a new contact inheriting the history of a lost neighbour (a wall and its end point).
   auto& wl = neighbors.walls;

@@ -260,6 +260,8 @@ void World::prepare(bool build_lists) {
   if (!rotation_angle) std::vector<double>().swap(d.phi);  // an output a scene asks for
   else d.phi.resize(d.size(), 0.0);
   if (!moving.empty()) moving.motion.resize(geometry.obstacle_count());
+  // The pairs' kept f_n serve the onset scheme's slip correction under the total cap alone.
+  if (scheme != Scheme::velocity_verlet_onset || options.friction_cap != FrictionCap::total) onset_normals.clear();
   if (build_lists) rebuild_lists();  // keeps the history already in the lists
 }
 
@@ -952,6 +954,7 @@ void World::remove_discs(const RemovedDiscs& removed) {
   if (!d.dux.empty()) { keep(d.dux); keep(d.duy); keep(d.dphi); }  // eq. 19 only
   keep(d.fx); keep(d.fy); keep(d.torque);
   pair_totals.compact(neighbors.pairs, removed);  // the recorded totals follow their pairs
+  onset_normals.compact(removed);  // and the onset scheme's f_n (history)
   neighbors.compact(removed);
   cross_ok_ = false;
   for (int& b : force_blocks)  // the same block edges, less the discs gone below them

@@ -14,6 +14,7 @@
 #include "physics/model.hpp"
 #include "physics/moving_walls.hpp"
 #include "physics/neighbors.hpp"
+#include "physics/pair_normals.hpp"
 #include "physics/pair_totals.hpp"
 
 namespace dem {
@@ -100,6 +101,10 @@ class World {
   PairTotals pair_totals;
   long pair_forces_step = -1;
   bool pair_forces_current() const { return pair_forces_step == steps; }
+  // velocity_verlet_onset under friction_cap = "total" alone: each touching pair's f_n at the end
+  // of the last step, the cap at the next step's start of its slip correction (onset.cpp). History,
+  // not output: removals and re-sorts carry it, state files and checkpoints hold it. Empty otherwise.
+  PairNormals onset_normals;
 
   // The threads' blocks of discs in the force pass (thread t owns discs [force_blocks[t],
   // force_blocks[t + 1]); empty with one thread). Set every kRebalanceEvery steps so that each

@@ -39,6 +39,7 @@ void World::resort_discs() {
   put(d.dux); put(d.duy); put(d.dphi);
   put(d.fx); put(d.fy); put(d.torque);
   pair_totals.renumber(neighbors.pairs, new_index);  // over the list as it was
+  onset_normals.renumber(new_index);
   neighbors.renumber(new_index);
   for (Bond& b : bonds) {  // a bond whose discs swap order swaps its arms (its forces are symmetric)
     const int i = new_index[b.i], j = new_index[b.j];
