@@ -6,10 +6,10 @@
 
 namespace dem {
 
-double ThreadChoice::median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+double ThreadChoice::mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s / static_cast<double>(v.size());
 }
 
 void ThreadChoice::start(World& w, bool enabled) {
@@ -20,7 +20,7 @@ void ThreadChoice::start(World& w, bool enabled) {
 }
 
 double ThreadChoice::close_window() {
-  const double m = median(window_);
+  const double m = mean(window_);
   window_steps_ = static_cast<int>(window_.size());
   window_.clear();
   window_s_ = 0;
@@ -56,11 +56,11 @@ void ThreadChoice::after_step(World& w, double seconds) {
   const double per_disc = seconds / std::max(n, 1);  // a discharge loses discs as it goes
   if (state_ == State::hold) {
     held_ += seconds;
-    if (many_) {  // the last steps, as many as the probe's window of threads, against its median
+    if (many_) {  // the last steps, as many as the probe's window of threads, against its mean
       const std::size_t size = static_cast<std::size_t>(std::max(window_steps_, kWindow));
       if (recent_.size() < size) recent_.push_back(per_disc);
       else recent_[recent_at_++ % size] = per_disc;
-      if (recent_.size() == size && median(recent_) > kSlower * probe_many_) return begin_probe(w);
+      if (recent_.size() == size && mean(recent_) > kSlower * probe_many_) return begin_probe(w);
     }
     if (held_ >= std::max(hold_, kHoldProbes * probe_s_)) begin_probe(w);
     return;

@@ -20,9 +20,12 @@ class ThreadChoice {
   // A probe: a window with one thread, then one with the scene's threads (each after one step
   // not counted: the first step after a switch pays for new blocks and cold caches), each of
   // kWindow steps and kWindowSeconds at least (the other processes' time slices are
-  // milliseconds); the median step time of each window, per disc. The threads' window stops
-  // after kAbandon steps in a row (the uncounted one included), and kWindowSeconds of them,
-  // that take kSlowStep times one thread's median: beside a busy process a step of 2 spinning
+  // milliseconds); the mean step time of each window, per disc. The mean, not the median: beside
+  // a process that takes a core in time slices of milliseconds, a window of small steps has many
+  // fast ones and a few that wait out a slice, and those few are most of its time (a median
+  // chose 2 threads for a 10k-disc scene that ran 1.6x slower with them). The threads' window
+  // stops after kAbandon steps in a row (the uncounted one included), and kWindowSeconds of
+  // them, that take kSlowStep times one thread's mean: beside a busy process a step of 2 spinning
   // threads takes several times one thread's, and a full window of such large steps would cost
   // a short run more than the choice saves. The scene's threads are kept when they are faster
   // by kGain at least (alike, one thread leaves a core to the machine's other work).
@@ -36,7 +39,7 @@ class ThreadChoice {
   // again from kHoldFirst when one overturns it.
   static constexpr double kHoldFirst = 0.5, kHoldMax = 32.0;  // [s]
   static constexpr int kHoldProbes = 32;
-  // Holding the scene's threads, a probe starts at once when the median of the last steps, as
+  // Holding the scene's threads, a probe starts at once when the mean of the last steps, as
   // many as the probe's window of threads had (kWindow at least), is kSlower times the probe's
   // (another process took a core).
   static constexpr double kSlower = 1.5;
@@ -64,15 +67,15 @@ class ThreadChoice {
   double window_s_ = 0;             // [s] its steps' time
   int window_steps_ = 0;            // the steps of the last window closed
   bool window_full() const { return window_.size() >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds; }
-  double probe_many_ = 0, probe_one_ = 0;  // the last probe's medians [s per disc]
+  double probe_many_ = 0, probe_one_ = 0;  // the last probe's means [s per disc]
   bool many_ = true;                // holding the scene's threads
   double hold_ = kHoldFirst;        // [s] the current hold
   double held_ = 0;                 // [s] stepped since the hold began
   double probe_s_ = 0;              // [s] the last probe took
   std::vector<double> recent_;      // the last kWindow per-disc step times while holding
   std::size_t recent_at_ = 0;
-  static double median(std::vector<double> v);
-  double close_window();  // the window's median; the window emptied
+  static double mean(const std::vector<double>& v);
+  double close_window();  // the window's mean; the window emptied
   void begin_probe(World& w);
   void decide(World& w);
 };
