@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "physics/world.hpp"
 
@@ -30,6 +32,19 @@ inline PairProps linear(double kn, double zeta, double m_eff, double mu = 0.0, d
   p.eta_s = eta_s;
   p.mu = mu;
   return p;
+}
+
+// FNV-1a over the bytes of every disc's position, velocity and spin: two runs' states compared
+// bit for bit.
+inline std::uint64_t state_hash(const Discs& d) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const auto* v : {&d.x, &d.y, &d.vx, &d.vy, &d.omega})
+    for (double x : *v) {
+      unsigned char b[sizeof x];
+      std::memcpy(b, &x, sizeof x);
+      for (unsigned char c : b) h = (h ^ c) * 1099511628211ull;
+    }
+  return h;
 }
 
 constexpr Scheme kSchemes[3] = {Scheme::paper_eq18, Scheme::paper_eq19, Scheme::velocity_verlet};

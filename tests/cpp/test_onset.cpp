@@ -175,17 +175,6 @@ TEST(Onset, SlipOnsetMatchesTheStickSlipClosedForm) {
 
 namespace {
 
-std::uint64_t state_hash(const Discs& d) {
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the bytes of the doubles
-  for (const auto* v : {&d.x, &d.y, &d.vx, &d.vy, &d.omega})
-    for (double x : *v) {
-      unsigned char b[sizeof x];
-      std::memcpy(b, &x, sizeof x);
-      for (unsigned char c : b) h = (h ^ c) * 1099511628211ull;
-    }
-  return h;
-}
-
 SceneSpec silo_10k(int threads) {
   SceneOverrides ov;
   ov.scheme = "velocity_verlet_onset";

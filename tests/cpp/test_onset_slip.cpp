@@ -197,17 +197,6 @@ TEST(OnsetSlip, ObliqueDiscDiscSpinIsSecondOrder) {
 
 namespace {
 
-std::uint64_t state_hash(const Discs& d) {
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the bytes of the doubles
-  for (const auto* v : {&d.x, &d.y, &d.vx, &d.vy, &d.omega})
-    for (double x : *v) {
-      unsigned char b[sizeof x];
-      std::memcpy(b, &x, sizeof x);
-      for (unsigned char c : b) h = (h ^ c) * 1099511628211ull;
-    }
-  return h;
-}
-
 // The 10k-disc lattice silo under the shared law as its first contacts form, the discs launched
 // sideways so that contacts slide (a lattice falling straight down hardly shears its contacts).
 void build_sliding_silo(World& w) {
