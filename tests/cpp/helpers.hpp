@@ -34,6 +34,17 @@ inline PairProps linear(double kn, double zeta, double m_eff, double mu = 0.0, d
   return p;
 }
 
+// The law LIGGGHTS and YADE share (compare/): overlap spring, no tension and Coulomb cap on the
+// totals, the contact point's arms.
+inline ContactOptions shared_law() {
+  ContactOptions o;
+  o.normal_spring = NormalSpring::overlap;
+  o.no_tension = NoTension::total;
+  o.friction_cap = FrictionCap::total;
+  o.lever_arm = LeverArm::contact_point;
+  return o;
+}
+
 // FNV-1a over the bytes of every disc's position, velocity and spin: two runs' states compared
 // bit for bit.
 inline std::uint64_t state_hash(const Discs& d) {

@@ -27,15 +27,6 @@ const double kKn = 9.45e7;  // the paper's K_n (3.64e4 rho g)
 const double kZeta = 0.3;
 const double kV0 = 50.0;    // cm/s, as compare/calibration.py's collisions
 
-ContactOptions shared_law() {
-  ContactOptions o;
-  o.normal_spring = NormalSpring::overlap;
-  o.no_tension = NoTension::total;
-  o.friction_cap = FrictionCap::total;
-  o.lever_arm = LeverArm::contact_point;
-  return o;
-}
-
 // The clamped head-on contact, exactly: overlap x(t) = v0/wd e^{-b t} sin(wd t) until the force
 // k x + c x' vanishes at t1; then the bodies fly apart at -x'(t1): e = -x'(t1) / v0.
 double exact_e(double m_eff) {

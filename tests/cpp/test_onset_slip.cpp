@@ -39,15 +39,6 @@ PairProps oblique_props() {
   return p;
 }
 
-ContactOptions shared_law() {
-  ContactOptions o;
-  o.normal_spring = NormalSpring::overlap;
-  o.no_tension = NoTension::total;
-  o.friction_cap = FrictionCap::total;
-  o.lever_arm = LeverArm::contact_point;
-  return o;
-}
-
 double contact_time() { return M_PI / std::sqrt(kKn / (kMass / 2) * (1 - kZeta * kZeta)); }
 
 // The continuous law for two discs from the touch: state x0 y0 u0 v0 w0 x1 y1 u1 v1 w1 e_s.
