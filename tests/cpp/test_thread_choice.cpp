@@ -144,3 +144,16 @@ TEST(ThreadChoice, OffOrOneThreadChoosesNothing) {
   EXPECT_FALSE(c.enabled());
   EXPECT_EQ(c.probes, 0);
 }
+
+TEST(ThreadChoice, LargeStepsMakeShortProbes) {
+  // A million discs: 25 ms a step with one thread, 13 ms with two. A probe's windows close after
+  // kWindowFew steps (kWindowLong of them), not kWindow: a run of 120 steps spends 4 of them with
+  // one thread (the uncounted settling step and a window of 3), not 9.
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps(w, c, 120, [](int nt) { return nt == 2 ? 0.013 : 0.025; });
+  EXPECT_EQ(c.probes, 1);
+  EXPECT_LE(c.steps_at[0], 4) << "steps of one thread";  // 9 with windows of kWindow steps
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+}

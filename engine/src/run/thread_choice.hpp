@@ -19,8 +19,8 @@ class ThreadChoice {
  public:
   // A probe: a window with one thread, then one with the scene's threads (each after one step
   // not counted: the first step after a switch pays for new blocks and cold caches), each of
-  // kWindow steps and kWindowSeconds at least (the other processes' time slices are
-  // milliseconds); the mean step time of each window, per disc. The mean, not the median: beside
+  // kWindow steps and kWindowSeconds at least, or kWindowFew steps and kWindowLong (the other
+  // processes' time slices are milliseconds); the mean step time of each window, per disc. The mean, not the median: beside
   // a process that takes a core in time slices of milliseconds, a window of small steps has many
   // fast ones and a few that wait out a slice, and those few are most of its time (a median
   // chose 2 threads for a 10k-disc scene that ran 1.6x slower with them). The threads' window
@@ -31,6 +31,12 @@ class ThreadChoice {
   // by kGain at least (alike, one thread leaves a core to the machine's other work).
   static constexpr int kWindow = 8;
   static constexpr double kWindowSeconds = 0.01;
+  // A window of kWindowLong seconds holds many of the other processes' time slices however few
+  // its steps: kWindowFew of them are enough. A large scene's steps are tens of milliseconds (25
+  // ms at 1M discs, one thread), and a window of kWindow such steps with one thread cost a run of
+  // 120 steps 18 of them at half speed.
+  static constexpr int kWindowFew = 3;
+  static constexpr double kWindowLong = 0.03;
   static constexpr double kGain = 0.95;
   static constexpr int kAbandon = 2;
   static constexpr double kSlowStep = 2.0;
@@ -66,7 +72,11 @@ class ThreadChoice {
   std::vector<double> window_;      // per-disc step times of the current window
   double window_s_ = 0;             // [s] its steps' time
   int window_steps_ = 0;            // the steps of the last window closed
-  bool window_full() const { return window_.size() >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds; }
+  bool window_full() const {
+    const std::size_t n = window_.size();
+    return (n >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds) ||
+           (n >= static_cast<std::size_t>(kWindowFew) && window_s_ >= kWindowLong);
+  }
   double probe_many_ = 0, probe_one_ = 0;  // the last probe's means [s per disc]
   bool many_ = true;                // holding the scene's threads
   double hold_ = kHoldFirst;        // [s] the current hold
