@@ -99,6 +99,9 @@ inline void onset_contact(const PairProps& p, double overlap, double du_n, doubl
 
 void World::step_onset() {
   Discs& d = discs;
+  // The discs in cell order when theirs has decayed: before v(t) is kept, which is in the discs'
+  // order (step() checks after its lists' refresh; here the last step left them fresh).
+  if (steps % DiscOrderRule::kCheckEvery == 0) check_disc_order();
   onset_vx_ = d.vx;  // v(t): the dashpots' prediction 2 v(t + dt/2) - v(t)
   onset_vy_ = d.vy;
   onset_om_ = d.omega;
