@@ -49,11 +49,20 @@ def run_dem(dem_binary):
     return run
 
 
+def pytest_configure(config):
+    config.addinivalue_line("markers", "reference_codes: runs LIGGGHTS, YADE or LAMMPS; their runs are most of "
+                            "its time, and the sanitizer build's run leaves it out")
+
+
 def pytest_collection_modifyitems(config, items):
     """DEM_ENGINE_TESTS_ONLY=1 (the sanitizer build's run): keep the tests that run the engine
-    (those using the dem_binary fixture, directly or through another fixture)."""
+    (those using the dem_binary fixture, directly or through another fixture), less those marked
+    reference_codes: their time goes to the reference codes' runs, which a sanitized engine does
+    not change, and the engine's side of them (its scenes, its outputs, the Python that reads
+    the codes' files) runs in the tests kept and in the release build's run."""
     if os.environ.get("DEM_ENGINE_TESTS_ONLY") != "1":
         return
-    keep = [item for item in items if "dem_binary" in getattr(item, "fixturenames", ())]
+    keep = [item for item in items if "dem_binary" in getattr(item, "fixturenames", ())
+            and item.get_closest_marker("reference_codes") is None]
     config.hook.pytest_deselected(items=[item for item in items if item not in keep])
     items[:] = keep

@@ -207,6 +207,7 @@ def test_a_wrong_constant_given_to_a_code_fails_the_check(cases, tmp_path, name,
     assert cal.within(got, ref, c.dt)[quantity] is False, (got[quantity], ref[quantity])
 
 
+@pytest.mark.reference_codes
 @slow
 @pytest.mark.parametrize("code", [pytest.param("liggghts", marks=needs("liggghts")),
                                   pytest.param("yade", marks=needs("yade"))])

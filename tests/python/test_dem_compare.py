@@ -19,6 +19,7 @@ def compare(dem_binary, *args, timeout=900):
                           timeout=timeout)
 
 
+@pytest.mark.reference_codes
 @needs_liggghts
 def test_a_collision_scene_through_dem_compare(dem_binary, tmp_path):
     out = tmp_path / "out"
@@ -33,6 +34,7 @@ def test_a_collision_scene_through_dem_compare(dem_binary, tmp_path):
     assert (out / "calibration.png").exists()
 
 
+@pytest.mark.reference_codes
 @needs_liggghts
 def test_mutants_are_caught_and_a_mutant_with_nothing_to_change_is_not_counted(dem_binary, tmp_path):
     """On a gravity-free collision every constant mutant of LIGGGHTS' translation fails a metric;
@@ -52,6 +54,7 @@ def test_mutants_are_caught_and_a_mutant_with_nothing_to_change_is_not_counted(d
     assert p.returncode == 0 and mu["all_caught"], p.stdout[-2000:]
 
 
+@pytest.mark.reference_codes
 @needs_liggghts
 def test_a_law_difference_is_attributed_to_the_option_that_closes_it(dem_binary, tmp_path):
     """The native side runs the scene's own law (no-tension on the elastic force, so the dashpot

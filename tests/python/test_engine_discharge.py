@@ -111,6 +111,7 @@ def check_native_layout(out: Path, native: Path) -> None:
         assert (out / f).is_file() and header(stem.with_suffix(".csv")) == header(native / "snapshots" / "discs_0000.csv")
 
 
+@pytest.mark.reference_codes
 @pytest.mark.parametrize("code", [pytest.param("liggghts", marks=needs_liggghts),
                                   pytest.param("lammps", marks=needs_lmp)])
 def test_a_discharge_in_a_reference_code_writes_the_native_outputs(tmp_path, dem_binary, native, code):
@@ -137,6 +138,7 @@ def test_a_discharge_in_a_reference_code_writes_the_native_outputs(tmp_path, dem
         assert (out / png).stat().st_size > 0, png
 
 
+@pytest.mark.reference_codes
 @needs_yade
 def test_a_discharge_in_yade_keeps_every_disc(tmp_path, dem_binary):
     text = scene("discharge", LATTICE, 0.1).replace("slit_width = 2.0", "slit_width = 4.0") + DISCHARGE

@@ -45,6 +45,7 @@ def data_positions(path: Path) -> np.ndarray:
     return np.array([[float(r[4]), float(r[5])] for r in rows])
 
 
+@pytest.mark.reference_codes
 @needs_lmp
 def test_members_in_lammps_start_perturbed_and_merge(silo, dem_binary):
     out = silo / "ens"
@@ -82,6 +83,7 @@ def test_members_in_lammps_start_perturbed_and_merge(silo, dem_binary):
     assert sum(ens["pattern"].values()) == 2
 
 
+@pytest.mark.reference_codes
 @needs_lmp
 @needs_liggghts
 def test_merge_refuses_a_member_of_another_code(silo, dem_binary):

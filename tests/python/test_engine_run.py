@@ -126,6 +126,7 @@ def wall_load_problems(s: dict, nat: dict) -> list[str]:
     return bad
 
 
+@pytest.mark.reference_codes
 @pytest.mark.parametrize("code,ranks", CODES)
 def test_a_rested_scene_in_a_reference_code_carries_the_native_wall_loads(rested, dem_binary, code, ranks):
     out = rested / f"{code}_np{ranks}"

@@ -268,6 +268,7 @@ def test_shear_figures(small_runs, tmp_path):
     assert Path(png).stat().st_size > 10000
 
 
+@pytest.mark.reference_codes
 def test_yade_runs_the_same_small_box_with_unbreakable_bonds(tmp_path, dem_binary):
     """YADE (real binary) on the small clustered box: its bonds never break, the compressed
     state carries the same plate load as the engine's, and the files have the engine's columns."""

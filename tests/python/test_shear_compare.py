@@ -59,6 +59,7 @@ def test_shear_and_clusters_are_refused_by_the_other_kinds(tmp_path):
         plan.make_plan(plan.Entry(tmp_path / "c.toml", plan.Options()))
 
 
+@pytest.mark.reference_codes
 def test_liggghts_refuses_the_shear_box_before_any_run(tmp_path, dem_binary):
     """Bonds: LIGGGHTS-PUBLIC 3.8.0's only bond style is a central harmonic spring; the plate: a
     wall moved by gravity and the discs' forces, which LIGGGHTS' meshes cannot be. A free-disc box
@@ -147,6 +148,7 @@ def test_the_engine_has_no_clumps(tmp_path):
     assert yade_backend.case_data(case)["clusters"]["mode"] == "clumps"
 
 
+@pytest.mark.reference_codes
 def test_the_bond_set_mutant_drops_the_gap_bonds_of_yade_only():
     p = _plan("shear_a50_clusters")
     case = plan.member_case(p, 0)
@@ -216,6 +218,7 @@ def small_box(tmp_path, max_strain=0.01):
     return scene
 
 
+@pytest.mark.reference_codes
 @pytest.mark.skipif(shutil.which("yade") is None, reason="yade is not installed")
 def test_a_small_clustered_box_agrees_in_native_and_yade(tmp_path, dem_binary):
     """12 cm x 6 cm box of bonded triangles, 2 members, sheared to 1 %: every member rests, the
