@@ -88,7 +88,7 @@ void ThreadChoice::after_step(World& w, double seconds) {
       if (slow_ >= kAbandon && slow_s_ >= kWindowSeconds) {
         window_.clear();
         window_s_ = 0;
-        probe_many_ = per_disc;
+        probe_many_ = slow_s_ / slow_ / std::max(n, 1);  // the slow run's mean
         return decide(w);
       }
       if (state_ == State::settle_many) {
