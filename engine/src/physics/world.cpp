@@ -59,7 +59,8 @@ void World::step() {
   const bool verlet = scheme == Scheme::velocity_verlet;
   bool far = false;  // some disc is now skin/2 from its list position
   if (verlet) {
-    far = move_discs(Move::kick_drift_eq18, 0.5 * dt);  // (17) v(t + dt/2); (18) du = v(t + dt/2) dt; x += du
+    // (17) v(t + dt/2); (18) du = v(t + dt/2) dt; x += du; the resultants' start, m_i g, in the same sweep
+    far = move_discs(Move::kick_drift_eq18, 0.5 * dt, true);
     move_walls(Move::kick_drift_eq18, 0.5 * dt);
   }
   refresh_lists(far);                                    // the candidates of (3)
@@ -93,8 +94,10 @@ bool World::forces_then_move(Move move, double h) {
   const Stage pairs = k.pairs[record][one_kind()];
   // Bonds and moving walls run on one thread: their stages reach across any block.
   const bool serial = k.key.features.bonds || k.key.features.moving_walls;
+  const bool started = resultants_started_;  // by the move before (Verlet's first half step)
+  resultants_started_ = false;
   const bool far = each_block(serial ? 1 : threads_for(static_cast<int>(discs.size())), [&](ForceBlock& b) {
-    start_resultants(b.i0, b.i1);                            // (15): m_i g in X_i, Y_i; M_i = 0
+    if (!started) start_resultants(b.i0, b.i1);              // (15): m_i g in X_i, Y_i; M_i = 0
     if (record) start_recording(b);
     if (b.threads > 1) (this->*k.cross[one_kind()])(b);      // (3)-(15) the block's cross pairs
     (this->*pairs)(b);                                       // (3)-(15) disc pairs
@@ -338,9 +341,11 @@ namespace {
 struct MoveArrays {
   int n;
   double h, dt;
-  const double *fx, *fy, *tq;
+  double *fx, *fy, *tq;
   const int* kind;
   const double *inv_mass, *inv_inertia;
+  const double* mass;  // RESET: m_i g into fx, fy once read
+  double gx, gy;
   double *vx, *vy, *om, *ux, *uy, *up, *x, *y, *phi;
   const float *x0, *y0;  // the skin/2 test: list positions, their origin and the limit
   double ox, oy, lim2;
@@ -350,15 +355,19 @@ struct MoveArrays {
 // local pointers; without it, it checked the arrays' overlap at run time, found more pairs to
 // check than it will (10), and ran the loop one disc at a time. With it, it runs two discs a
 // vector (four with AVX2, eight with AVX-512): the same operations on each disc, the same bits.
-template <int D, bool ONE_KIND, bool PHI, bool FAR>  // D: 0 kick alone, 1 eq. (18), 2 eq. (19)
+// RESET: the forces, once read, set to the next force pass's start (start_resultants: the same
+// m_i g, the same bits): one sweep of the force arrays a step less.
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>  // D: 0 kick alone, 1 eq. (18), 2 eq. (19)
 inline __attribute__((always_inline)) long kick_drift_kernel(
-    int n, double h, double dt, const double* __restrict fx, const double* __restrict fy,
-    const double* __restrict tq, const int* __restrict kd, const double* __restrict im, const double* __restrict ii,
+    int n, double h, double dt, double* __restrict fx, double* __restrict fy,
+    double* __restrict tq, const int* __restrict kd, const double* __restrict im, const double* __restrict ii,
+    const double* __restrict km, double gx, double gy,
     double* __restrict vx, double* __restrict vy, double* __restrict om, double* __restrict ux,
     double* __restrict uy, double* __restrict up, double* __restrict x, double* __restrict y,
     double* __restrict phi, const float* __restrict x0, const float* __restrict y0, double ox, double oy,
     double lim2) {
   const double im0 = ONE_KIND ? im[0] : 0, ii0 = ONE_KIND ? ii[0] : 0;  // one kind: its constants, loaded once
+  const double gx0 = RESET && ONE_KIND ? km[0] * gx : 0, gy0 = RESET && ONE_KIND ? km[0] * gy : 0;
   long far = 0;
   for (int i = 0; i < n; ++i) {
     const double mi = ONE_KIND ? im0 : im[kd[i]], ji = ONE_KIND ? ii0 : ii[kd[i]];
@@ -366,6 +375,11 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
     const double w = kick(vy[i], fy[i] * mi, h);
     const double o = kick(om[i], tq[i] * ji, h);
     vx[i] = v; vy[i] = w; om[i] = o;
+    if constexpr (RESET) {  // (15): m_i g, a zero torque
+      fx[i] = ONE_KIND ? gx0 : km[kd[i]] * gx;
+      fy[i] = ONE_KIND ? gy0 : km[kd[i]] * gy;
+      tq[i] = 0;
+    }
     if constexpr (D == 0) continue;
     constexpr bool EQ19 = D == 2;
     const double a = move_increment<EQ19>(EQ19 ? ux[i] : 0.0, v, dt);  // (18) or (19)
@@ -387,54 +401,57 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
 }
 
 #define DEM_MOVE_ARGS                                                                                           \
-  a.n, a.h, a.dt, a.fx, a.fy, a.tq, a.kind, a.inv_mass, a.inv_inertia, a.vx, a.vy, a.om, a.ux, a.uy, a.up, a.x, \
+  a.n, a.h, a.dt, a.fx, a.fy, a.tq, a.kind, a.inv_mass, a.inv_inertia, a.mass, a.gx, a.gy, a.vx, a.vy, a.om, a.ux, a.uy, a.up, a.x, \
       a.y, a.phi, a.x0, a.y0, a.ox, a.oy, a.lim2
-template <int D, bool ONE_KIND, bool PHI, bool FAR>
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>
 long move_sse2(const MoveArrays& a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(DEM_MOVE_ARGS);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET>(DEM_MOVE_ARGS);
 }
 // Without AVX2 GCC does not vectorise the count of far discs (its floats widen to doubles, the
 // count is 64-bit).
 #if defined(__x86_64__) && defined(__GNUC__)
-template <int D, bool ONE_KIND, bool PHI, bool FAR>
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>
 DEM_TARGET_AVX2 long move_avx2(const MoveArrays& a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(DEM_MOVE_ARGS);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET>(DEM_MOVE_ARGS);
 }
-template <int D, bool ONE_KIND, bool PHI, bool FAR>
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>
 DEM_TARGET_AVX512 long move_avx512(const MoveArrays& a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR>(DEM_MOVE_ARGS);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET>(DEM_MOVE_ARGS);
 }
 #endif
 #undef DEM_MOVE_ARGS
 
 // The move kernels (kernels.hpp): kMoves[width index][move], the move numbered
-// D * 8 + one kind * 4 + angle * 2 + skin/2 test, D as in kick_drift_kernel. A kick alone has
-// neither the angle nor the test (the kernel of its row without them).
+// D * 8 + one kind * 4 + angle * 2 + skin/2 test, D as in kick_drift_kernel, or 3 for eq. (18)
+// with the resultants' reset (velocity Verlet's first half step). A kick alone has neither the
+// angle nor the test (the kernel of its row without them).
 using MoveKernel = long (*)(const MoveArrays&);
+constexpr std::size_t kMoveCount = 32;
 template <int W, std::size_t M>
 constexpr MoveKernel move_kernel() {
-  constexpr int D = static_cast<int>(M / 8);
+  constexpr int D = M / 8 == 3 ? 1 : static_cast<int>(M / 8);
+  constexpr bool RESET = M / 8 == 3;
   constexpr bool ONE_KIND = M / 4 % 2 == 1, PHI = D != 0 && M / 2 % 2 == 1, FAR = D != 0 && M % 2 == 1;
 #if defined(__x86_64__) && defined(__GNUC__)
-  if constexpr (W == 8) return &move_avx512<D, ONE_KIND, PHI, FAR>;
-  else if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR>;
+  if constexpr (W == 8) return &move_avx512<D, ONE_KIND, PHI, FAR, RESET>;
+  else if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR, RESET>;
   else
 #endif
-  return &move_sse2<D, ONE_KIND, PHI, FAR>;
+  return &move_sse2<D, ONE_KIND, PHI, FAR, RESET>;
 }
 template <int W, std::size_t... M>
-constexpr std::array<MoveKernel, 24> move_kernels(std::index_sequence<M...>) {
+constexpr std::array<MoveKernel, kMoveCount> move_kernels(std::index_sequence<M...>) {
   return {move_kernel<W, M>()...};
 }
-constexpr std::array<MoveKernel, 24> kMoves[3] = {move_kernels<2>(std::make_index_sequence<24>{}),
-                                                  move_kernels<4>(std::make_index_sequence<24>{}),
-                                                  move_kernels<8>(std::make_index_sequence<24>{})};
+constexpr std::array<MoveKernel, kMoveCount> kMoves[3] = {move_kernels<2>(std::make_index_sequence<kMoveCount>{}),
+                                                          move_kernels<4>(std::make_index_sequence<kMoveCount>{}),
+                                                          move_kernels<8>(std::make_index_sequence<kMoveCount>{})};
 
 }  // namespace
 
 // (16)-(19) for discs [i0, i1): whether some disc of them is now more than skin/2 from its list
 // position (or the lists are stale). A kick alone (Verlet's closing half) moves nothing.
-bool World::move_block(Move move, double h, int i0, int i1) {
+bool World::move_block(Move move, double h, int i0, int i1, bool reset) {
   if (move == Move::none) return false;
   Discs& d = discs;
   const int D = move == Move::kick ? 0 : move == Move::kick_drift_eq18 ? 1 : 2;
@@ -442,27 +459,29 @@ bool World::move_block(Move move, double h, int i0, int i1) {
   const bool stale = D != 0 && neighbors.stale(d);
   const bool test = D != 0 && !stale;
   const auto at = [i0](auto& v) { return v.empty() ? nullptr : v.data() + i0; };  // eq. 19's and the angle's may be empty
+  reset = reset && D == 1;
   const MoveArrays a{i1 - i0, h, dt, at(d.fx), at(d.fy), at(d.torque), at(d.kind), d.kinds.inv_mass.data(),
-                     d.kinds.inv_inertia.data(), at(d.vx), at(d.vy), at(d.omega), at(d.dux), at(d.duy), at(d.dphi),
+                     d.kinds.inv_inertia.data(), d.kinds.mass.data(), gx, gy, at(d.vx), at(d.vy), at(d.omega), at(d.dux), at(d.duy), at(d.dphi),
                      at(d.x), at(d.y), at(d.phi), test ? neighbors.reference_x().data() + i0 : nullptr,
                      test ? neighbors.reference_y().data() + i0 : nullptr, neighbors.origin_x(),
                      neighbors.origin_y(), neighbors.moved_far_limit2()};
-  const std::size_t m = D * 8 + (one_kind() ? 4 : 0) + (d.phi.empty() ? 0 : 2) + (test ? 1 : 0);
+  const std::size_t m = (reset ? 3 : D) * 8 + (one_kind() ? 4 : 0) + (d.phi.empty() ? 0 : 2) + (test ? 1 : 0);
   const long far = kMoves[width_index()][m](a);
   return stale || far != 0;
 }
 
 // One parallel region: each thread an equal block of discs (block_start; the force pass balances
 // its blocks by work, force_blocks: here every disc costs the same).
-bool World::move_discs(Move move, double h) {
+bool World::move_discs(Move move, double h, bool reset) {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
-  if (nt <= 1) return move_block(move, h, 0, n);
+  resultants_started_ = reset && move == Move::kick_drift_eq18;
+  if (nt <= 1) return move_block(move, h, 0, n, reset);
   unsigned far = 0;
 #pragma omp parallel num_threads(nt) reduction(| : far)
   {
     const int t = omp_thread_index();
-    far |= move_block(move, h, block_start(n, nt, t), block_start(n, nt, t + 1)) ? 1u : 0u;
+    far |= move_block(move, h, block_start(n, nt, t), block_start(n, nt, t + 1), reset) ? 1u : 0u;
   }
   return far != 0;
 }

@@ -235,8 +235,11 @@ class World {
   void bond_contacts(ForceBlock& b);      // paper 2's bonds: (4), (5), the bond law, (15)
   void map_cross_pairs(ForceBlock& b);    // cross_out_, cross_in_ for the blocks and lists as they are
   void add_cross_forces(ForceBlock& b);   // the forces on the block's discs of its cross pairs, computed by later blocks
-  bool move_block(Move move, double h, int i0, int i1);  // (16)-(19) for discs [i0, i1)
-  bool move_discs(Move move, double h);   // move_block on equal blocks, one parallel region
+  // (16)-(19) for discs [i0, i1); reset: the kick's forces, once read, set to the next pass's
+  // start (start_resultants) in the same sweep (velocity Verlet's first half step).
+  bool move_block(Move move, double h, int i0, int i1, bool reset = false);
+  bool move_discs(Move move, double h, bool reset = false);  // move_block on equal blocks, one parallel region
+  bool resultants_started_ = false;  // the next force pass finds m_i g and a zero torque already
   // velocity_verlet_onset (onset.cpp): its step, and its force pass (one thread): the forces at
   // t + dt with the dashpots on the predicted v(t + dt), and the impulses a contact or a slip that
   // started inside the step missed (onset_jx, jy, jt), added with the closing half kick.
