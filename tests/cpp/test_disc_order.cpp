@@ -47,6 +47,17 @@ std::vector<std::size_t> user_order(const Discs& d) {
   return at;
 }
 
+// The largest |x| or |y| difference of one disc in two runs of the same discs [cm].
+double largest_position_gap(const Discs& a, const Discs& b) {
+  const std::vector<std::size_t> ua = user_order(a), ub = user_order(b);
+  double worst = 0;
+  for (std::size_t k = 0; k < ua.size(); ++k) {
+    worst = std::max(worst, std::abs(a.x[ua[k]] - b.x[ub[k]]));
+    worst = std::max(worst, std::abs(a.y[ua[k]] - b.y[ub[k]]));
+  }
+  return worst;
+}
+
 std::uint64_t user_hash(const Discs& d) {  // FNV-1a of x, y, vx, vy, omega in the user's order
   std::uint64_t h = 1469598103934665603ull;
   const std::vector<std::size_t> at = user_order(d);
@@ -180,12 +191,7 @@ TEST(DiscOrder, SamePhysicsAsTheUserOrderToRoundOff) {
   ASSERT_EQ(a.resorts, 0);
   for (const PairContact& p : b.neighbors.pairs) contacts += p.en != 0;
   ASSERT_GT(contacts, 10) << "the test needs pairs in contact (the column's foot has landed)";
-  const std::vector<std::size_t> ua = user_order(a.discs), ub = user_order(b.discs);
-  double worst = 0;
-  for (std::size_t k = 0; k < ua.size(); ++k) {
-    worst = std::max(worst, std::abs(a.discs.x[ua[k]] - b.discs.x[ub[k]]));
-    worst = std::max(worst, std::abs(a.discs.y[ua[k]] - b.discs.y[ub[k]]));
-  }
+  const double worst = largest_position_gap(a.discs, b.discs);
   std::printf("largest position difference, re-sorted vs user order: %.3g cm\n", worst);
   EXPECT_LT(worst, 1e-9);
   EXPECT_EQ(a.neighbors.rebuilds, b.neighbors.rebuilds);
@@ -213,12 +219,7 @@ TEST(DiscOrder, OnsetSchemeResortsToo) {
   ASSERT_EQ(a.resorts, 0);
   EXPECT_EQ(b.resorts, 1);
   ASSERT_GT(b.onset_normals.size(), 10u) << "the test needs pairs in contact under the total cap";
-  const std::vector<std::size_t> ua = user_order(a.discs), ub = user_order(b.discs);
-  double worst = 0;
-  for (std::size_t k = 0; k < ua.size(); ++k) {
-    worst = std::max(worst, std::abs(a.discs.x[ua[k]] - b.discs.x[ub[k]]));
-    worst = std::max(worst, std::abs(a.discs.y[ua[k]] - b.discs.y[ub[k]]));
-  }
+  const double worst = largest_position_gap(a.discs, b.discs);
   std::printf("largest position difference, onset scheme re-sorted vs user order: %.3g cm\n", worst);
   EXPECT_LT(worst, 1e-9);
 }
