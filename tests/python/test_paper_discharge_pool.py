@@ -5,7 +5,11 @@ the report are all there."""
 import json
 import subprocess
 
+import numpy as np
+from PIL import Image
+
 from compare import paper_discharge
+from compare.run_dir import RunDir
 
 
 def test_pooled_members_give_the_ensemble_of_one_process(tmp_path, dem_binary, monkeypatch):
@@ -31,6 +35,24 @@ def test_pooled_members_give_the_ensemble_of_one_process(tmp_path, dem_binary, m
     for kind in ("frames", "ratios", "flow"):
         assert (out / f"{kind}_{tag}.png").stat().st_size > 0
         assert f"![{kind}_{tag}]({kind}_{tag}.png)" in report
+    # The study's members write no VTU file and no PVD index (--no-vtu: nobody reads them), their
+    # CSV files are those of the whole ensemble's members byte for byte, and the pictures drawn from
+    # a member of the whole ensemble (snapshots found through its .pvd) have the same pixels.
+    assert not [p for p in (out / tag).rglob("*") if p.suffix in (".vtu", ".pvd")]
+    assert list(whole.rglob("*.vtu")) and list(whole.rglob("discharge_discs.pvd"))
+    for member in sorted((out / tag).glob("member_*")):
+        assert (member / "discharge_snapshots.csv").is_file()
+        for f in member.rglob("*.csv"):
+            if f.name != "discharge_snapshots.csv":
+                assert f.read_bytes() == (whole / f.relative_to(out / tag)).read_bytes(), f
+    pictured = whole / f"member_{record['pictured']:02d}"
+    assert [s["t"] for s in RunDir(pictured).discharge_snapshots()] == \
+        [s["t"] for s in RunDir(out / tag / pictured.name).discharge_snapshots()]
+    paper_discharge.draw(pictured, tmp_path / "from_whole", tag)
+    for kind in ("frames", "ratios", "flow"):
+        ours, theirs = Image.open(out / f"{kind}_{tag}.png"), Image.open(tmp_path / "from_whole" / f"{kind}_{tag}.png")
+        assert ours.mode == theirs.mode and ours.size == theirs.size
+        assert np.array_equal(np.asarray(ours), np.asarray(theirs)), kind
 
 
 def test_longest_runs_start_first():
