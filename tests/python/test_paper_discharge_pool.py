@@ -82,3 +82,39 @@ def test_configurations_ending_out_of_order_keep_their_place(tmp_path, dem_binar
     for tag, *_ in configs:
         for kind in ("frames", "ratios", "flow"):
             assert (out / f"{kind}_{tag}.png").stat().st_size > 0
+
+
+def test_runs_and_pictures_share_the_jobs_places(tmp_path, dem_binary, monkeypatch):
+    """Each picture is a task of the runs' pool (draw_in, waiting on its figure process): never more
+    than --jobs engine runs and pictures at a time (a picture drawn beside --jobs runs, as when the
+    figure processes had places of their own, fails this)."""
+    import threading
+    configs = [("17_18_eq19_1e-4", "17_18", "paper_eq19", 1e-4, {}),
+               ("11_12_eq19_1e-4", "11_12", "paper_eq19", 1e-4, {})]
+    monkeypatch.setattr(paper_discharge, "CONFIGS", configs)
+    lock, busy, most, drawn = threading.Lock(), [0], [0], []
+
+    def counted(kind, call):
+        def wrapper(*args, **kwargs):
+            with lock:
+                busy[0] += 1
+                most[0] = max(most[0], busy[0])
+                if kind == "draw":
+                    drawn.append(args[-1])
+            try:
+                return call(*args, **kwargs)
+            finally:
+                with lock:
+                    busy[0] -= 1
+        return wrapper
+
+    run = subprocess.run
+    monkeypatch.setattr(paper_discharge, "draw_in", counted("draw", paper_discharge.draw_in))
+    monkeypatch.setattr(subprocess, "run", lambda cmd, *a, **k: (counted("run", run) if "--member" in cmd else run)(cmd, *a, **k))
+    out = tmp_path / "study"
+    assert paper_discharge.main(["--out", str(out), "--dem", str(dem_binary), "--members", "2", "--jobs", "2"]) == 0
+    assert sorted(drawn) == sorted(["frames", "ratios", "flow"] * len(configs))
+    assert 1 <= most[0] <= 2
+    for tag, *_ in configs:
+        for kind in ("frames", "ratios", "flow"):
+            assert (out / f"{kind}_{tag}.png").stat().st_size > 0
