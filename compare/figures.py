@@ -36,8 +36,10 @@ Usage, from the repository root::
 import argparse
 import math
 import os
+import struct
 import sys
 import textwrap
+import zlib
 
 import numpy as np
 import matplotlib
@@ -47,7 +49,6 @@ import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-import PIL.Image  # noqa: E402
 
 # Reading and the pure maths (compare/figure_data.py, no matplotlib), re-exported here.
 from compare import run_dir as _run_dir  # noqa: E402,F401
@@ -75,9 +76,9 @@ FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
 def _save(fig, out_png):
     """Save a figure at 150 dpi in the format its suffix names (.png, .pdf or .svg), creating
     the folder, and close it. The file is written to NAME.tmp in the same folder and renamed when
-    complete (a killed run leaves no half file). A PNG is drawn by Agg and encoded by PIL at zlib
-    level 3, as RGB when every pixel is opaque: the pixels of savefig, which encodes RGBA at
-    level 6."""
+    complete (a killed run leaves no half file). A PNG is drawn by Agg and written unfiltered at
+    zlib level 3 (png_bytes), as RGB when every pixel is opaque: the pixels of savefig, which
+    encodes RGBA at level 6 through PIL."""
     fmt = FORMATS.get(os.path.splitext(out_png)[1].lower())
     if fmt is None:
         plt.close(fig)
@@ -103,15 +104,39 @@ SAVE_DPI = 150
 PNG_COMPRESS_LEVEL = 3
 
 
+def _png_chunk(kind, data):
+    """One PNG chunk: length, type, data, CRC of type and data."""
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))
+
+
+def png_bytes(pixels, dpi):
+    """A PNG file of an (h, w, 3) RGB or (h, w, 4) RGBA uint8 array, with its dpi (pHYs).
+
+    Every row is stored unfiltered (filter type 0) and deflated at zlib level PNG_COMPRESS_LEVEL:
+    a figure's flat colours compress as well as with PIL's adaptive row filters (frames.png
+    1.34 against 1.57 MB), in half PIL's time, whose filtering costs as much as the deflate."""
+    h, w, channels = pixels.shape
+    rows = np.empty((h, 1 + w * channels), np.uint8)   # each row: its filter byte, then its pixels
+    rows[:, 0] = 0
+    rows[:, 1:].reshape(h, w, channels)[...] = pixels
+    ppm = int(dpi / 0.0254 + 0.5)                      # pixels per metre, as PIL writes them
+    return b"".join([b"\x89PNG\r\n\x1a\n",
+                     _png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2 if channels == 3 else 6, 0, 0, 0)),
+                     _png_chunk(b"pHYs", struct.pack(">IIB", ppm, ppm, 1)),
+                     _png_chunk(b"IDAT", zlib.compress(rows.data, PNG_COMPRESS_LEVEL)),
+                     _png_chunk(b"IEND", b"")])
+
+
 def _write_png(fig, path, dpi):
     """Draw fig with Agg at dpi and write its pixels as PNG (RGB if all opaque, else RGBA)."""
     fig.set_dpi(dpi)
     canvas = FigureCanvasAgg(fig) if not isinstance(fig.canvas, FigureCanvasAgg) else fig.canvas
     canvas.draw()
     rgba = np.asarray(canvas.buffer_rgba())
-    opaque = bool(np.all(rgba[..., 3] == 255))
-    image = PIL.Image.fromarray(np.ascontiguousarray(rgba[..., :3]) if opaque else np.array(rgba))
-    image.save(path, format="png", compress_level=PNG_COMPRESS_LEVEL, dpi=(dpi, dpi))
+    # Opaque: every alpha byte 255, i.e. every pixel read as a little-endian word >= 0xff000000.
+    opaque = bool(np.all(rgba.view("<u4") >= 0xFF000000))
+    with open(path, "wb") as f:
+        f.write(png_bytes(rgba[..., :3] if opaque else rgba, dpi))
 
 
 def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):

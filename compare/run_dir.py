@@ -9,7 +9,8 @@
 - ``discs()``, ``contacts()``, ``profiles()``: discs.csv, contacts.csv, wall_profiles.csv;
 - ``removals()``, ``flow_series()``, ``wall_series()``, ``wall_totals_series()``: a discharge's
   series; ``shear_series()``, ``shear_planes()``: a shear's; ``series(name)`` by file name;
-- ``discharge_snapshots()``: the discharge snapshots indexed by discharge_discs.pvd;
+- ``discharge_snapshots()``: the discharge snapshots indexed by discharge_discs.pvd (or, in a run
+  without VTU files, discharge_snapshots.csv);
   ``shear_snapshots()``: snapshots/index.json of a shear run;
 
 each CSV as a dict of numpy arrays keyed by column (text columns str, counters int, the rest
@@ -413,7 +414,23 @@ class RunDir:
         Times (since opening) come from discharge_discs.pvd's timestep attributes; each VTU file
         named there has a CSV twin of the same stem (snapshots/discs_NNNN.csv). The contacts CSV
         is the twin of discharge_contacts.pvd's file at the same time, or, without that .pvd or
-        time, the discs file's name with 'discs_' replaced by 'contacts_'."""
+        time, the discs file's name with 'discs_' replaced by 'contacts_'. A run without VTU files
+        (`--no-vtu`, output.vtu = "none") lists them in discharge_snapshots.csv (t, discs,
+        contacts: the CSV files, relative to the run), with the times the .pvd would give."""
+        index = self.file("discharge_snapshots.csv")
+        if not self.file("discharge_discs.pvd").is_file() and index.is_file():
+            lines = index.read_text().splitlines()
+            if not lines or lines[0] != "t,discs,contacts":
+                raise RunDirError(index, "the header must be t,discs,contacts")
+            snaps = []
+            for n, line in enumerate(lines[1:], 2):
+                cells = line.split(",")
+                try:
+                    snaps.append({"t": float(cells[0]), "discs": os.path.join(str(self.path), cells[1]),
+                                  "contacts": os.path.join(str(self.path), cells[2])})
+                except (ValueError, IndexError):
+                    raise RunDirError(index, f"line {n}: expected t,discs,contacts, found {line!r}") from None
+            return sorted(snaps, key=lambda s: s["t"])
         discs = read_pvd(self.file("discharge_discs.pvd"))
         contacts_pvd = self.file("discharge_contacts.pvd")
         contacts = read_pvd(contacts_pvd) if contacts_pvd.is_file() else []

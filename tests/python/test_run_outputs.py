@@ -156,3 +156,31 @@ def test_contacts_are_written_where_their_forces_were_computed(tmp_path, dem_bin
     overlap = 2.0 - abs(x[1] - x[0])
     assert float(rows[0]["e_n"]) == pytest.approx(kn * overlap, rel=1e-9)
     assert float(rows[0]["x"]) == pytest.approx(0.5 * (x[0] + x[1]), abs=1e-12)
+
+
+def test_no_vtu_writes_the_csv_files_alone(tmp_path, dem_binary):
+    """`dem run --no-vtu` (output.vtu = "none"): no VTU file and no PVD index, every other file the
+    same bytes as the run with them (summary.json but its timings and command), and the discharge
+    snapshots listed with the .pvd's times in discharge_snapshots.csv. A run that still wrote a VTU
+    file, or whose index had other times or names, fails this."""
+    import subprocess
+    from compare.run_dir import RunDir
+    scene = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
+    runs = {}
+    for name, extra in (("vtu", []), ("none", ["--no-vtu"])):
+        runs[name] = tmp_path / name
+        proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(runs[name]), "--quiet", *extra],
+                              capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+    files = {k: {p.relative_to(d) for p in d.rglob("*") if p.is_file()} for k, d in runs.items()}
+    vtu_only = {p for p in files["vtu"] if p.suffix in (".vtu", ".pvd")}
+    assert vtu_only and not {p for p in files["none"] if p.suffix in (".vtu", ".pvd")}
+    assert files["none"] == files["vtu"] - vtu_only | {Path("discharge_snapshots.csv")}
+    for p in files["vtu"] - vtu_only - {Path("summary.json"), Path("run.log")}:
+        assert (runs["vtu"] / p).read_bytes() == (runs["none"] / p).read_bytes(), p
+    with_pvd, with_csv = RunDir(runs["vtu"]).discharge_snapshots(), RunDir(runs["none"]).discharge_snapshots()
+    assert len(with_pvd) == 10
+    assert [s["t"] for s in with_csv] == [s["t"] for s in with_pvd]
+    for a, b in zip(with_csv, with_pvd):
+        assert Path(a["discs"]).relative_to(runs["none"]) == Path(b["discs"]).relative_to(runs["vtu"])
+        assert Path(a["contacts"]).relative_to(runs["none"]) == Path(b["contacts"]).relative_to(runs["vtu"])

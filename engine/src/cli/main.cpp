@@ -49,7 +49,7 @@ const char* kMainHelp =
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
-    "               [--quiet] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
+    "               [--quiet] [--no-vtu] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
     "               [--set KEY=VALUE ...]\n"
     "       dem run SCENE.toml --engine liggghts|lammps|yade [--np N] [--settle S] [--timeout S] --out DIR\n"
     "\n"
@@ -68,6 +68,7 @@ const char* kRunHelp =
     "  --resume        continue from DIR/checkpoint.dem (same scene file, engine and options);\n"
     "                  the result is bit-identical to a run never stopped\n"
     "  --quiet         no header and no progress line\n"
+    "  --no-vtu        no VTU files and no PVD indexes: the CSV files alone (output.vtu = \"none\")\n"
     "  --engine CODE   run the scene in the real LIGGGHTS, LAMMPS or YADE with the shared law and write\n"
     "                  the same outputs (docs/compare.md, \"Running a scene in a reference code\");\n"
     "                  exit 2 when the code cannot express the scene (the field named)\n"
@@ -88,7 +89,7 @@ const char* kRunHelp =
 
 const char* kEnsembleHelp =
     "usage: dem ensemble SCENE.toml --out DIR [--members M] [--seed S] [--perturb CM] [--jobs J]\n"
-    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet] [--set KEY=VALUE ...]\n"
+    "                    [--dt S] [--scheme NAME] [--force-dt] [--quiet] [--no-vtu] [--set KEY=VALUE ...]\n"
     "       dem ensemble SCENE.toml --out DIR --member K [--seed S] [--perturb CM] [...]\n"
     "       dem ensemble SCENE.toml --out DIR --member K --engine liggghts|lammps|yade [--np N]\n"
     "                    [--settle S] [--timeout S] [--seed S] [--perturb CM] [--set ...] [--quiet]\n"
@@ -100,6 +101,8 @@ const char* kEnsembleHelp =
     "DIR/ensemble.json: mean and standard error of the flow rate, discs\n"
     "out at 1 s, peak/static ratios, jam fraction and flow-pattern counts. --set KEY=VALUE changes\n"
     "one value of the scene as dem run --set does (repeatable; merge refuses members of other sets).\n"
+    "--no-vtu: the members write no VTU files and no PVD indexes, as dem run --no-vtu (no part of\n"
+    "the ensemble's identity).\n"
     "\n"
     "--member K runs member K alone (0-based), the same member bit for bit as in a full ensemble\n"
     "of that seed and perturbation: one job of a job array. `merge DIR` gathers the finished\n"
@@ -219,6 +222,8 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
       ov.scheme = v;
     } else if (k == "--force-dt") {
       ov.force_dt = true;
+    } else if (k == "--no-vtu") {
+      ov.no_vtu = true;
     } else if (k == "--threads") {
       const char* v = value();
       double x = 0;
@@ -399,6 +404,7 @@ int cmd_ensemble(int argc, char** argv) {
     }
     if (k == "--quiet") { quiet = true; continue; }
     if (k == "--force-dt") { ov.force_dt = true; continue; }
+    if (k == "--no-vtu") { ov.no_vtu = true; continue; }
     if (a == 0 && k == "merge") { merge = true; continue; }
     if (!k.empty() && k[0] != '-') {
       if (!scene.empty()) return bad(merge ? "merge takes one folder" : "more than one scene given");

@@ -12,8 +12,8 @@ namespace {
 const char* const kRunFiles[] = {
     "summary.json", "run.log", "thermo.csv", "snapshots.pvd", "discs.csv", "discs.vtu", "contacts.csv",
     "contacts.vtu", "wall_profiles.csv", "removals.csv", "flow_series.csv", "wall_series.csv",
-    "wall_totals_series.csv", "discharge_discs.pvd", "discharge_contacts.pvd", "shear_series.csv",
-    "shear_planes.csv", "checkpoint.dem", "last_good.bin", "opening_positions.bin", "member.json",
+    "wall_totals_series.csv", "discharge_discs.pvd", "discharge_contacts.pvd", "discharge_snapshots.csv",
+    "shear_series.csv", "shear_planes.csv", "checkpoint.dem", "last_good.bin", "opening_positions.bin", "member.json",
     "network.png", "side_walls.png", "frames.png", "wall_ratios.png", "flow.png"};
 
 // The snapshots' names: discs_*, contacts_*, walls_*, step_* and index.json.

@@ -115,7 +115,7 @@ class NthKept {
 
 }  // namespace
 
-void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary) {
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary, bool vtu) {
   const Discs& d = w.discs;
   // Every contact is written where its forces were computed. Eqs. (18) and (19) compute the
   // forces and then move the discs in the same pass, so their discs are taken back by the
@@ -276,6 +276,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
+  if (!vtu) return;
   VtuGrid g;
   g.np = 2 * n;
   g.point = point;
@@ -324,6 +325,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
+  if (!spec.vtu_files()) return;
   std::vector<VtuVector> vec;
   vec.push_back({"velocity", [&](std::size_t k, double& vx, double& vy) { vx = d.vx[disc(k)]; vy = d.vy[disc(k)]; }});
   if (disp) vec.push_back({"displacement", [&](std::size_t k, double& dx, double& dy) { displacement(disc(k), dx, dy); }});
@@ -459,7 +461,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   }
   if (extra)
     for (auto& [k, v] : extra->items()) js[k] = std::move(v);
-  if (!unstable) write_contact_files(dir, "contacts", w, spec.vtu_binary(d.size()));
+  if (!unstable) write_contact_files(dir, "contacts", w, spec.vtu_binary(d.size()), spec.vtu_files());
   write_disc_files(dir, "discs", spec, d, nullptr);
   // Serialised straight to the file (some 1.3 MB of text at a million discs, which a string
   // built first held twice over as it grew, at the run's peak): the bytes of js.dump(2).

@@ -54,11 +54,11 @@ struct RunSummary {
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
                    const StabilityReport& stab, nlohmann::ordered_json* extra = nullptr);
 
-// STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md).
-// `binary`: the VTU file binary (SceneSpec::vtu_binary), else ASCII.
-void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary);
-// STEM.csv and STEM.vtu of the discs; with displacement columns from the positions at opening
-// when given.
+// STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md); STEM.vtu only with `vtu`
+// (SceneSpec::vtu_files). `binary`: the VTU file binary (SceneSpec::vtu_binary), else ASCII.
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary, bool vtu);
+// STEM.csv and STEM.vtu of the discs (STEM.vtu unless output.vtu = "none"); with displacement
+// columns from the positions at opening when given.
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
                       const OpeningPositions* at_open);
 

@@ -548,9 +548,13 @@ void DischargePhase::snapshots(World& w, double t) {
     char stem[32];
     std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
     write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open);
-    write_contact_files(snapdir, std::string("contacts_") + stem, w, spec_.vtu_binary(w.discs.size()));
-    st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
-    st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+    write_contact_files(snapdir, std::string("contacts_") + stem, w, spec_.vtu_binary(w.discs.size()), spec_.vtu_files());
+    if (spec_.vtu_files()) {
+      st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
+      st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+    } else {  // no VTU files to index: the rows of discharge_snapshots.csv
+      st.pvd_d << fmt(t) << ",snapshots/discs_" << stem << ".csv,snapshots/contacts_" << stem << ".csv\n";
+    }
     if (record && record->active())
       record->note_snapshot(w, std::string("snapshots/discs_") + stem + ".vtu", record->write_walls(w, stem),
                             std::string("snapshots/contacts_") + stem + ".vtu");
@@ -591,9 +595,12 @@ void DischargePhase::finish(World& w, Status status) {
         << (r.keystone ? "keystone" : "outlet") << '\n';
     write_file_atomic(out_ + "/removals.csv", o.str());
   }
-  for (auto [name, body] : {std::pair{"discharge_discs.pvd", st.pvd_d.str()}, std::pair{"discharge_contacts.pvd", st.pvd_c.str()}})
-    write_file_atomic(out_ + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
-                                             body + "  </Collection>\n</VTKFile>\n");
+  if (!spec_.vtu_files())
+    write_file_atomic(out_ + "/discharge_snapshots.csv", "t,discs,contacts\n" + st.pvd_d.str());
+  else
+    for (auto [name, body] : {std::pair{"discharge_discs.pvd", st.pvd_d.str()}, std::pair{"discharge_contacts.pvd", st.pvd_c.str()}})
+      write_file_atomic(out_ + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
+                                               body + "  </Collection>\n</VTKFile>\n");
 
   // Ratios of peak to static: raw maximum and the maximum of a moving average.
   const std::vector<WallLoad>& static_walls = st.static_walls;

@@ -47,7 +47,7 @@ void Recorder::phase_end(const World& w, const char* phase, Status status) {
 
 std::string Recorder::write_walls(const World& w, const std::string& stem) const {
   const std::string rel = "snapshots/walls_" + stem + ".vtu";
-  write_walls_vtu(out_ + "/" + rel, w.geometry, spec_->vtu_binary(w.discs.size()));
+  if (spec_->vtu_files()) write_walls_vtu(out_ + "/" + rel, w.geometry, spec_->vtu_binary(w.discs.size()));
   return rel;
 }
 
@@ -63,8 +63,8 @@ void Recorder::snapshot(const World& w) {
   const std::string dir = out_ + "/snapshots", s = stem;
   const bool binary = spec_->vtu_binary(w.discs.size());
   write_disc_files(dir, s + "_discs", *spec_, w.discs, nullptr);
-  write_contact_files(dir, s + "_contacts", w, binary);
-  write_walls_vtu(dir + "/" + s + "_walls.vtu", w.geometry, binary);
+  write_contact_files(dir, s + "_contacts", w, binary, spec_->vtu_files());
+  if (spec_->vtu_files()) write_walls_vtu(dir + "/" + s + "_walls.vtu", w.geometry, binary);
   snapshots.add(w.time, w.steps, "snapshots/" + s + "_discs.vtu", "snapshots/" + s + "_walls.vtu",
                 "snapshots/" + s + "_contacts.vtu");
 }
@@ -72,7 +72,7 @@ void Recorder::snapshot(const World& w) {
 void Recorder::write() const {
   if (!active()) return;
   if (!thermo.text().empty()) write_file_atomic(out_ + "/thermo.csv", thermo.text());
-  if (!snapshots.empty()) snapshots.write(out_ + "/snapshots.pvd");
+  if (!snapshots.empty() && spec_->vtu_files()) snapshots.write(out_ + "/snapshots.pvd");  // it indexes VTU files
 }
 
 void Recorder::save(BinaryOut& o) const {

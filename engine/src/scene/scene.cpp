@@ -637,8 +637,11 @@ void read_output(SceneSpec& s, Tab& root) {
     s.thermo_interval = t.positive("thermo_interval", s.thermo_interval);
     s.snapshot_interval = t.non_negative("snapshot_interval", 0.0);
     s.progress_interval = t.non_negative("progress_interval", s.progress_interval);
-    const std::string vtu = t.choice("vtu", {"auto", "ascii", "binary"}, "auto");
-    s.vtu = vtu == "ascii" ? VtuChoice::ascii : vtu == "binary" ? VtuChoice::binary : VtuChoice::automatic;
+    const std::string vtu = t.choice("vtu", {"auto", "ascii", "binary", "none"}, "auto");
+    s.vtu = vtu == "ascii"    ? VtuChoice::ascii
+            : vtu == "binary" ? VtuChoice::binary
+            : vtu == "none"   ? VtuChoice::none
+                              : VtuChoice::automatic;
     t.finish();
   }
 }
@@ -671,6 +674,7 @@ void apply_overrides(SceneSpec& s, const SceneOverrides& ov) {
     throw SceneError(s.file + ": integrator.scheme = \"velocity_verlet_onset\" needs contact.normal_spring = \"overlap\"");
   if (ov.end_time > 0) s.end_time = ov.end_time;
   if (ov.force_dt) s.force_dt = true;
+  if (ov.no_vtu) s.vtu = VtuChoice::none;
   if (ov.threads > 0) s.threads = ov.threads;
   if (!ov.from.empty()) s.start_from = ov.from;
   // Step counts are integers: a time that is too many steps of dt is refused.

@@ -47,8 +47,9 @@ struct DischargeSpec {
   double surface_column = 4.0;     // [cm] width of the surface columns at the walls and centre
 };
 
-// output.vtu: ASCII or binary VTU files (auto: binary above kVtuBinaryAbove discs).
-enum class VtuChoice { automatic, ascii, binary };
+// output.vtu: ASCII or binary VTU files (auto: binary above kVtuBinaryAbove discs), or none (the
+// CSV files alone, for runs whose files are read by programs: no VTU, no PVD index).
+enum class VtuChoice { automatic, ascii, binary, none };
 constexpr std::size_t kVtuBinaryAbove = 10'000;
 
 struct SceneSpec {
@@ -94,6 +95,8 @@ struct SceneSpec {
   double progress_interval = 2;    // [s] wall time between progress lines
   VtuChoice vtu = VtuChoice::automatic;
 
+  // Whether the run writes VTU files and their PVD indexes (output.vtu != "none").
+  bool vtu_files() const { return vtu != VtuChoice::none; }
   // Whether the VTU files of a world of n discs are binary (output.vtu).
   bool vtu_binary(std::size_t n) const {
     return vtu == VtuChoice::binary || (vtu == VtuChoice::automatic && n > kVtuBinaryAbove);
@@ -110,6 +113,7 @@ struct SceneOverrides {
   std::string from;           // "": none; a state file to start from
   long max_discs = 0;         // 0: kMaxDiscs; lower for fuzzing (engine/fuzz)
   std::vector<std::string> sets;  // "KEY=VALUE" (--set), applied to the table before it is read
+  bool no_vtu = false;        // --no-vtu: output.vtu = "none" (no part of an ensemble's identity)
 };
 
 }  // namespace dem
