@@ -107,15 +107,18 @@ TEST(DiscOrder, SpreadOfRowOrderAndRandomOrder) {
 }
 
 TEST(DiscOrder, CellOrderFollowsTheGrid) {
-  // Five discs of radius 0.25 with a skin of 0.5: cells of 2 r + skin = 1 cm over the extent
-  // [0.1, 1.3] x [0.1, 1.3], 2 x 2 of them. Cells row-major from the lower left, by index within
-  // a cell: cell 0 holds discs 1 and 4, cell 1 disc 2, cell 2 disc 3, cell 3 disc 0.
+  // Seven discs of radius 0.25 with a skin of 0.5: cells of 2 r + skin = 1 cm over the extent
+  // [0.1, 1.3] x [0.1, 1.3], 2 x 2 of them. Cells row-major from the lower left, by x within a
+  // cell and by index at equal x: cell 0 holds discs 4 (x 0.1), 1 and 6 (x 0.3), cell 1 disc 2,
+  // cell 2 discs 5 (x 0.15) and 3 (x 0.2), cell 3 disc 0. By index within a cell it would be
+  // 1, 4, 6, 2, 3, 5, 0.
   Discs d;
-  for (auto [x, y] : {std::pair{1.2, 1.1}, {0.1, 0.2}, {1.3, 0.1}, {0.2, 1.3}, {0.3, 0.3}}) d.add(x, y, 0.25, 1.0, 0);
+  for (auto [x, y] : {std::pair{1.2, 1.1}, {0.3, 0.2}, {1.3, 0.1}, {0.2, 1.3}, {0.1, 0.3}, {0.15, 1.2}, {0.3, 0.9}})
+    d.add(x, y, 0.25, 1.0, 0);
   const OrderGrid g = order_grid(d, 0.5, 0.0);  // cell 2 r + skin = 1 cm over [0.1, 1.3] x [0.1, 1.3]
   ASSERT_EQ(g.nx, 2);
   ASSERT_EQ(g.ny, 2);
-  EXPECT_EQ(cell_order(d, g), (std::vector<int>{1, 4, 2, 3, 0}));
+  EXPECT_EQ(cell_order(d, g), (std::vector<int>{4, 1, 6, 2, 5, 3, 0}));
 }
 
 TEST(DiscOrder, ShuffledFillIsResortedOnceAndStaysInOrder) {

@@ -46,6 +46,15 @@ std::vector<int> cell_order(const Discs& d, const OrderGrid& g) {
   for (long c = 0; c < slots; ++c) start[c + 1] += start[c];
   std::vector<int> order(n);
   for (int i = 0; i < n; ++i) order[start[g.cell_of(d.x[i], d.y[i])]++] = i;
+  // start[c] is now the end of cell c. Within each cell (one or two discs, a few at most) by x:
+  // an insertion sort, stable, so equal x keep the order of their indices.
+  for (long c = 0, begin = 0; c + 1 < slots; begin = start[c], ++c)
+    for (long s = begin + 1; s < start[c]; ++s) {
+      const int disc = order[s];
+      long t = s;
+      for (; t > begin && d.x[order[t - 1]] > d.x[disc]; --t) order[t] = order[t - 1];
+      order[t] = disc;
+    }
   return order;
 }
 
