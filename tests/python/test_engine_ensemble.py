@@ -102,6 +102,8 @@ def test_engine_needs_a_member_and_a_known_code(silo, dem_binary):
     assert p.returncode == 2 and "abaqus" in p.stderr
     p = dem(dem_binary, "ensemble", silo / "d.toml", "--out", silo / "x", "--member", 0, "--np", 2)
     assert p.returncode == 2 and "--engine" in p.stderr
+    p = dem(dem_binary, "ensemble", silo / "d.toml", "--out", silo / "x", "--member", 0, "--engine", "lammps", "--no-vtu")
+    assert p.returncode == 2 and "--no-vtu does not go with --engine" in p.stderr
     assert not (silo / "x").exists()
 
 

@@ -446,6 +446,8 @@ int cmd_ensemble(int argc, char** argv) {
     return bad("--engine runs one member: give --member K (and gather them with dem ensemble merge DIR)");
   if (!engine.empty() && (ov.dt > 0 || !ov.scheme.empty() || ov.force_dt))  // the codes run the shared law's dt
     return bad("--dt, --scheme, --force-dt do not go with --engine: set the scene's value with --set");
+  if (!engine.empty() && ov.no_vtu)  // compare.engine_run writes a reference code's files, VTU included
+    return bad("--no-vtu does not go with --engine: a member in a reference code writes the files of dem run --engine");
   try {
     SceneSpec spec = load_scene(scene, ov);
     World probe;
