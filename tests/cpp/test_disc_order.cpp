@@ -47,6 +47,14 @@ std::vector<std::size_t> user_order(const Discs& d) {
   return at;
 }
 
+// Two runs side by side, `steps` steps each.
+void step_both(World& a, World& b, long steps) {
+  for (long s = 0; s < steps; ++s) {
+    a.step();
+    b.step();
+  }
+}
+
 // The largest |x| or |y| difference of one disc in two runs of the same discs [cm].
 double largest_position_gap(const Discs& a, const Discs& b) {
   const std::vector<std::size_t> ua = user_order(a), ub = user_order(b);
@@ -186,10 +194,7 @@ TEST(DiscOrder, SamePhysicsAsTheUserOrderToRoundOff) {
   build_world(off, a);
   build_world(on, b);
   long contacts = 0;
-  for (long s = 0; s < 2500; ++s) {
-    a.step();
-    b.step();
-  }
+  step_both(a, b, 2500);
   ASSERT_EQ(b.resorts, 1);
   ASSERT_EQ(a.resorts, 0);
   for (const PairContact& p : b.neighbors.pairs) contacts += p.en != 0;
@@ -215,10 +220,7 @@ TEST(DiscOrder, OnsetSchemeResortsToo) {
   World a, b;
   build_world(off, a);
   build_world(on, b);
-  for (long s = 0; s < 4000; ++s) {
-    a.step();
-    b.step();
-  }
+  step_both(a, b, 4000);
   ASSERT_EQ(a.resorts, 0);
   EXPECT_EQ(b.resorts, 1);
   ASSERT_GT(b.onset_normals.size(), 10u) << "the test needs pairs in contact under the total cap";
@@ -280,10 +282,7 @@ TEST(DiscOrder, RemovalsAfterAResortKeepIdsAndHistory) {
   World a, b;
   build_world(off, a);
   build_world(on, b);
-  for (long s = 0; s < 1800; ++s) {
-    a.step();
-    b.step();
-  }
+  step_both(a, b, 1800);
   ASSERT_EQ(b.resorts, 1);
   const auto remove_ids_below = [](World& w, int limit) {  // every disc of id < limit
     RemovedDiscs r;
@@ -293,10 +292,7 @@ TEST(DiscOrder, RemovalsAfterAResortKeepIdsAndHistory) {
   };
   remove_ids_below(a, 1000);
   remove_ids_below(b, 1000);
-  for (long s = 0; s < 600; ++s) {
-    a.step();
-    b.step();
-  }
+  step_both(a, b, 600);
   ASSERT_EQ(a.discs.size(), 3500u);
   ASSERT_EQ(b.discs.size(), 3500u);
   std::vector<std::size_t> ia(4500, 0), ib(4500, 0);
