@@ -69,7 +69,7 @@ void World::step() {
   if (verlet && measure_increments) measure_increment_sums();  // the move's |v dt|, before the kick overwrites v
   const Move move = verlet ? Move::kick : scheme == Scheme::paper_eq18 ? Move::kick_drift_eq18 : Move::kick_drift_eq19;
   const double h = verlet ? 0.5 * dt : dt;
-  far = forces_then_move(move, h);                       // (3)-(15), then (16)-(19) for the discs
+  far = forces_then_move(move, h, verlet);               // (3)-(15), then (16)-(19) for the discs
   move_walls(move, h);                                   // (16)-(19) for the plates; the walls' turns
   if (far) rebuild_lists();                              // for the next step's forces
   time += dt;
@@ -85,7 +85,7 @@ void World::step() {
 // (h of an earlier block, i its own: the first of i's pairs in that order), then its own pairs,
 // and once every block is done adds the forces of its discs' pairs with a later block's j (the
 // last of their pairs), then the walls.
-bool World::forces_then_move(Move move, double h) {
+bool World::forces_then_move(Move move, double h, bool started) {
   const Kernel& k = *kernel_;
   const bool record = record_pair_forces;
   // Totals recorded by an earlier pass are stale after this one (pair_forces_current is false):
@@ -94,8 +94,6 @@ bool World::forces_then_move(Move move, double h) {
   const Stage pairs = k.pairs[record][one_kind()];
   // Bonds and moving walls run on one thread: their stages reach across any block.
   const bool serial = k.key.features.bonds || k.key.features.moving_walls;
-  const bool started = resultants_started_;  // by the move before (Verlet's first half step)
-  resultants_started_ = false;
   const bool far = each_block(serial ? 1 : threads_for(static_cast<int>(discs.size())), [&](ForceBlock& b) {
     if (!started) start_resultants(b.i0, b.i1);              // (15): m_i g in X_i, Y_i; M_i = 0
     if (record) start_recording(b);
@@ -475,7 +473,6 @@ bool World::move_block(Move move, double h, int i0, int i1, bool reset) {
 bool World::move_discs(Move move, double h, bool reset) {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
-  resultants_started_ = reset && move == Move::kick_drift_eq18;
   if (nt <= 1) return move_block(move, h, 0, n, reset);
   unsigned far = 0;
 #pragma omp parallel num_threads(nt) reduction(| : far)

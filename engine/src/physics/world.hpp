@@ -220,7 +220,9 @@ class World {
 
   // The stages of a step (world.cpp shows them in order).
   void refresh_lists(bool far);  // the lists rebuilt where stale or where something moved skin/2
-  bool forces_then_move(Move move, double h);  // the force stages and the move, fused per block
+  // The force stages and the move, fused per block; `started`: the resultants already hold m_i g
+  // and a zero torque (the move before wrote them: move_discs' reset).
+  bool forces_then_move(Move move, double h, bool started = false);
   template <class F>
   bool each_block(int nt, F&& stages);  // stages(block) for each thread's block; whether some disc is far
   void start_resultants(int i0, int i1);  // the m_i g of (15) and a zero torque
@@ -239,7 +241,6 @@ class World {
   // start (start_resultants) in the same sweep (velocity Verlet's first half step).
   bool move_block(Move move, double h, int i0, int i1, bool reset = false);
   bool move_discs(Move move, double h, bool reset = false);  // move_block on equal blocks, one parallel region
-  bool resultants_started_ = false;  // the next force pass finds m_i g and a zero torque already
   // velocity_verlet_onset (onset.cpp): its step, and its force pass (one thread): the forces at
   // t + dt with the dashpots on the predicted v(t + dt), and the impulses a contact or a slip that
   // started inside the step missed (onset_jx, jy, jt), added with the closing half kick.
