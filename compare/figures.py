@@ -36,10 +36,8 @@ Usage, from the repository root::
 import argparse
 import math
 import os
-import struct
 import sys
 import textwrap
-import zlib
 
 import numpy as np
 import matplotlib
@@ -57,6 +55,15 @@ from compare.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH
                                  network_segments, point_positions, read_csv, read_summary,
                                  reference_radius, run_caption, scene_name, side_profile,
                                  side_wall_contacts)
+# The discharge pictures' data (compare/figure_data.py), re-exported here.
+from compare.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRACTION,  # noqa: E402,F401
+                                 SURFACE_COLOURS, _discharge_head, _fmt, _rest_text, cell_edges,
+                                 discharge_info, displacement_radii, flow_fit_line, gate_name,
+                                 network_bounds, read_pvd, select_snapshots, snapshot_index,
+                                 static_ratio, wall_series_matrix, discharge_frames, flow_data,
+                                 wall_ratio_data)
+# PNG writing (compare/png_file.py, no matplotlib), re-exported here.
+from compare.png_file import PNG_COMPRESS_LEVEL, SAVE_DPI, _png_chunk, png_bytes  # noqa: E402,F401
 # The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
 from compare.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
@@ -100,32 +107,6 @@ def _save(fig, out_png):
     return out_png
 
 
-SAVE_DPI = 150
-PNG_COMPRESS_LEVEL = 3
-
-
-def _png_chunk(kind, data):
-    """One PNG chunk: length, type, data, CRC of type and data."""
-    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))
-
-
-def png_bytes(pixels, dpi):
-    """A PNG file of an (h, w, 3) RGB or (h, w, 4) RGBA uint8 array, with its dpi (pHYs).
-
-    Every row is stored unfiltered (filter type 0) and deflated at zlib level PNG_COMPRESS_LEVEL:
-    a figure's flat colours compress as well as with PIL's adaptive row filters (frames.png
-    1.34 against 1.57 MB), in half PIL's time, whose filtering costs as much as the deflate."""
-    h, w, channels = pixels.shape
-    rows = np.empty((h, 1 + w * channels), np.uint8)   # each row: its filter byte, then its pixels
-    rows[:, 0] = 0
-    rows[:, 1:].reshape(h, w, channels)[...] = pixels
-    ppm = int(dpi / 0.0254 + 0.5)                      # pixels per metre, as PIL writes them
-    return b"".join([b"\x89PNG\r\n\x1a\n",
-                     _png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2 if channels == 3 else 6, 0, 0, 0)),
-                     _png_chunk(b"pHYs", struct.pack(">IIB", ppm, ppm, 1)),
-                     _png_chunk(b"IDAT", zlib.compress(rows.data, PNG_COMPRESS_LEVEL)),
-                     _png_chunk(b"IEND", b"")])
-
 
 def _write_png(fig, path, dpi):
     """Draw fig with Agg at dpi and write its pixels as PNG (RGB if all opaque, else RGBA)."""
@@ -153,22 +134,6 @@ def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):
                         wspace=wspace / cell_w if ncols > 1 else 0.0,
                         hspace=hspace / cell_h if nrows > 1 else 0.0)
 
-
-def network_bounds(run, pad_fraction=0.04):
-    """Drawing bounds (x0, x1, y0, y1) of a run's network: walls, point contacts and discs,
-    padded by pad_fraction of the larger extent."""
-    summary, discs = run["summary"], run["discs"]
-    points = point_positions(summary, run["contacts"])
-    xs = [c[0] for w in summary["walls"] for c in (w["from"], w["to"])] + [p[0] for p in points.values()]
-    ys = [c[1] for w in summary["walls"] for c in (w["from"], w["to"])] + [p[1] for p in points.values()]
-    if len(discs["r"]):
-        xs += [np.min(discs["x"] - discs["r"]), np.max(discs["x"] + discs["r"])]
-        ys += [np.min(discs["y"] - discs["r"]), np.max(discs["y"] + discs["r"])]
-    if not xs:
-        _fail(run["dir"], "nothing to draw: no walls, points or discs")
-    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
-    pad = pad_fraction * max(x1 - x0, y1 - y0, 1e-9)
-    return x0 - pad, x1 + pad, y0 - pad, y1 + pad
 
 
 def _draw_discs(ax, discs, facecolors, edgecolors, linewidth, zorder=1):
@@ -221,15 +186,6 @@ def draw_network(ax, run, linewidth=1.0):
     ax.set_aspect("equal")
     return x0, x1, y0, y1
 
-
-def _rest_text(summary):
-    """'at rest', 'NOT at rest (status)' or 'rest unknown' from summary.json."""
-    rest = summary.get("rest")
-    if isinstance(rest, dict) and "reached" in rest:
-        if rest["reached"]:
-            return "at rest"
-        return f"NOT at rest ({summary.get('status', '?')})"
-    return "rest unknown"
 
 
 def plot_network(run_dir, out_png, title=None):
@@ -468,136 +424,8 @@ def plot_bottom_profile(run_dir, out_png):
     return _save(fig, out_png)
 
 
+
 # --------------------------------------------------------------------------- discharge
-
-# The gate wall is removed at opening; summary.json does not name it (docs/outputs.md), so the
-# wall of this name is the gate unless summary["discharge"]["gate"] says otherwise.
-GATE_NAME = "gate"
-# Discs that moved less than this many radii since opening are "dead" (docs/outputs.md).
-DEAD_RADII = 1.0
-# Bins whose static (t = 0) normal force is below this fraction of the wall's largest static bin
-# are masked in the ratio heat maps (docs/outputs.md: peak_ratio_*).
-STATIC_FRACTION = 0.25
-# Colour range of the force / static ratio (log scale, ratio 1 = white).
-RATIO_LIMITS = (0.1, 30.0)
-# Colours of the three surface columns and of the wall groups.
-SURFACE_COLOURS = {"left": "tab:blue", "centre": "tab:red", "right": "tab:green"}
-
-
-def discharge_info(summary, path):
-    """summary["discharge"], or stop: the run has no [discharge] table."""
-    info = summary.get("discharge")
-    if not isinstance(info, dict):
-        _fail(path, "no 'discharge' object: not a discharge run (scene without [discharge])")
-    return info
-
-
-def gate_name(summary):
-    """Name of the gate wall: summary["discharge"]["gate"] if given, else 'gate'."""
-    gate = (summary.get("discharge") or {}).get("gate")
-    return gate if isinstance(gate, str) and gate else GATE_NAME
-
-
-def read_pvd(path):
-    """The DataSets of a ParaView collection (.pvd) as (timestep, file) pairs sorted by time
-    (compare.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
-    return _reading(_run_dir.read_pvd, path)
-
-
-def snapshot_index(run_dir):
-    """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t
-    (compare.run_dir.RunDir.discharge_snapshots)."""
-    return _reading(RunDir(run_dir).discharge_snapshots)
-
-
-def select_snapshots(snaps, times=None):
-    """All snapshots (times None), or for each requested time the snapshot nearest to it
-    (each snapshot once, in time order)."""
-    if not snaps:
-        raise SystemExit("compare.figures: the run has no discharge snapshots")
-    if times is None:
-        return list(snaps)
-    at = np.array([s["t"] for s in snaps])
-    picked = sorted({int(np.argmin(np.abs(at - float(t)))) for t in times})
-    return [snaps[k] for k in picked]
-
-
-def displacement_radii(discs):
-    """Displacement since opening, |(dx, dy)| / r, of each disc of a snapshot."""
-    return np.hypot(discs["dx"], discs["dy"]) / discs["r"]
-
-
-def wall_series_matrix(series, wall):
-    """One wall's bins over time from wall_series.csv arrays, or None if the wall is absent.
-
-    Returns a dict: ``t`` (sorted sample times), ``bin`` (sorted bin numbers), ``s_mid``,
-    ``x_mid``, ``y_mid``, ``depth_mid`` (per bin, from its first row), and ``normal``,
-    ``shear`` as (len(t), len(bin)) arrays (nan where a sample lacks a bin).
-    """
-    sel = series["wall"] == wall
-    if not np.any(sel):
-        return None
-    times, it = np.unique(series["t"][sel], return_inverse=True)
-    bins, first, ib = np.unique(series["bin"][sel], return_index=True, return_inverse=True)
-    out = {"t": times, "bin": bins}
-    for q in ("s_mid", "x_mid", "y_mid", "depth_mid"):
-        out[q] = np.asarray(series[q], float)[sel][first]
-    for q in ("normal", "shear"):
-        m = np.full((len(times), len(bins)), np.nan)
-        m[it, ib] = np.asarray(series[q], float)[sel]
-        out[q] = m
-    return out
-
-
-def static_ratio(normal, fraction=STATIC_FRACTION):
-    """Force over static force per bin: returns (ratio, static, keep).
-
-    ``normal`` is a (time, bin) array whose first row is the static state (t = 0, at opening).
-    A bin is kept if its static value is positive and at least ``fraction`` of the largest
-    static bin; ratio = normal / static in kept bins, nan in the others.
-    """
-    normal = np.asarray(normal, float)
-    static = normal[0] if len(normal) else np.zeros(normal.shape[1:])
-    positive = np.isfinite(static) & (static > 0)
-    largest = float(static[positive].max()) if positive.any() else 0.0
-    keep = positive & (static >= fraction * largest)
-    ratio = np.full(normal.shape, np.nan)
-    ratio[:, keep] = normal[:, keep] / static[keep]
-    return ratio, static, keep
-
-
-def cell_edges(centres):
-    """Edges of cells around sorted centres (midpoints; the ends mirror the nearest gap)."""
-    c = np.asarray(centres, float)
-    if len(c) == 1:
-        return np.array([c[0] - 0.5, c[0] + 0.5])
-    mid = (c[1:] + c[:-1]) / 2
-    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
-
-
-def flow_fit_line(t, cumulative, slope, first=5):
-    """The fitted flow line through cumulative removals: returns (t0, t1, intercept) or None.
-
-    summary.json gives only the least-squares slope, from the ``first``-th removal on; the
-    least-squares intercept for that slope over the same points is mean(M) - slope mean(t).
-    The line is drawn from the first to the last of those points.
-    """
-    if slope is None or len(t) < first:
-        return None
-    t, m = np.asarray(t, float)[first - 1:], np.asarray(cumulative, float)[first - 1:]
-    return float(t[0]), float(t[-1]), float(np.mean(m) - slope * np.mean(t))
-
-
-def _fmt(value, spec=".3g"):
-    """A number formatted, or 'n/a' for None / non-numbers."""
-    return format(value, spec) if isinstance(value, (int, float)) else "n/a"
-
-
-def _discharge_head(summary):
-    """'scene, scheme, dt, law: pattern flow, status S' for discharge figure titles."""
-    info = summary.get("discharge") or {}
-    return (f"{run_caption(summary)}: {info.get('pattern', '?')} flow, "
-            f"status {summary.get('status', '?')}")
 
 
 def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
@@ -610,45 +438,14 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     50/pi disc weights). All panels share the same limits, which reach down to the outlet
     (summary["discharge"]["outlet_y"], where discs are removed).
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
     if ncols < 1:
         raise SystemExit(f"compare.figures: ncols must be >= 1, found {ncols}")
-    snaps = select_snapshots(snapshot_index(run_dir), times)
-    # a reference code's run (dem run --engine) has no contact files: its discs without forces
-    frames = [(s["t"], read_csv(s["discs"], SNAPSHOT_DISC_COLUMNS),
-               read_csv(s["contacts"], CONTACT_COLUMNS) if os.path.exists(s["contacts"]) else None)
-              for s in snaps]
-    if any(c is None for _, _, c in frames):
-        sys.stderr.write(f"compare.figures: {run_dir}: snapshots without contact files (the run gives no "
-                         "contact list): frames.png draws the discs only\n")
-    r_ref = next((reference_radius(d) for _, d, _ in frames if len(d["r"])), None)
-    if r_ref is None:
-        _fail(snaps[0]["discs"], "no discs in any snapshot: the plot scale needs disc 0")
+    d = discharge_frames(run_dir, times)
+    summary, info, frames, r_ref, walls, points = (d[k] for k in ("summary", "info", "frames", "r_ref",
+                                                                  "walls", "points"))
+    n_initial, outlet_y, pad, top = d["n_initial"], d["outlet_y"], d["pad"], d["top"]
+    x0, x1, y0, y1 = d["bounds"]
     weight = summary["disc_weight"]
-    gate = gate_name(summary)
-    walls = [w for w in summary["walls"] if w.get("name") != gate]
-    points = point_positions(summary, None)
-    for _, _, c in frames:
-        if c is not None:
-            points.update({k: v for k, v in point_positions({}, c).items() if k not in points})
-    n_initial = info.get("n_initial") or len(frames[0][1]["r"])
-    outlet_y = info.get("outlet_y")
-
-    xs = [c[0] for w in walls for c in (w["from"], w["to"])] + [p[0] for p in points.values()]
-    ys = [c[1] for w in walls for c in (w["from"], w["to"])] + [p[1] for p in points.values()]
-    if isinstance(outlet_y, (int, float)):
-        ys.append(outlet_y)
-    for _, d, _ in frames:
-        if len(d["r"]):
-            xs += [np.min(d["x"] - d["r"]), np.max(d["x"] + d["r"])]
-            ys += [np.min(d["y"] - d["r"]), np.max(d["y"] + d["r"])]
-    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
-    pad = 0.03 * max(x1 - x0, y1 - y0, 1e-9)
-    x0, x1, y0, y1 = x0 - pad, x1 + pad, y0 - pad, y1 + pad
-
-    top = max([float(np.max(displacement_radii(d))) for _, d, _ in frames if len(d["r"])] + [0])
     norm = matplotlib.colors.LogNorm(DEAD_RADII, max(2.0 * DEAD_RADII, top))
     cmap = matplotlib.colors.LinearSegmentedColormap.from_list(
         "moved", plt.get_cmap("YlOrRd")(np.linspace(0.15, 0.85, 256)))
@@ -747,21 +544,9 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     wall's total normal force (wall_totals_series.csv) / its static total.
     The title quotes summary.json's peak ratios (raw and windowed).
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
-    rd = RunDir(run_dir)
-    series = _reading(rd.wall_series)
-    totals = _reading(rd.wall_totals_series)
-    gate = gate_name(summary)
-    sides = [w for w in summary["walls"] if str(w.get("group", "")).startswith("side")]
-    bottoms = [w for w in summary["walls"]
-               if str(w.get("group", "")).startswith("bottom") and w.get("name") != gate]
-    strips = [(f"side wall {w['name']}", [w], "depth_mid") for w in sides]
-    if bottoms:
-        strips.append(("bottom walls (gate left out)", bottoms, "x_mid"))
-    if not strips:
-        _fail(spath, "no side or bottom wall in 'walls'")
+    d = wall_ratio_data(run_dir)
+    summary, info, series, totals, sides, bottoms, strips = (
+        d[k] for k in ("summary", "info", "series", "totals", "sides", "bottoms", "strips"))
 
     lo, hi = RATIO_LIMITS
     log_norm = matplotlib.colors.TwoSlopeNorm(vmin=math.log10(lo), vcenter=0.0,
@@ -851,19 +636,8 @@ def plot_flow(run_dir, out_png):
     below the floor, and the moved fraction; (c) the three surface heights with the sink times
     (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
-    rd = RunDir(run_dir)
-    removals = _reading(rd.removals)
-    flow = _reading(rd.flow_series)
-    order = np.argsort(flow["t"], kind="stable")
-    flow = {k: v[order] for k, v in flow.items()}
-    order = np.argsort(removals["t"], kind="stable")
-    removals = {k: v[order] for k, v in removals.items()}
-    duration = info.get("duration")
-    t_end = max([float(duration) if isinstance(duration, (int, float)) else 0.0]
-                + list(flow["t"][-1:]) + list(removals["t"][-1:])) or 1.0
+    d = flow_data(run_dir)
+    summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
 
     title = textwrap.fill(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
                           f"{_fmt(info.get('n_initial'), 'd')} discs out "
