@@ -8,6 +8,7 @@ the processes that draw.
 import math
 import os
 import sys
+import textwrap
 
 import numpy as np
 
@@ -534,3 +535,60 @@ def wall_ratio_data(run_dir):
         _fail(spath, "no side or bottom wall in 'walls'")
     return {"summary": summary, "info": info, "series": series, "totals": totals, "sides": sides,
             "bottoms": bottoms, "strips": strips}
+
+
+# --------------------------------------------------------------------------- titles
+
+# Line styles and markers of the separate side walls in the side-wall picture.
+SIDE_STYLES = {"side_left": "--", "side_right": ":"}
+SIDE_MARKERS = {"side_left": "<", "side_right": ">"}
+
+
+def network_title(summary, discs, title=None):
+    """The network picture's title: ``title`` or 'caption: N discs, t = ..', wrapped, and the scale."""
+    head = title or (f"{run_caption(summary)}: {len(discs['r'])} discs, "
+                     f"t = {float(summary.get('time', float('nan'))):.4g} s")
+    return (textwrap.fill(head, 7 * 12) + "\ncontact forces e_n n + e_s t: "
+            f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights")
+
+
+def side_title(summaries, unpaired):
+    """The side-wall picture's title (per contact), naming the runs whose rows are not level."""
+    note = ("mean of left and right per contact row; "
+            "the paper's Fig. 7 shows P_y per contact")
+    if unpaired:
+        note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
+    return textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
+                         f"{common_caption(summaries)}", 11 * 11) + "\n" + note
+
+
+def side_bins_title(summaries):
+    """The side-wall picture's title per wall_profiles.csv bin."""
+    return f"Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), {common_caption(summaries)}"
+
+
+def frames_title(summary, n_initial, chars):
+    """The frames picture's title, wrapped at ``chars`` characters a line."""
+    head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
+            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
+    note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
+            f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
+            f"(discs removed); dead = share of the {n_initial} discs at opening")
+    return textwrap.fill(head, chars) + "\n" + textwrap.fill(note, chars)
+
+
+def ratios_title(summary, info):
+    """The wall-ratio picture's title with summary.json's peak ratios."""
+    head = textwrap.fill(f"{_discharge_head(summary)}: wall forces relative to static "
+                         f"(cf. Kiyama & Fujimura 1982, Fig. 10)", 11 * 12)
+    return head + (f"\nsummary peak ratios: bottom {_fmt(info.get('peak_ratio_bottom'))} (windowed "
+                   f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side {_fmt(info.get('peak_ratio_side'))} "
+                   f"(windowed {_fmt(info.get('peak_ratio_side_windowed'))})")
+
+
+def flow_title(summary, info):
+    """The flow picture's title: discs out, by hand, jams."""
+    return textwrap.fill(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
+                         f"{_fmt(info.get('n_initial'), 'd')} discs out "
+                         f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
+                         f"{_fmt(info.get('jams'), 'd')} jams", 12 * 11)

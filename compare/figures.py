@@ -61,7 +61,8 @@ from compare.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRA
                                  discharge_info, displacement_radii, flow_fit_line, gate_name,
                                  network_bounds, read_pvd, select_snapshots, snapshot_index,
                                  static_ratio, wall_series_matrix, discharge_frames, flow_data,
-                                 wall_ratio_data)
+                                 wall_ratio_data, network_title, side_title, frames_title,
+                                 ratios_title, flow_title, side_bins_title)
 # PNG writing (compare/png_file.py, no matplotlib), re-exported here.
 from compare.png_file import PNG_COMPRESS_LEVEL, SAVE_DPI, _png_chunk, png_bytes  # noqa: E402,F401
 # The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
@@ -70,8 +71,7 @@ from compare.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_CO
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
 
 # Line styles of the separate side walls in the profile figure.
-SIDE_STYLES = {"side_left": "--", "side_right": ":"}
-SIDE_MARKERS = {"side_left": "<", "side_right": ">"}
+from compare.figure_data import SIDE_MARKERS, SIDE_STYLES  # noqa: E402,F401
 
 # --------------------------------------------------------------------------- figures
 
@@ -198,10 +198,7 @@ def plot_network(run_dir, out_png, title=None):
     draw_network(ax, run)
     ax.set_xlabel("X [cm]")
     ax.set_ylabel("Y [cm]")
-    head = title or (f"{run_caption(summary)}: {len(discs['r'])} discs, "
-                     f"t = {float(summary.get('time', float('nan'))):.4g} s")
-    title = (textwrap.fill(head, 7 * 12) + "\ncontact forces e_n n + e_s t: "
-             f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights")
+    title = network_title(summary, discs, title)
     ax.set_title(title, fontsize=10, y=1.0)
     # A fixed layout (inches): the title's lines above, the tick and axis labels.
     _fixed_layout(fig, left=0.65, right=0.2, bottom=0.55, top=0.2 + 0.19 * (title.count("\n") + 1))
@@ -323,12 +320,7 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
                               marker=marker or None, markersize=4))
         names.append(f"{g} alone")
     axn.legend(handles, names, fontsize=8, loc="upper right")
-    note = ("mean of left and right per contact row; "
-            "the paper's Fig. 7 shows P_y per contact")
-    if unpaired:
-        note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
-    title = textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
-                          f"{common_caption(summaries)}", 11 * 11) + "\n" + note
+    title = side_title(summaries, unpaired)
     fig.suptitle(title, fontsize=11, y=1 - 0.1 / fig.get_size_inches()[1], va="top")
     # A fixed layout (inches): the title's lines, the tick and axis labels.
     _fixed_layout(fig, left=0.75, right=0.25, bottom=0.6, top=0.25 + 0.2 * (title.count("\n") + 1),
@@ -390,7 +382,7 @@ def _plot_side_bins(run_dirs, out_png, labels):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8))
         names.append(f"{g} alone")
     axn.legend(handles, names, fontsize=8, loc="upper right")
-    fig.suptitle(f"Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), {common_caption(summaries)}")
+    fig.suptitle(side_bins_title(summaries))
     fig.tight_layout()
     return _save(fig, out_png)
 
@@ -457,12 +449,7 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     aspect = (y1 - y0) / (x1 - x0)
     width = panel * ncols + 1.3
     chars = int(width * 12)                    # characters per title line at 10 pt
-    head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
-            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
-    note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
-            f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
-            f"(discs removed); dead = share of the {n_initial} discs at opening")
-    title = textwrap.fill(head, chars) + "\n" + textwrap.fill(note, chars)
+    title = frames_title(summary, n_initial, chars)
     # A fixed layout (inches): the title's lines, each panel's title, the tick labels of the
     # outer panels only (all panels share their limits), the colour bar at the right.
     top = 0.15 + 0.19 * (title.count("\n") + 1) + 0.25
@@ -553,11 +540,7 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
                                               vmax=math.log10(hi))
     cmap = plt.get_cmap("RdBu_r").copy()
     cmap.set_bad("0.72")
-    head = textwrap.fill(f"{_discharge_head(summary)}: wall forces relative to static "
-                         f"(cf. Kiyama & Fujimura 1982, Fig. 10)", 11 * 12)
-    head += (f"\nsummary peak ratios: bottom {_fmt(info.get('peak_ratio_bottom'))} (windowed "
-             f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side {_fmt(info.get('peak_ratio_side'))} "
-             f"(windowed {_fmt(info.get('peak_ratio_side_windowed'))})")
+    head = ratios_title(summary, info)
     fig, axes = plt.subplots(len(strips) + 1, 1, sharex=True,
                              figsize=(11, 2.7 * len(strips) + 2.9),
                              gridspec_kw={"height_ratios": [3] * len(strips) + [2.3]})
@@ -639,10 +622,7 @@ def plot_flow(run_dir, out_png):
     d = flow_data(run_dir)
     summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
 
-    title = textwrap.fill(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
-                          f"{_fmt(info.get('n_initial'), 'd')} discs out "
-                          f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
-                          f"{_fmt(info.get('jams'), 'd')} jams", 12 * 11)
+    title = flow_title(summary, info)
     fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
     # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
     # each.
