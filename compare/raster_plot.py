@@ -112,17 +112,17 @@ def text_size(fnt, s):
 # --------------------------------------------------------------------------- ticks
 
 
-def nice_ticks(lo, hi, max_intervals=6):
-    """Round tick values in [lo, hi]: the step is the smallest of 1, 2, 2.5, 5 x 10^k that makes at
-    most max_intervals intervals of the span (as matplotlib's MaxNLocator); e.g. 0..7.3 -> 0, 2,
-    4, 6."""
+def nice_ticks(lo, hi, max_intervals=6, steps=(1, 2, 2.5, 5, 10)):
+    """Round tick values in [lo, hi]: the step is the smallest of steps x 10^k that makes at most
+    max_intervals intervals of the span (as matplotlib's MaxNLocator); e.g. 0..7.3 -> 0, 2, 4,
+    6."""
     lo, hi = (lo, hi) if lo <= hi else (hi, lo)
     span = hi - lo
     if not span > 0 or not math.isfinite(span):
         return np.array([lo])
     raw = span / max_intervals
     mag = 10.0 ** math.floor(math.log10(raw))
-    step = next(m * mag for m in (1, 2, 2.5, 5, 10) if m * mag >= raw * (1 - 1e-9))
+    step = next(m * mag for m in tuple(steps) + (10,) if m * mag >= raw * (1 - 1e-9))
     first, last = math.ceil(lo / step - 1e-9), math.floor(hi / step + 1e-9)
     return np.arange(first, last + 1) * step
 
@@ -200,9 +200,10 @@ class Figure:
         """Points (1/72 inch: line widths, font sizes) as drawn pixels."""
         return points / 72.0 * self.scale
 
-    def text(self, x, y, s, size=10, ha="left", va="top", colour="black", rotate=False):
+    def text(self, x, y, s, size=10, ha="left", va="top", colour="black", rotate=False, align=None):
         """Text (lines split at newlines) at drawn pixel (x, y); ha left/center/right, va
-        top/center/bottom of the whole block; rotate=True writes it upward (a y-axis label)."""
+        top/center/bottom of the whole block, align (default ha) each line in the block;
+        rotate=True writes it upward (a y-axis label)."""
         fnt = font(self.pt(size))
         lines = str(s).split("\n")
         sizes = [text_size(fnt, line) for line in lines]
@@ -220,8 +221,9 @@ class Figure:
             self.image.paste(Image.new("RGB", block.size, rgb(colour)), (int(round(x0)), int(round(y0))), block)
             return
         y0 = y - {"top": 0, "center": h / 2, "bottom": h}[va]
+        left = x - {"left": 0, "center": w / 2, "right": w}[ha]
         for k, (line, (lw, _)) in enumerate(zip(lines, sizes)):
-            x0 = x - {"left": 0, "center": lw / 2, "right": lw}[ha]
+            x0 = left + {"left": 0, "center": (w - lw) / 2, "right": w - lw}[align or ha]
             self.draw.text((x0, y0 + k * line_h), line, fill=rgb(colour), font=fnt)
 
     def text_width(self, s, size):
@@ -288,6 +290,7 @@ class Axes:
         self.owner = image is None
         self.xticks = self.yticks = None
         self.legend_items = []
+        self._legend, self.finished = None, False
 
     # mapping -------------------------------------------------------------
     def x_px(self, x):
@@ -307,9 +310,7 @@ class Axes:
 
     def twin(self, ylim):
         """Axes on the same box, image and x, with their own y (ticks on the right)."""
-        t = Axes(self.fig, self.box, self.xlim, ylim, image=self.image)
-        t.right = True
-        return t
+        return Axes(self.fig, self.box, self.xlim, ylim, image=self.image)
 
     # drawing -------------------------------------------------------------
     def _width(self, points):
@@ -342,7 +343,8 @@ class Axes:
     def markers(self, x, y, shape="o", size=6, face="black", edge=None, edge_width=1.0):
         """Markers of size points (across) at finite points: 'o' circle, 'v' '<' '>' triangles;
         face None leaves it hollow."""
-        r = self.fig.pt(size) / 2
+        # a filled marker without an edge of its own has matplotlib's: its face colour, 1 pt wide
+        r = self.fig.pt(size + (1.0 if face is not None and edge is None else 0.0)) / 2
         fill = None if face is None else rgb(face)
         outline = None if edge is None else rgb(edge)
         ew = self._width(edge_width)
@@ -444,6 +446,12 @@ class Axes:
         self.legend_items.append((label, rgb(colour), style, width, marker, patch))
 
     def legend(self, items=None, loc="upper right", size=8, ncol=1, frame=True):
+        """A legend, drawn on the figure once the box is pasted (by finish(), or now if it was)."""
+        self._legend = (items, loc, size, ncol, frame)
+        if self.finished:
+            self._draw_legend(*self._legend)
+
+    def _draw_legend(self, items, loc, size, ncol, frame):
         """The legend of items (default: those added to these axes), at loc: 'upper left',
         'upper right', 'lower left', 'lower right', 'center left' inside the box, or 'above right'
         (outside, over the box's right end, no frame)."""
@@ -498,7 +506,7 @@ class Axes:
 
     # frame, ticks, labels ------------------------------------------------
     def finish(self, xlabel=None, ylabel=None, title=None, title_size=10, title_loc="center",
-               tick_size=8, label_size=10, xticks=None, yticks=None, xtick_labels=True,
+               tick_size=10, label_size=10, xticks=None, yticks=None, xtick_labels=True,
                ytick_labels=True, right=False, title_colour="black"):
         """Paste the box into the figure (first axes of an image only), draw its frame, the ticks
         (given, or nice_ticks of the limits) with labels, the axis labels and the title. right:
@@ -546,3 +554,6 @@ class Axes:
         if title:
             x = {"center": (x0 + x1) / 2, "left": x0}[title_loc]
             fig.text(x, y0 - fig.pt(4), title, size=title_size, ha=title_loc, va="bottom", colour=title_colour)
+        self.finished = True
+        if self._legend is not None:
+            self._draw_legend(*self._legend)
