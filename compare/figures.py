@@ -30,7 +30,10 @@ Usage, from the repository root::
     /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
     /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
     /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
-    /usr/bin/python3 -m compare.figures run RUN_DIR
+    /usr/bin/python3 -m compare.figures run RUN_DIR [--renderer pil]
+
+``run --renderer pil`` draws the same five files with PIL (compare/quick_figures.py), without
+importing matplotlib.
 """
 
 import argparse
@@ -39,8 +42,15 @@ import os
 import sys
 import textwrap
 
-import numpy as np
-import matplotlib
+if __name__ == "__main__":
+    # `run RUN_DIR --renderer pil` is drawn by compare.quick_figures (PIL), before matplotlib is
+    # imported: the import alone costs more than drawing the five pictures so.
+    from compare import quick_figures as _quick
+    if _quick.pil_requested(sys.argv[1:]):
+        raise SystemExit(_quick.main(sys.argv[1:]))
+
+import numpy as np  # noqa: E402
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
@@ -786,6 +796,9 @@ def main(argv=None):
     p.add_argument("--outdir", required=True, help="folder to write the three PNGs to")
     p = sub.add_parser("run", help="the pictures of one run directory, into it")
     p.add_argument("run_dir")
+    p.add_argument("--renderer", choices=("matplotlib", "pil"), default="matplotlib",
+                   help="matplotlib (default), or PIL (compare.quick_figures: the same five files, "
+                        "matplotlib not imported)")
     args = parser.parse_args(argv)
 
     if args.command == "network":
@@ -804,6 +817,9 @@ def main(argv=None):
         out = plot_flow(args.run_dir, args.out)
     elif args.command == "discharge":
         out = "\n".join(plot_discharge(args.run_dir, args.outdir))
+    elif args.renderer == "pil":
+        from compare import quick_figures
+        out = "\n".join(quick_figures.plot_run(args.run_dir))
     else:
         out = "\n".join(plot_run(args.run_dir))
     print(out)

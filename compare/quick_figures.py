@@ -514,13 +514,25 @@ def plot_run(run_dir):
     return [fig.save(os.path.join(run_dir, name)) for name, fig in draw_run(run_dir).items()]
 
 
+def pil_requested(argv):
+    """Whether a command line of compare.figures asks for this renderer (--renderer pil or
+    --renderer=pil): compare.figures looks before it imports matplotlib."""
+    for k, a in enumerate(argv):
+        if a == "--renderer=pil" or (a == "--renderer" and argv[k + 1:k + 2] == ["pil"]):
+            return True
+    return False
+
+
 def main(argv=None):
-    """Command line: `run RUN_DIR`."""
+    """Command line: `run RUN_DIR` (also as compare.figures' `run RUN_DIR --renderer pil`)."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    if len(argv) != 2 or argv[0] != "run":
-        sys.stderr.write("usage: python3 -m compare.quick_figures run RUN_DIR\n")
+    rest = [a for k, a in enumerate(argv) if a not in ("--renderer=pil", "--renderer")
+            and not (a == "pil" and k > 0 and argv[k - 1] == "--renderer")]
+    if len(rest) != 2 or rest[0] != "run":
+        sys.stderr.write("usage: python3 -m compare.quick_figures run RUN_DIR\n"
+                         "       python3 -m compare.figures run RUN_DIR --renderer pil\n")
         return 2
-    print("\n".join(plot_run(argv[1])))
+    print("\n".join(plot_run(rest[1])))
     return 0
 
 

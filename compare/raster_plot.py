@@ -2,10 +2,12 @@
 axes with a data -> pixel mapping, round ticks, lines, markers, discs, cells, text, legends,
 colour maps and colour bars. compare.quick_figures draws a run's pictures with it.
 
-Everything is drawn at SUPERSAMPLE times the size and scaled down on saving (Image.reduce): that
-is the antialiasing, PIL's own drawing has none. A figure's pixels are those of dpi (150, as
-compare.figures), its sizes in inches and points as matplotlib's, so that both renderers give
-pictures of the same size and proportions.
+The data inside an axes box is drawn at SUPERSAMPLE times its pixels and scaled down (Image.reduce)
+into the figure: that is the antialiasing of discs and slanted lines, which PIL's own drawing
+lacks. Text (FreeType, antialiased itself), frames and ticks are drawn on the figure at its own
+pixels: the whole figure at twice the size cost twice the time (filling, reducing and text at 4x
+the pixels). A figure's pixels are those of dpi (150, as compare.figures), its sizes in inches and
+points as matplotlib's, so that both renderers give pictures of the same size and proportions.
 """
 
 import functools
@@ -18,7 +20,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from compare.png_file import SAVE_DPI, png_bytes
 
-# Drawn at twice the size, then averaged 2 x 2 (Image.reduce): antialiased edges and text.
+# An axes' data drawn at twice the size, then averaged 2 x 2 (Image.reduce): antialiased edges.
 SUPERSAMPLE = 2
 
 # --------------------------------------------------------------------------- colours
@@ -82,12 +84,12 @@ FONT_NAME = "DejaVuSans.ttf"
 def font_path():
     """DejaVu Sans: Debian's copy, else matplotlib's own (found without importing matplotlib);
     None if neither is there (then PIL's small bitmap font is used, at one size)."""
-    places = ["/usr/share/fonts/truetype/dejavu"]
-    spec = importlib.util.find_spec("matplotlib")
+    path = os.path.join("/usr/share/fonts/truetype/dejavu", FONT_NAME)
+    if os.path.exists(path):
+        return path
+    spec = importlib.util.find_spec("matplotlib")         # finds the package, does not import it
     if spec is not None and spec.origin:
-        places.append(os.path.join(os.path.dirname(spec.origin), "mpl-data", "fonts", "ttf"))
-    for place in places:
-        path = os.path.join(place, FONT_NAME)
+        path = os.path.join(os.path.dirname(spec.origin), "mpl-data", "fonts", "ttf", FONT_NAME)
         if os.path.exists(path):
             return path
     return None
@@ -100,6 +102,12 @@ def font(size_px):
     if path is None:
         return ImageFont.load_default()
     return ImageFont.truetype(path, max(1, int(round(size_px))))
+
+
+@functools.lru_cache(maxsize=4096)
+def measure(size_px, s):
+    """text_size of s in the font of size_px (cached: tick labels repeat)."""
+    return text_size(font(size_px), s)
 
 
 def text_size(fnt, s):
@@ -181,23 +189,23 @@ def dash_segments(points, pattern):
 
 
 class Figure:
-    """A white picture of width x height inches at dpi, drawn at SUPERSAMPLE times its pixels.
-    Layout positions are in inches from the top left corner."""
+    """A white picture of width x height inches at dpi. Layout positions are in inches from the
+    top left corner, drawing positions in its pixels."""
 
-    def __init__(self, width_in, height_in, dpi=SAVE_DPI, supersample=SUPERSAMPLE):
-        self.dpi, self.ss = dpi, supersample
-        self.scale = dpi * supersample                           # drawn pixels per inch
-        self.size = (int(round(width_in * dpi)) * supersample, int(round(height_in * dpi)) * supersample)
+    def __init__(self, width_in, height_in, dpi=SAVE_DPI):
+        self.dpi = dpi
+        self.scale = dpi                                         # pixels per inch
+        self.size = (int(round(width_in * dpi)), int(round(height_in * dpi)))
         self.width_in, self.height_in = width_in, height_in
         self.image = Image.new("RGB", self.size, "white")
         self.draw = ImageDraw.Draw(self.image)
 
     def px(self, inches):
-        """Inches as drawn pixels."""
+        """Inches as pixels."""
         return inches * self.scale
 
     def pt(self, points):
-        """Points (1/72 inch: line widths, font sizes) as drawn pixels."""
+        """Points (1/72 inch: line widths, font sizes) as pixels."""
         return points / 72.0 * self.scale
 
     def text(self, x, y, s, size=10, ha="left", va="top", colour="black", rotate=False, align=None):
@@ -206,7 +214,7 @@ class Figure:
         rotate=True writes it upward (a y-axis label)."""
         fnt = font(self.pt(size))
         lines = str(s).split("\n")
-        sizes = [text_size(fnt, line) for line in lines]
+        sizes = [measure(self.pt(size), line) for line in lines]
         line_h = max(h for _, h in sizes)
         w, h = max(w for w, _ in sizes), line_h * len(lines)
         if rotate:
@@ -228,12 +236,13 @@ class Figure:
 
     def text_width(self, s, size):
         """Drawn pixel width of one line of text at size points."""
-        return text_size(font(self.pt(size)), s)[0]
+        return measure(self.pt(size), s)[0]
 
-    def axes(self, left, top, width, height, xlim=(0.0, 1.0), ylim=(0.0, 1.0), invert_y=False):
+    def axes(self, left, top, width, height, xlim=(0.0, 1.0), ylim=(0.0, 1.0), invert_y=False,
+             supersample=SUPERSAMPLE):
         """Axes in the box left, top, width, height (inches) showing xlim x ylim."""
         box = tuple(int(round(self.px(v))) for v in (left, top, left + width, top + height))
-        return Axes(self, box, xlim, ylim, invert_y)
+        return Axes(self, box, xlim, ylim, invert_y, supersample=supersample)
 
     def colorbar(self, left, top, width, height, colours, ticks, label, size=7, label_size=8):
         """A vertical colour bar in the box (inches): ``colours`` (n, 3) from bottom to top,
@@ -255,12 +264,12 @@ class Figure:
                   va="center", rotate=True)
 
     def save(self, path):
-        """Scale down to dpi pixels and write a PNG (png_bytes) through path.tmp, renamed when
-        complete: a killed process leaves no half file."""
+        """Write a PNG (png_bytes) through path.tmp, renamed when complete: a killed process
+        leaves no half file."""
         folder = os.path.dirname(path)
         if folder:
             os.makedirs(folder, exist_ok=True)
-        image = self.image.reduce(self.ss) if self.ss > 1 else self.image
+        image = self.image
         tmp = f"{path}.tmp"
         try:
             with open(tmp, "wb") as f:
@@ -275,17 +284,24 @@ class Figure:
 # --------------------------------------------------------------------------- axes
 
 
-class Axes:
-    """A box of a Figure that maps data (x, y) to pixels. Data is drawn on the box's own image
-    (so that it is clipped to the box) and pasted into the figure by finish(), which also draws
-    the frame, ticks, tick labels, axis labels and title. A twin (twin()) shares the image and x
-    and has its own y, labelled on the right."""
+def _fig_width(fig, points):
+    """A line width in points as whole figure pixels (at least one)."""
+    return max(1, int(round(fig.pt(points))))
 
-    def __init__(self, fig, box, xlim, ylim, invert_y=False, image=None):
-        self.fig, self.box = fig, box
-        self.w, self.h = box[2] - box[0], box[3] - box[1]
+
+class Axes:
+    """A box of a Figure that maps data (x, y) to pixels. Data is drawn on the box's own image at
+    ``supersample`` times its pixels (so that it is clipped to the box, and antialiased when
+    scaled down) and pasted into the figure by finish(), which also draws the frame, ticks, tick
+    labels, axis labels and title. A twin (twin()) shares the image and x and has its own y,
+    labelled on the right."""
+
+    def __init__(self, fig, box, xlim, ylim, invert_y=False, image=None, supersample=SUPERSAMPLE):
+        self.fig, self.box, self.ss = fig, box, supersample
+        self.w, self.h = box[2] - box[0], box[3] - box[1]             # figure pixels
+        self.W, self.H = self.w * supersample, self.h * supersample   # the drawing's pixels
         self.xlim, self.ylim, self.invert_y = tuple(map(float, xlim)), tuple(map(float, ylim)), invert_y
-        self.image = image if image is not None else Image.new("RGB", (self.w, self.h), "white")
+        self.image = image if image is not None else Image.new("RGB", (self.W, self.H), "white")
         self.draw = ImageDraw.Draw(self.image)
         self.owner = image is None
         self.xticks = self.yticks = None
@@ -294,27 +310,28 @@ class Axes:
 
     # mapping -------------------------------------------------------------
     def x_px(self, x):
-        """Data x as pixels from the box's left edge (float, not rounded)."""
+        """Data x as drawing pixels from the box's left edge (float, not rounded)."""
         x0, x1 = self.xlim
-        return (np.asarray(x, float) - x0) / (x1 - x0) * self.w
+        return (np.asarray(x, float) - x0) / (x1 - x0) * self.W
 
     def y_px(self, y):
-        """Data y as pixels from the box's top edge: up is smaller, unless invert_y."""
+        """Data y as drawing pixels from the box's top edge: up is smaller, unless invert_y."""
         y0, y1 = self.ylim
         f = (np.asarray(y, float) - y0) / (y1 - y0)
-        return f * self.h if self.invert_y else (1.0 - f) * self.h
+        return f * self.H if self.invert_y else (1.0 - f) * self.H
 
     def figure_px(self, x, y):
-        """Data (x, y) as drawn pixels of the whole figure."""
-        return self.box[0] + self.x_px(x), self.box[1] + self.y_px(y)
+        """Data (x, y) as pixels of the figure."""
+        return self.box[0] + self.x_px(x) / self.ss, self.box[1] + self.y_px(y) / self.ss
 
     def twin(self, ylim):
         """Axes on the same box, image and x, with their own y (ticks on the right)."""
-        return Axes(self.fig, self.box, self.xlim, ylim, image=self.image)
+        return Axes(self.fig, self.box, self.xlim, ylim, image=self.image, supersample=self.ss)
 
     # drawing -------------------------------------------------------------
     def _width(self, points):
-        return max(1, int(round(self.fig.pt(points))))
+        """A line width in points as whole drawing pixels (at least one)."""
+        return max(1, int(round(self.fig.pt(points) * self.ss)))
 
     def line(self, x, y, colour="black", width=1.5, style="-"):
         """A polyline through finite points (nan breaks it), solid or dashed ('--', ':', '-.')."""
@@ -344,7 +361,7 @@ class Axes:
         """Markers of size points (across) at finite points: 'o' circle, 'v' '<' '>' triangles;
         face None leaves it hollow."""
         # a filled marker without an edge of its own has matplotlib's: its face colour, 1 pt wide
-        r = self.fig.pt(size + (1.0 if face is not None and edge is None else 0.0)) / 2
+        r = self.fig.pt(size + (1.0 if face is not None and edge is None else 0.0)) * self.ss / 2
         fill = None if face is None else rgb(face)
         outline = None if edge is None else rgb(edge)
         ew = self._width(edge_width)
@@ -362,7 +379,7 @@ class Axes:
     def discs(self, x, y, r, faces=None, edge="0.5", edge_width=0.3):
         """Discs of radius r in data units (x scale), each with its face colour (n, 3) or none."""
         px, py = self.x_px(x), self.y_px(y)
-        pr = np.asarray(r, float) * self.w / (self.xlim[1] - self.xlim[0])
+        pr = np.asarray(r, float) * self.W / (self.xlim[1] - self.xlim[0])
         outline, ew = rgb(edge), self._width(edge_width)
         ellipse = self.draw.ellipse
         if faces is None:
@@ -401,24 +418,35 @@ class Axes:
     def hspan(self, y0, y1, colour):
         """A band across the box between y0 and y1."""
         a, b = sorted(self.y_px([y0, y1]).tolist())
-        self.draw.rectangle([0, a, self.w, b], fill=rgb(colour))
+        self.draw.rectangle([0, a, self.W, b], fill=rgb(colour))
 
     def cells(self, x_edges, y_edges, colours):
         """Rectangular cells (pcolormesh): colours (ny, nx, 3) between the sorted edges; each
-        pixel takes the colour of the cell its centre lies in (none outside)."""
+        pixel takes the colour of the cell its centre lies in (none outside). Cells are sharp
+        edged: they are looked up at figure pixels and scaled up (NEAREST), 4 x fewer look-ups."""
         cx = np.searchsorted(np.asarray(x_edges, float), self._data_x(np.arange(self.w) + 0.5)) - 1
         cy = np.searchsorted(np.asarray(y_edges, float), self._data_y(np.arange(self.h) + 0.5)) - 1
         colours = np.asarray(colours, np.uint8)
         okx = (cx >= 0) & (cx < colours.shape[1])
         oky = (cy >= 0) & (cy < colours.shape[0])
-        pixels = np.array(self.image)
-        rows, cols = np.flatnonzero(oky), np.flatnonzero(okx)
-        pixels[np.ix_(rows, cols)] = colours[np.ix_(cy[rows], cx[cols])]
-        self.image.paste(Image.fromarray(pixels, "RGB"))
+        if not okx.any() or not oky.any():
+            return
+        cols, rows = np.flatnonzero(okx), np.flatnonzero(oky)
+        c0, c1, r0, r1 = cols[0], cols[-1] + 1, rows[0], rows[-1] + 1      # cells' pixel range
+        block = colours.take(cy[r0:r1].clip(0, colours.shape[0] - 1), axis=0) \
+                       .take(cx[c0:c1].clip(0, colours.shape[1] - 1), axis=1)
+        image = Image.fromarray(np.ascontiguousarray(block), "RGB")
+        image = image.resize(((c1 - c0) * self.ss, (r1 - r0) * self.ss), Image.Resampling.NEAREST)
+        inside = (okx[c0:c1].all() and oky[r0:r1].all())
+        mask = None
+        if not inside:                  # a gap between sorted edges can only be outside: mask it
+            m = np.outer(oky[r0:r1], okx[c0:c1]).astype(np.uint8) * 255
+            mask = Image.fromarray(m, "L").resize(image.size, Image.Resampling.NEAREST)
+        self.image.paste(image, (c0 * self.ss, r0 * self.ss), mask)
 
     def _data_x(self, px):
         x0, x1 = self.xlim
-        return x0 + px / self.w * (x1 - x0)
+        return x0 + px / self.w * (x1 - x0)          # px in figure pixels
 
     def _data_y(self, py):
         y0, y1 = self.ylim
@@ -436,9 +464,9 @@ class Axes:
         yt = self.yticks if self.yticks is not None else nice_ticks(*self.ylim)
         w, c = self._width(width), rgb(colour)
         for x in self.x_px(xt):
-            self.draw.line([(x, 0), (x, self.h)], fill=c, width=w)
+            self.draw.line([(x, 0), (x, self.H)], fill=c, width=w)
         for y in self.y_px(yt):
-            self.draw.line([(0, y), (self.w, y)], fill=c, width=w)
+            self.draw.line([(0, y), (self.W, y)], fill=c, width=w)
 
     # legend --------------------------------------------------------------
     def add_legend_item(self, label, colour, style="-", width=1.5, marker=None, patch=False):
@@ -479,7 +507,7 @@ class Axes:
         draw = fig.draw
         if frame:
             draw.rounded_rectangle([x0, y0, x0 + total_w, y0 + total_h], radius=fig.pt(2),
-                                   fill=(255, 255, 255), outline=(204, 204, 204), width=self._width(0.8))
+                                   fill=(255, 255, 255), outline=(204, 204, 204), width=_fig_width(fig, 0.8))
         for k, (label, colour, style, width, marker, patch) in enumerate(items):
             c, row = k // nrow, k % nrow
             x = x0 + pad + sum(col_w[:c]) + gap * c
@@ -488,7 +516,7 @@ class Axes:
                 draw.rectangle([x, y - line_h * 0.3, x + handle, y + line_h * 0.3], fill=colour)
             elif style:
                 pts = np.array([(x, y), (x + handle, y)])
-                w = self._width(width)
+                w = _fig_width(fig, width)
                 pattern = DASHES.get(style)
                 pieces = [pts] if pattern is None else dash_segments(pts, [p * w for p in pattern])
                 for piece in pieces:
@@ -514,8 +542,8 @@ class Axes:
         fig = self.fig
         x0, y0, x1, y1 = self.box
         if self.owner:
-            fig.image.paste(self.image, (x0, y0))
-        lw = self._width(0.8)
+            fig.image.paste(self.image.reduce(self.ss) if self.ss > 1 else self.image, (x0, y0))
+        lw = _fig_width(fig, 0.8)
         if self.owner:
             fig.draw.rectangle([x0, y0, x1, y1], outline=(0, 0, 0), width=lw)
         tick, gap = fig.pt(3.5), fig.pt(3.5)
@@ -525,12 +553,12 @@ class Axes:
         yt = np.asarray(yticks if yticks is not None else (self.yticks if self.yticks is not None
                                                            else nice_ticks(*self.ylim)), float)
         if self.owner and not right:
-            for x, text in zip(self.x_px(xt), tick_labels(xt)):
+            for x, text in zip(self.x_px(xt) / self.ss, tick_labels(xt)):
                 if -0.5 <= x <= self.w + 0.5:
                     fig.draw.line([(x0 + x, y1), (x0 + x, y1 + tick)], fill=(0, 0, 0), width=lw)
                     if xtick_labels:
                         fig.text(x0 + x, y1 + tick + gap * 0.5, text, size=tick_size, ha="center")
-        for y, text in zip(self.y_px(yt), tick_labels(yt)):
+        for y, text in zip(self.y_px(yt) / self.ss, tick_labels(yt)):
             if -0.5 <= y <= self.h + 0.5:
                 if right:
                     fig.draw.line([(x1, y0 + y), (x1 + tick, y0 + y)], fill=(0, 0, 0), width=lw)
