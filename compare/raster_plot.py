@@ -199,6 +199,7 @@ class Figure:
         self.width_in, self.height_in = width_in, height_in
         self.image = Image.new("RGB", self.size, "white")
         self.draw = ImageDraw.Draw(self.image)
+        self.all_axes = []                                       # in the order made
 
     def px(self, inches):
         """Inches as pixels."""
@@ -242,7 +243,8 @@ class Figure:
              supersample=SUPERSAMPLE):
         """Axes in the box left, top, width, height (inches) showing xlim x ylim."""
         box = tuple(int(round(self.px(v))) for v in (left, top, left + width, top + height))
-        return Axes(self, box, xlim, ylim, invert_y, supersample=supersample)
+        self.all_axes.append(Axes(self, box, xlim, ylim, invert_y, supersample=supersample))
+        return self.all_axes[-1]
 
     def colorbar(self, left, top, width, height, colours, ticks, label, size=7, label_size=8):
         """A vertical colour bar in the box (inches): ``colours`` (n, 3) from bottom to top,
