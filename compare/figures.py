@@ -42,12 +42,24 @@ import os
 import sys
 import textwrap
 
-if __name__ == "__main__":
+
+
+def pil_requested(argv):
+    """Whether a command line asks for the PIL renderer (--renderer pil or --renderer=pil)."""
+    for k, a in enumerate(argv):
+        if a == "--renderer=pil" or (a == "--renderer" and argv[k + 1:k + 2] == ["pil"]):
+            return True
+    return False
+
+
+if __name__ == "__main__" and pil_requested(sys.argv[1:]):
     # `run RUN_DIR --renderer pil` is drawn by compare.quick_figures (PIL), before matplotlib is
-    # imported: the import alone costs more than drawing the five pictures so.
+    # imported: the import alone costs more than drawing the five pictures so. The pictures do
+    # no linear algebra: one OpenBLAS thread, not one a core started at numpy's import (some
+    # 0.08 s CPU).
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     from compare import quick_figures as _quick
-    if _quick.pil_requested(sys.argv[1:]):
-        raise SystemExit(_quick.main(sys.argv[1:]))
+    raise SystemExit(_quick.main(sys.argv[1:]))
 
 import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402

@@ -15,9 +15,13 @@ import math
 import os
 import sys
 
-import numpy as np
+if __name__ == "__main__":
+    # no linear algebra here: one OpenBLAS thread, not one a core started at numpy's import
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from compare.figure_data import (DEAD_RADII, RATIO_LIMITS, SIDE_MARKERS, SIDE_STYLES,
+import numpy as np  # noqa: E402
+
+from compare.figure_data import (DEAD_RADII, RATIO_LIMITS, SIDE_MARKERS, SIDE_STYLES,  # noqa: E402
                                  STATIC_FRACTION, SURFACE_COLOURS, _fail, _fmt, _rest_text,
                                  cell_edges, discharge_frames, displacement_radii, flow_data,
                                  flow_fit_line, flow_title, frames_title, load_run,
@@ -25,7 +29,7 @@ from compare.figure_data import (DEAD_RADII, RATIO_LIMITS, SIDE_MARKERS, SIDE_ST
                                  ratios_title, reference_radius, scene_name, side_bins_title,
                                  side_profile, side_title, side_wall_contacts, static_ratio,
                                  wall_ratio_data, wall_series_matrix)
-from compare import raster_plot as rp
+from compare import raster_plot as rp  # noqa: E402
 
 GREY_DEAD = (224, 224, 224)            # matplotlib's '0.88': discs that moved < 1 radius
 GREY_BAD = (184, 184, 184)             # '0.72': heat-map bins without a static load
@@ -512,15 +516,6 @@ def draw_run(run_dir):
 def plot_run(run_dir):
     """Draw the run's pictures and write them into run_dir; returns their paths."""
     return [fig.save(os.path.join(run_dir, name)) for name, fig in draw_run(run_dir).items()]
-
-
-def pil_requested(argv):
-    """Whether a command line of compare.figures asks for this renderer (--renderer pil or
-    --renderer=pil): compare.figures looks before it imports matplotlib."""
-    for k, a in enumerate(argv):
-        if a == "--renderer=pil" or (a == "--renderer" and argv[k + 1:k + 2] == ["pil"]):
-            return True
-    return False
 
 
 def main(argv=None):

@@ -87,11 +87,12 @@ def test_compare_figures_renderer_pil_imports_no_matplotlib(run, tmp_path):
 
 
 def test_pil_requested():
-    assert quick_figures.pil_requested(["run", "D", "--renderer", "pil"])
-    assert quick_figures.pil_requested(["run", "--renderer=pil", "D"])
-    assert not quick_figures.pil_requested(["run", "D", "--renderer", "matplotlib"])
-    assert not quick_figures.pil_requested(["run", "D"])
-    assert not quick_figures.pil_requested(["run", "D", "--renderer"])
+    from compare.figures import pil_requested
+    assert pil_requested(["run", "D", "--renderer", "pil"])
+    assert pil_requested(["run", "--renderer=pil", "D"])
+    assert not pil_requested(["run", "D", "--renderer", "matplotlib"])
+    assert not pil_requested(["run", "D"])
+    assert not pil_requested(["run", "D", "--renderer"])
 
 
 # --------------------------------------------------------------------------- bad input
