@@ -86,6 +86,19 @@ def test_compare_figures_renderer_pil_imports_no_matplotlib(run, tmp_path):
     assert [line for line in p.stderr.splitlines() if "| matplotlib" in line]
 
 
+def test_a_run_without_contact_lists_gets_four_pictures(run, tmp_path):
+    """A reference code's run (no contacts.csv, no contact snapshots): no network.png, a note on
+    stderr naming contacts.csv, side_walls.png per wall_profiles.csv bin, the discharge's three."""
+    out = copy_run(run, tmp_path / "run")
+    for f in [out / "contacts.csv", out / "contacts.vtu", out / "discharge_contacts.pvd",
+              *(out / "snapshots").glob("contacts_*")]:
+        f.unlink()
+    p = draw("-m", "compare.figures", "run", str(out), "--renderer", "pil")
+    assert p.returncode == 0, p.stderr
+    assert f"{out / 'contacts.csv'}: absent" in p.stderr
+    assert sorted(x.name for x in out.glob("*.png")) == sorted(PICTURES[1:])
+
+
 def test_pil_requested():
     from compare.figures import pil_requested
     assert pil_requested(["run", "D", "--renderer", "pil"])
