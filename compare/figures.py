@@ -36,12 +36,8 @@ Usage, from the repository root::
 importing matplotlib.
 """
 
-import argparse
-import math
 import os
 import sys
-import textwrap
-
 
 
 def pil_requested(argv):
@@ -61,6 +57,9 @@ if __name__ == "__main__" and pil_requested(sys.argv[1:]):
     from compare import quick_figures as _quick
     raise SystemExit(_quick.main(sys.argv[1:]))
 
+import argparse  # noqa: E402
+import math  # noqa: E402
+import textwrap  # noqa: E402
 import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 
