@@ -601,5 +601,8 @@ class Axes:
             x = {"center": (x0 + x1) / 2, "left": x0}[title_loc]
             fig.text(x, y0 - fig.pt(4), title, size=title_size, ha=title_loc, va="bottom", colour=title_colour)
         self.finished = True
+        # the supersampled drawing is in the figure now: let it go, so that the next axes reuse
+        # its memory (fresh pages cost more than drawing on them)
+        self.image = self.draw = None
         if self._legend is not None:
             self._draw_legend(*self._legend)
