@@ -423,13 +423,15 @@ def flow(run_dir):
         ax.vline(jam, "firebrick", 1.5, ":")
         items.append((f"first jam {jam:.3g} s", rp.rgb("firebrick"), ":", 1.5, None, False))
     ax.legend(items, loc="upper left", size=8)
-    ax.finish(ylabel="removed mass [g per cm]", xtick_labels=False, title="(a) discs through the outlet",
-              title_loc="left")
     mass = removals["mass"]
+    sec = None                          # a removed-disc count axis when all discs weigh the same
     if len(mass) and np.ptp(mass) <= 1e-9 * abs(mass[0]) and mass[0] > 0:
         unit = float(mass[0])
         sec = ax.twin((ax.ylim[0] / unit, ax.ylim[1] / unit))
         _ticks(sec)
+    ax.finish(ylabel="removed mass [g per cm]", xtick_labels=False, title="(a) discs through the outlet",
+              title_loc="left")
+    if sec is not None:
         sec.finish(ylabel="removed discs", right=True)
 
     # (b) discs in the silo, below the floor, moved fraction on the right

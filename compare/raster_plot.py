@@ -104,10 +104,19 @@ def font(size_px):
     return ImageFont.truetype(path, max(1, int(round(size_px))))
 
 
+def _encodable(fnt, s):
+    """s as the font can draw it: PIL's bitmap fallback font has Latin-1 only ('?' for the rest:
+    pi, minus signs)."""
+    if isinstance(fnt, ImageFont.FreeTypeFont):
+        return s
+    return s.encode("latin-1", "replace").decode("latin-1")
+
+
 @functools.lru_cache(maxsize=4096)
 def measure(size_px, s):
     """text_size of s in the font of size_px (cached: tick labels repeat)."""
-    return text_size(font(size_px), s)
+    fnt = font(size_px)
+    return text_size(fnt, _encodable(fnt, s))
 
 
 # Pixels left of a line's mask for glyphs that reach left of the pen (a negative bearing).
@@ -120,8 +129,9 @@ def text_mask(size_px, s):
     (TEXT_MARGIN, 0); cached: tick labels and panel titles repeat, and a mask pasted costs less
     than the text drawn again."""
     w, h = measure(size_px, s)
+    fnt = font(size_px)
     mask = Image.new("L", (int(w) + 2 * TEXT_MARGIN + 1, int(h) + 1), 0)
-    ImageDraw.Draw(mask).text((TEXT_MARGIN, 0), s, fill=255, font=font(size_px))
+    ImageDraw.Draw(mask).text((TEXT_MARGIN, 0), _encodable(fnt, s), fill=255, font=fnt)
     return mask
 
 
@@ -225,7 +235,7 @@ class Figure:
         return points / 72.0 * self.scale
 
     def text(self, x, y, s, size=10, ha="left", va="top", colour="black", rotate=False, align=None):
-        """Text (lines split at newlines) at drawn pixel (x, y); ha left/center/right, va
+        """Text (lines split at newlines) at pixel (x, y); ha left/center/right, va
         top/center/bottom of the whole block, align (default ha) each line in the block;
         rotate=True writes it upward (a y-axis label)."""
         fnt = font(self.pt(size))
@@ -237,7 +247,7 @@ class Figure:
             block = Image.new("L", (int(w) + 2, int(h) + 2), 0)
             pen = ImageDraw.Draw(block)
             for k, (line, (lw, _)) in enumerate(zip(lines, sizes)):
-                pen.text(((w - lw) / 2, k * line_h), line, fill=255, font=fnt)
+                pen.text(((w - lw) / 2, k * line_h), _encodable(fnt, line), fill=255, font=fnt)
             block = block.transpose(Image.Transpose.ROTATE_90)
             bw, bh = block.size
             x0 = x - {"left": 0, "center": bw / 2, "right": bw}[ha]
@@ -323,7 +333,6 @@ class Axes:
         self.draw = ImageDraw.Draw(self.image)
         self.owner = image is None
         self.xticks = self.yticks = None
-        self.legend_items = []
         self._legend, self.finished = None, False
 
     # mapping -------------------------------------------------------------
@@ -343,7 +352,10 @@ class Axes:
         return self.box[0] + self.x_px(x) / self.ss, self.box[1] + self.y_px(y) / self.ss
 
     def twin(self, ylim):
-        """Axes on the same box, image and x, with their own y (ticks on the right)."""
+        """Axes on the same box, image and x, with their own y (ticks on the right); made before
+        finish(), which pastes the image the two draw on."""
+        if self.finished:
+            raise RuntimeError("raster_plot: twin() of axes already finished (their image is pasted)")
         return Axes(self.fig, self.box, self.xlim, ylim, image=self.image, supersample=self.ss)
 
     # drawing -------------------------------------------------------------
@@ -487,21 +499,19 @@ class Axes:
             self.draw.line([(0, y), (self.W, y)], fill=c, width=w)
 
     # legend --------------------------------------------------------------
-    def add_legend_item(self, label, colour, style="-", width=1.5, marker=None, patch=False):
-        """An entry for legend(): a line (style, width), a marker, or a filled patch."""
-        self.legend_items.append((label, rgb(colour), style, width, marker, patch))
+    def legend(self, items, loc="upper right", size=8, ncol=1, frame=True):
+        """A legend, drawn on the figure once the box is pasted (by finish(), or now if it was).
 
-    def legend(self, items=None, loc="upper right", size=8, ncol=1, frame=True):
-        """A legend, drawn on the figure once the box is pasted (by finish(), or now if it was)."""
+        ``items`` are (label, colour, line style or None, line width [pt], marker or None,
+        patch): a line, a marker, or (patch) a filled box. ``loc``: 'upper left', 'upper right',
+        'lower left', 'lower right', 'center left' inside the box, or 'above right' (outside,
+        over the box's right end, no frame)."""
         self._legend = (items, loc, size, ncol, frame)
         if self.finished:
             self._draw_legend(*self._legend)
 
     def _draw_legend(self, items, loc, size, ncol, frame):
-        """The legend of items (default: those added to these axes), at loc: 'upper left',
-        'upper right', 'lower left', 'lower right', 'center left' inside the box, or 'above right'
-        (outside, over the box's right end, no frame)."""
-        items = self.legend_items if items is None else items
+        """legend() drawn: a column of handles and labels, ncol columns, framed or not."""
         if not items:
             return
         fig = self.fig
@@ -527,6 +537,7 @@ class Axes:
             draw.rounded_rectangle([x0, y0, x0 + total_w, y0 + total_h], radius=fig.pt(2),
                                    fill=(255, 255, 255), outline=(204, 204, 204), width=_fig_width(fig, 0.8))
         for k, (label, colour, style, width, marker, patch) in enumerate(items):
+            colour = rgb(colour)
             c, row = k // nrow, k % nrow
             x = x0 + pad + sum(col_w[:c]) + gap * c
             y = y0 + pad + (row + 0.5) * line_h * 1.15

@@ -68,6 +68,18 @@ def test_five_pictures_written_decoded_and_sized(run, tmp_path):
     assert not list(out.glob("*.tmp"))
 
 
+def test_every_panel_shows_its_data(run, tmp_path):
+    """Inside every axes box of the five pictures (their Figures' all_axes) at least 2 % of the
+    pixels are neither white nor the grid's grey: no panel is left blank or painted over."""
+    for name, fig in quick_figures.draw_run(str(run)).items():
+        pixels = np.asarray(Image.open(fig.save(str(tmp_path / name)))).astype(int)
+        for k, ax in enumerate(fig.all_axes):
+            x0, y0, x1, y1 = ax.box
+            inside = pixels[y0 + 3:y1 - 2, x0 + 3:x1 - 2]
+            plain = np.all(inside == 255, axis=-1) | np.all(np.abs(inside - 223) <= 2, axis=-1)
+            assert np.mean(~plain) > 0.02, (name, k, np.mean(~plain))
+
+
 def test_compare_figures_renderer_pil_imports_no_matplotlib(run, tmp_path):
     """`compare.figures run DIR --renderer pil` writes the five files and never imports matplotlib
     (python -X importtime lists every module imported); the same check run on the default
