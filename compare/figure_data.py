@@ -300,7 +300,6 @@ def network_bounds(run, pad_fraction=0.04):
     return x0 - pad, x1 + pad, y0 - pad, y1 + pad
 
 
-
 def _rest_text(summary):
     """'at rest', 'NOT at rest (status)' or 'rest unknown' from summary.json."""
     rest = summary.get("rest")

@@ -91,7 +91,7 @@ from compare.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_CO
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
 
-# Line styles of the separate side walls in the profile figure.
+# Line styles and markers of the separate side walls in the profile figure (figure_data's).
 from compare.figure_data import SIDE_MARKERS, SIDE_STYLES  # noqa: E402,F401
 
 # --------------------------------------------------------------------------- figures
@@ -128,7 +128,6 @@ def _save(fig, out_png):
     return out_png
 
 
-
 def _write_png(fig, path, dpi):
     """Draw fig with Agg at dpi and write its pixels as PNG (RGB if all opaque, else RGBA)."""
     fig.set_dpi(dpi)
@@ -154,7 +153,6 @@ def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):
     fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
                         wspace=wspace / cell_w if ncols > 1 else 0.0,
                         hspace=hspace / cell_h if nrows > 1 else 0.0)
-
 
 
 def _draw_discs(ax, discs, facecolors, edgecolors, linewidth, zorder=1):
@@ -206,7 +204,6 @@ def draw_network(ax, run, linewidth=1.0):
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
     return x0, x1, y0, y1
-
 
 
 def plot_network(run_dir, out_png, title=None):
@@ -435,7 +432,6 @@ def plot_bottom_profile(run_dir, out_png):
     ax.set_title(f"{run_caption(summary)}\nbottom-wall normal force, {total}", fontsize=10)
     fig.tight_layout()
     return _save(fig, out_png)
-
 
 
 # --------------------------------------------------------------------------- discharge
