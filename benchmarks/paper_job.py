@@ -1,13 +1,16 @@
 """The paper's job, timed: its parts for one or more checkouts, interleaved, with medians.
 
     /usr/bin/python3 benchmarks/paper_job.py --out out/paper_job [--repeats 3] \
-        [--variant NAME REPO DEM ...] [--parts single,single_plots,static,discharge] [--members 8]
+        [--variant NAME REPO DEM ...] [--parts single,single_plots,single_pil,static,discharge] \
+        [--members 8]
 
 Each variant is a checkout (REPO: its compare/ and scenes) and an engine binary (DEM); default:
 this checkout and build/dem. Parts:
 
 - ``single``:       `dem run reference_inputs/scenes/discharge_17_18.toml --out DIR --quiet`;
 - ``single_plots``: that run, then `python3 -m compare.figures run DIR` (its five pictures);
+- ``single_pil``:   that run, then `python3 -m compare.figures run DIR --renderer pil` (the same
+  five pictures drawn with PIL, compare/quick_figures.py);
 - ``static``:       `python3 -m compare.paper_static --out DIR --dem DEM`;
 - ``discharge``:    `python3 -m compare.paper_discharge --out DIR --dem DEM --members M`.
 
@@ -69,6 +72,9 @@ def part_commands(part, repo, dem, out, members):
         return [[dem, "run", scene, "--out", out, "--quiet"]]
     if part == "single_plots":
         return [[dem, "run", scene, "--out", out, "--quiet"], [PY, "-m", "compare.figures", "run", out]]
+    if part == "single_pil":
+        return [[dem, "run", scene, "--out", out, "--quiet"],
+                [PY, "-m", "compare.figures", "run", out, "--renderer", "pil"]]
     if part == "static":
         return [[PY, "-m", "compare.paper_static", "--out", out, "--dem", dem]]
     if part == "discharge":

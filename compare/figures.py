@@ -30,19 +30,38 @@ Usage, from the repository root::
     /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
     /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
     /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
-    /usr/bin/python3 -m compare.figures run RUN_DIR
+    /usr/bin/python3 -m compare.figures run RUN_DIR [--renderer pil]
+
+``run --renderer pil`` draws the same five files with PIL (compare/quick_figures.py), without
+importing matplotlib.
 """
 
-import argparse
-import math
 import os
-import struct
 import sys
-import textwrap
-import zlib
 
-import numpy as np
-import matplotlib
+
+def pil_requested(argv):
+    """Whether a command line asks for the PIL renderer (--renderer pil or --renderer=pil)."""
+    for k, a in enumerate(argv):
+        if a == "--renderer=pil" or (a == "--renderer" and argv[k + 1:k + 2] == ["pil"]):
+            return True
+    return False
+
+
+if __name__ == "__main__" and pil_requested(sys.argv[1:]):
+    # `run RUN_DIR --renderer pil` is drawn by compare.quick_figures (PIL), before matplotlib is
+    # imported: the import alone costs more than drawing the five pictures so. The pictures do
+    # no linear algebra: one OpenBLAS thread, not one a core started at numpy's import (some
+    # 0.08 s CPU).
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    from compare import quick_figures as _quick
+    raise SystemExit(_quick.main(sys.argv[1:]))
+
+import argparse  # noqa: E402
+import math  # noqa: E402
+import textwrap  # noqa: E402
+import numpy as np  # noqa: E402
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
@@ -57,14 +76,23 @@ from compare.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH
                                  network_segments, point_positions, read_csv, read_summary,
                                  reference_radius, run_caption, scene_name, side_profile,
                                  side_wall_contacts)
+# The discharge pictures' data (compare/figure_data.py), re-exported here.
+from compare.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRACTION,  # noqa: E402,F401
+                                 SURFACE_COLOURS, _discharge_head, _fmt, _rest_text, cell_edges,
+                                 discharge_info, displacement_radii, flow_fit_line, gate_name,
+                                 network_bounds, read_pvd, select_snapshots, snapshot_index,
+                                 static_ratio, wall_series_matrix, discharge_frames, flow_data,
+                                 wall_ratio_data, network_title, side_title, frames_title,
+                                 ratios_title, flow_title, side_bins_title)
+# PNG writing (compare/png_file.py, no matplotlib), re-exported here.
+from compare.png_file import PNG_COMPRESS_LEVEL, SAVE_DPI, _png_chunk, png_bytes  # noqa: E402,F401
 # The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
 from compare.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
 
-# Line styles of the separate side walls in the profile figure.
-SIDE_STYLES = {"side_left": "--", "side_right": ":"}
-SIDE_MARKERS = {"side_left": "<", "side_right": ">"}
+# Line styles and markers of the separate side walls in the profile figure (figure_data's).
+from compare.figure_data import SIDE_MARKERS, SIDE_STYLES  # noqa: E402,F401
 
 # --------------------------------------------------------------------------- figures
 
@@ -100,33 +128,6 @@ def _save(fig, out_png):
     return out_png
 
 
-SAVE_DPI = 150
-PNG_COMPRESS_LEVEL = 3
-
-
-def _png_chunk(kind, data):
-    """One PNG chunk: length, type, data, CRC of type and data."""
-    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))
-
-
-def png_bytes(pixels, dpi):
-    """A PNG file of an (h, w, 3) RGB or (h, w, 4) RGBA uint8 array, with its dpi (pHYs).
-
-    Every row is stored unfiltered (filter type 0) and deflated at zlib level PNG_COMPRESS_LEVEL:
-    a figure's flat colours compress as well as with PIL's adaptive row filters (frames.png
-    1.34 against 1.57 MB), in half PIL's time, whose filtering costs as much as the deflate."""
-    h, w, channels = pixels.shape
-    rows = np.empty((h, 1 + w * channels), np.uint8)   # each row: its filter byte, then its pixels
-    rows[:, 0] = 0
-    rows[:, 1:].reshape(h, w, channels)[...] = pixels
-    ppm = int(dpi / 0.0254 + 0.5)                      # pixels per metre, as PIL writes them
-    return b"".join([b"\x89PNG\r\n\x1a\n",
-                     _png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2 if channels == 3 else 6, 0, 0, 0)),
-                     _png_chunk(b"pHYs", struct.pack(">IIB", ppm, ppm, 1)),
-                     _png_chunk(b"IDAT", zlib.compress(rows.data, PNG_COMPRESS_LEVEL)),
-                     _png_chunk(b"IEND", b"")])
-
-
 def _write_png(fig, path, dpi):
     """Draw fig with Agg at dpi and write its pixels as PNG (RGB if all opaque, else RGBA)."""
     fig.set_dpi(dpi)
@@ -152,23 +153,6 @@ def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):
     fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
                         wspace=wspace / cell_w if ncols > 1 else 0.0,
                         hspace=hspace / cell_h if nrows > 1 else 0.0)
-
-
-def network_bounds(run, pad_fraction=0.04):
-    """Drawing bounds (x0, x1, y0, y1) of a run's network: walls, point contacts and discs,
-    padded by pad_fraction of the larger extent."""
-    summary, discs = run["summary"], run["discs"]
-    points = point_positions(summary, run["contacts"])
-    xs = [c[0] for w in summary["walls"] for c in (w["from"], w["to"])] + [p[0] for p in points.values()]
-    ys = [c[1] for w in summary["walls"] for c in (w["from"], w["to"])] + [p[1] for p in points.values()]
-    if len(discs["r"]):
-        xs += [np.min(discs["x"] - discs["r"]), np.max(discs["x"] + discs["r"])]
-        ys += [np.min(discs["y"] - discs["r"]), np.max(discs["y"] + discs["r"])]
-    if not xs:
-        _fail(run["dir"], "nothing to draw: no walls, points or discs")
-    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
-    pad = pad_fraction * max(x1 - x0, y1 - y0, 1e-9)
-    return x0 - pad, x1 + pad, y0 - pad, y1 + pad
 
 
 def _draw_discs(ax, discs, facecolors, edgecolors, linewidth, zorder=1):
@@ -222,16 +206,6 @@ def draw_network(ax, run, linewidth=1.0):
     return x0, x1, y0, y1
 
 
-def _rest_text(summary):
-    """'at rest', 'NOT at rest (status)' or 'rest unknown' from summary.json."""
-    rest = summary.get("rest")
-    if isinstance(rest, dict) and "reached" in rest:
-        if rest["reached"]:
-            return "at rest"
-        return f"NOT at rest ({summary.get('status', '?')})"
-    return "rest unknown"
-
-
 def plot_network(run_dir, out_png, title=None):
     """Contact-force network of one run in the style of the paper's Fig. 6 (see draw_network)."""
     run = load_run(run_dir, parts=("contacts", "discs"))
@@ -242,10 +216,7 @@ def plot_network(run_dir, out_png, title=None):
     draw_network(ax, run)
     ax.set_xlabel("X [cm]")
     ax.set_ylabel("Y [cm]")
-    head = title or (f"{run_caption(summary)}: {len(discs['r'])} discs, "
-                     f"t = {float(summary.get('time', float('nan'))):.4g} s")
-    title = (textwrap.fill(head, 7 * 12) + "\ncontact forces e_n n + e_s t: "
-             f"disc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights")
+    title = network_title(summary, discs, title)
     ax.set_title(title, fontsize=10, y=1.0)
     # A fixed layout (inches): the title's lines above, the tick and axis labels.
     _fixed_layout(fig, left=0.65, right=0.2, bottom=0.55, top=0.2 + 0.19 * (title.count("\n") + 1))
@@ -367,12 +338,7 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
                               marker=marker or None, markersize=4))
         names.append(f"{g} alone")
     axn.legend(handles, names, fontsize=8, loc="upper right")
-    note = ("mean of left and right per contact row; "
-            "the paper's Fig. 7 shows P_y per contact")
-    if unpaired:
-        note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
-    title = textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
-                          f"{common_caption(summaries)}", 11 * 11) + "\n" + note
+    title = side_title(summaries, unpaired)
     fig.suptitle(title, fontsize=11, y=1 - 0.1 / fig.get_size_inches()[1], va="top")
     # A fixed layout (inches): the title's lines, the tick and axis labels.
     _fixed_layout(fig, left=0.75, right=0.25, bottom=0.6, top=0.25 + 0.2 * (title.count("\n") + 1),
@@ -434,7 +400,7 @@ def _plot_side_bins(run_dirs, out_png, labels):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8))
         names.append(f"{g} alone")
     axn.legend(handles, names, fontsize=8, loc="upper right")
-    fig.suptitle(f"Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), {common_caption(summaries)}")
+    fig.suptitle(side_bins_title(summaries))
     fig.tight_layout()
     return _save(fig, out_png)
 
@@ -470,135 +436,6 @@ def plot_bottom_profile(run_dir, out_png):
 
 # --------------------------------------------------------------------------- discharge
 
-# The gate wall is removed at opening; summary.json does not name it (docs/outputs.md), so the
-# wall of this name is the gate unless summary["discharge"]["gate"] says otherwise.
-GATE_NAME = "gate"
-# Discs that moved less than this many radii since opening are "dead" (docs/outputs.md).
-DEAD_RADII = 1.0
-# Bins whose static (t = 0) normal force is below this fraction of the wall's largest static bin
-# are masked in the ratio heat maps (docs/outputs.md: peak_ratio_*).
-STATIC_FRACTION = 0.25
-# Colour range of the force / static ratio (log scale, ratio 1 = white).
-RATIO_LIMITS = (0.1, 30.0)
-# Colours of the three surface columns and of the wall groups.
-SURFACE_COLOURS = {"left": "tab:blue", "centre": "tab:red", "right": "tab:green"}
-
-
-def discharge_info(summary, path):
-    """summary["discharge"], or stop: the run has no [discharge] table."""
-    info = summary.get("discharge")
-    if not isinstance(info, dict):
-        _fail(path, "no 'discharge' object: not a discharge run (scene without [discharge])")
-    return info
-
-
-def gate_name(summary):
-    """Name of the gate wall: summary["discharge"]["gate"] if given, else 'gate'."""
-    gate = (summary.get("discharge") or {}).get("gate")
-    return gate if isinstance(gate, str) and gate else GATE_NAME
-
-
-def read_pvd(path):
-    """The DataSets of a ParaView collection (.pvd) as (timestep, file) pairs sorted by time
-    (compare.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
-    return _reading(_run_dir.read_pvd, path)
-
-
-def snapshot_index(run_dir):
-    """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t
-    (compare.run_dir.RunDir.discharge_snapshots)."""
-    return _reading(RunDir(run_dir).discharge_snapshots)
-
-
-def select_snapshots(snaps, times=None):
-    """All snapshots (times None), or for each requested time the snapshot nearest to it
-    (each snapshot once, in time order)."""
-    if not snaps:
-        raise SystemExit("compare.figures: the run has no discharge snapshots")
-    if times is None:
-        return list(snaps)
-    at = np.array([s["t"] for s in snaps])
-    picked = sorted({int(np.argmin(np.abs(at - float(t)))) for t in times})
-    return [snaps[k] for k in picked]
-
-
-def displacement_radii(discs):
-    """Displacement since opening, |(dx, dy)| / r, of each disc of a snapshot."""
-    return np.hypot(discs["dx"], discs["dy"]) / discs["r"]
-
-
-def wall_series_matrix(series, wall):
-    """One wall's bins over time from wall_series.csv arrays, or None if the wall is absent.
-
-    Returns a dict: ``t`` (sorted sample times), ``bin`` (sorted bin numbers), ``s_mid``,
-    ``x_mid``, ``y_mid``, ``depth_mid`` (per bin, from its first row), and ``normal``,
-    ``shear`` as (len(t), len(bin)) arrays (nan where a sample lacks a bin).
-    """
-    sel = series["wall"] == wall
-    if not np.any(sel):
-        return None
-    times, it = np.unique(series["t"][sel], return_inverse=True)
-    bins, first, ib = np.unique(series["bin"][sel], return_index=True, return_inverse=True)
-    out = {"t": times, "bin": bins}
-    for q in ("s_mid", "x_mid", "y_mid", "depth_mid"):
-        out[q] = np.asarray(series[q], float)[sel][first]
-    for q in ("normal", "shear"):
-        m = np.full((len(times), len(bins)), np.nan)
-        m[it, ib] = np.asarray(series[q], float)[sel]
-        out[q] = m
-    return out
-
-
-def static_ratio(normal, fraction=STATIC_FRACTION):
-    """Force over static force per bin: returns (ratio, static, keep).
-
-    ``normal`` is a (time, bin) array whose first row is the static state (t = 0, at opening).
-    A bin is kept if its static value is positive and at least ``fraction`` of the largest
-    static bin; ratio = normal / static in kept bins, nan in the others.
-    """
-    normal = np.asarray(normal, float)
-    static = normal[0] if len(normal) else np.zeros(normal.shape[1:])
-    positive = np.isfinite(static) & (static > 0)
-    largest = float(static[positive].max()) if positive.any() else 0.0
-    keep = positive & (static >= fraction * largest)
-    ratio = np.full(normal.shape, np.nan)
-    ratio[:, keep] = normal[:, keep] / static[keep]
-    return ratio, static, keep
-
-
-def cell_edges(centres):
-    """Edges of cells around sorted centres (midpoints; the ends mirror the nearest gap)."""
-    c = np.asarray(centres, float)
-    if len(c) == 1:
-        return np.array([c[0] - 0.5, c[0] + 0.5])
-    mid = (c[1:] + c[:-1]) / 2
-    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
-
-
-def flow_fit_line(t, cumulative, slope, first=5):
-    """The fitted flow line through cumulative removals: returns (t0, t1, intercept) or None.
-
-    summary.json gives only the least-squares slope, from the ``first``-th removal on; the
-    least-squares intercept for that slope over the same points is mean(M) - slope mean(t).
-    The line is drawn from the first to the last of those points.
-    """
-    if slope is None or len(t) < first:
-        return None
-    t, m = np.asarray(t, float)[first - 1:], np.asarray(cumulative, float)[first - 1:]
-    return float(t[0]), float(t[-1]), float(np.mean(m) - slope * np.mean(t))
-
-
-def _fmt(value, spec=".3g"):
-    """A number formatted, or 'n/a' for None / non-numbers."""
-    return format(value, spec) if isinstance(value, (int, float)) else "n/a"
-
-
-def _discharge_head(summary):
-    """'scene, scheme, dt, law: pattern flow, status S' for discharge figure titles."""
-    info = summary.get("discharge") or {}
-    return (f"{run_caption(summary)}: {info.get('pattern', '?')} flow, "
-            f"status {summary.get('status', '?')}")
-
 
 def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     """Disc positions and contact forces at the discharge snapshots (the paper's Figs. 8, 9).
@@ -610,45 +447,14 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     50/pi disc weights). All panels share the same limits, which reach down to the outlet
     (summary["discharge"]["outlet_y"], where discs are removed).
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
     if ncols < 1:
         raise SystemExit(f"compare.figures: ncols must be >= 1, found {ncols}")
-    snaps = select_snapshots(snapshot_index(run_dir), times)
-    # a reference code's run (dem run --engine) has no contact files: its discs without forces
-    frames = [(s["t"], read_csv(s["discs"], SNAPSHOT_DISC_COLUMNS),
-               read_csv(s["contacts"], CONTACT_COLUMNS) if os.path.exists(s["contacts"]) else None)
-              for s in snaps]
-    if any(c is None for _, _, c in frames):
-        sys.stderr.write(f"compare.figures: {run_dir}: snapshots without contact files (the run gives no "
-                         "contact list): frames.png draws the discs only\n")
-    r_ref = next((reference_radius(d) for _, d, _ in frames if len(d["r"])), None)
-    if r_ref is None:
-        _fail(snaps[0]["discs"], "no discs in any snapshot: the plot scale needs disc 0")
+    d = discharge_frames(run_dir, times)
+    summary, info, frames, r_ref, walls, points = (d[k] for k in ("summary", "info", "frames", "r_ref",
+                                                                  "walls", "points"))
+    n_initial, outlet_y, pad, top = d["n_initial"], d["outlet_y"], d["pad"], d["top"]
+    x0, x1, y0, y1 = d["bounds"]
     weight = summary["disc_weight"]
-    gate = gate_name(summary)
-    walls = [w for w in summary["walls"] if w.get("name") != gate]
-    points = point_positions(summary, None)
-    for _, _, c in frames:
-        if c is not None:
-            points.update({k: v for k, v in point_positions({}, c).items() if k not in points})
-    n_initial = info.get("n_initial") or len(frames[0][1]["r"])
-    outlet_y = info.get("outlet_y")
-
-    xs = [c[0] for w in walls for c in (w["from"], w["to"])] + [p[0] for p in points.values()]
-    ys = [c[1] for w in walls for c in (w["from"], w["to"])] + [p[1] for p in points.values()]
-    if isinstance(outlet_y, (int, float)):
-        ys.append(outlet_y)
-    for _, d, _ in frames:
-        if len(d["r"]):
-            xs += [np.min(d["x"] - d["r"]), np.max(d["x"] + d["r"])]
-            ys += [np.min(d["y"] - d["r"]), np.max(d["y"] + d["r"])]
-    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
-    pad = 0.03 * max(x1 - x0, y1 - y0, 1e-9)
-    x0, x1, y0, y1 = x0 - pad, x1 + pad, y0 - pad, y1 + pad
-
-    top = max([float(np.max(displacement_radii(d))) for _, d, _ in frames if len(d["r"])] + [0])
     norm = matplotlib.colors.LogNorm(DEAD_RADII, max(2.0 * DEAD_RADII, top))
     cmap = matplotlib.colors.LinearSegmentedColormap.from_list(
         "moved", plt.get_cmap("YlOrRd")(np.linspace(0.15, 0.85, 256)))
@@ -660,12 +466,7 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     aspect = (y1 - y0) / (x1 - x0)
     width = panel * ncols + 1.3
     chars = int(width * 12)                    # characters per title line at 10 pt
-    head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
-            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
-    note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
-            f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
-            f"(discs removed); dead = share of the {n_initial} discs at opening")
-    title = textwrap.fill(head, chars) + "\n" + textwrap.fill(note, chars)
+    title = frames_title(summary, n_initial, chars)
     # A fixed layout (inches): the title's lines, each panel's title, the tick labels of the
     # outer panels only (all panels share their limits), the colour bar at the right.
     top = 0.15 + 0.19 * (title.count("\n") + 1) + 0.25
@@ -747,32 +548,16 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     wall's total normal force (wall_totals_series.csv) / its static total.
     The title quotes summary.json's peak ratios (raw and windowed).
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
-    rd = RunDir(run_dir)
-    series = _reading(rd.wall_series)
-    totals = _reading(rd.wall_totals_series)
-    gate = gate_name(summary)
-    sides = [w for w in summary["walls"] if str(w.get("group", "")).startswith("side")]
-    bottoms = [w for w in summary["walls"]
-               if str(w.get("group", "")).startswith("bottom") and w.get("name") != gate]
-    strips = [(f"side wall {w['name']}", [w], "depth_mid") for w in sides]
-    if bottoms:
-        strips.append(("bottom walls (gate left out)", bottoms, "x_mid"))
-    if not strips:
-        _fail(spath, "no side or bottom wall in 'walls'")
+    d = wall_ratio_data(run_dir)
+    summary, info, series, totals, sides, bottoms, strips = (
+        d[k] for k in ("summary", "info", "series", "totals", "sides", "bottoms", "strips"))
 
     lo, hi = RATIO_LIMITS
     log_norm = matplotlib.colors.TwoSlopeNorm(vmin=math.log10(lo), vcenter=0.0,
                                               vmax=math.log10(hi))
     cmap = plt.get_cmap("RdBu_r").copy()
     cmap.set_bad("0.72")
-    head = textwrap.fill(f"{_discharge_head(summary)}: wall forces relative to static "
-                         f"(cf. Kiyama & Fujimura 1982, Fig. 10)", 11 * 12)
-    head += (f"\nsummary peak ratios: bottom {_fmt(info.get('peak_ratio_bottom'))} (windowed "
-             f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side {_fmt(info.get('peak_ratio_side'))} "
-             f"(windowed {_fmt(info.get('peak_ratio_side_windowed'))})")
+    head = ratios_title(summary, info)
     fig, axes = plt.subplots(len(strips) + 1, 1, sharex=True,
                              figsize=(11, 2.7 * len(strips) + 2.9),
                              gridspec_kw={"height_ratios": [3] * len(strips) + [2.3]})
@@ -851,24 +636,10 @@ def plot_flow(run_dir, out_png):
     below the floor, and the moved fraction; (c) the three surface heights with the sink times
     (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
-    rd = RunDir(run_dir)
-    removals = _reading(rd.removals)
-    flow = _reading(rd.flow_series)
-    order = np.argsort(flow["t"], kind="stable")
-    flow = {k: v[order] for k, v in flow.items()}
-    order = np.argsort(removals["t"], kind="stable")
-    removals = {k: v[order] for k, v in removals.items()}
-    duration = info.get("duration")
-    t_end = max([float(duration) if isinstance(duration, (int, float)) else 0.0]
-                + list(flow["t"][-1:]) + list(removals["t"][-1:])) or 1.0
+    d = flow_data(run_dir)
+    summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
 
-    title = textwrap.fill(f"{_discharge_head(summary)}: {_fmt(info.get('removed'), 'd')} of "
-                          f"{_fmt(info.get('n_initial'), 'd')} discs out "
-                          f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
-                          f"{_fmt(info.get('jams'), 'd')} jams", 12 * 11)
+    title = flow_title(summary, info)
     fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
     # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
     # each.
@@ -1032,6 +803,9 @@ def main(argv=None):
     p.add_argument("--outdir", required=True, help="folder to write the three PNGs to")
     p = sub.add_parser("run", help="the pictures of one run directory, into it")
     p.add_argument("run_dir")
+    p.add_argument("--renderer", choices=("matplotlib", "pil"), default="matplotlib",
+                   help="matplotlib (default), or PIL (compare.quick_figures: the same five files, "
+                        "matplotlib not imported)")
     args = parser.parse_args(argv)
 
     if args.command == "network":
@@ -1050,6 +824,9 @@ def main(argv=None):
         out = plot_flow(args.run_dir, args.out)
     elif args.command == "discharge":
         out = "\n".join(plot_discharge(args.run_dir, args.outdir))
+    elif args.renderer == "pil":
+        from compare import quick_figures
+        out = "\n".join(quick_figures.plot_run(args.run_dir))
     else:
         out = "\n".join(plot_run(args.run_dir))
     print(out)
