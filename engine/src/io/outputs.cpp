@@ -343,6 +343,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
 
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
                    const StabilityReport& stab, json* extra) {
+  w.require_velocities("write_outputs");
   const bool unstable = res.unstable;
   // An unstable run writes its discs as they were in the last good state (a discharge may have
   // removed some since); wall loads and the summary's counters are those of the stop.
