@@ -114,6 +114,7 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const double rounding = std::sqrt(2.0) * std::ldexp(std::max(dxmax - dxmin, dymax - dymin), -23);
   const double allowed = std::max(0.0, 0.5 * skin - rounding);
   limit2_ = allowed * allowed;
+  rounding_ = 0.5 * skin - allowed;
   sort_by_cell(d, ncell, nt);
   // Each obstacle's box grown by the largest reach: a disc outside it cannot be a candidate, so
   // most discs skip the distance to most walls (the same lists, far fewer square roots).
@@ -412,6 +413,83 @@ void Neighbors::search_walls(const Discs& d, const Geometry& g, std::vector<Wall
 }  // namespace dem
 
 namespace dem {
+
+// Patches. A pair is listed when its discs were within r_i + r_j + skin of each other at the
+// build; each disc then moves less than skin/2 from its reference position before the lists are
+// rebuilt, so an unlisted pair stays apart. The same holds disc by disc: if each disc's reference
+// moves to where it is (a patch) only after checking that every disc within r_i + r_j + skin of
+// it, by the others' reference positions, is listed with it, an unlisted pair was at least
+// r_i + r_j + skin apart when the later of its two references was set, and each disc has moved
+// less than skin/2 from its own since. The margin of twice the references' rounding covers the
+// floats (the far test's limit is skin/2 less it). Listed pairs that have moved apart stay
+// listed, tested apart at each force pass and adding nothing: the forces are those of a rebuilt
+// list, the same bits, and a rebuild drops them later. In a discharging silo the lists are
+// rebuilt every 11-12 steps for one disc, the one over the gate pushed out through the slit: the
+// patch costs a pass over the references instead of a rebuild.
+bool Neighbors::patch(const Discs& d, const Geometry& g) {
+  const int n = static_cast<int>(d.size());
+  if (stale(d) || !(limit2_ > 0) || patch_most <= 0) return false;
+  const double ox = grid_.xmin, oy = grid_.ymin;
+  far_.clear();
+  for (int i = 0; i < n; ++i) {  // the far test of the moves (World::move_block), disc by disc
+    const double dx = (d.x[i] - ox) - x0_[i], dy = (d.y[i] - oy) - y0_[i];
+    if (dx * dx + dy * dy > limit2_) {
+      if (static_cast<int>(far_.size()) == patch_most) return false;
+      far_.push_back(i);
+    }
+  }
+  // A far disc's new reference is a float like the others, inside the build's extent (whose
+  // rounding the limit allows for): rounding_ = sqrt(2) 2^-23 extent.
+  const double extent = rounding_ / (std::sqrt(2.0) * std::ldexp(1.0, -23));
+  for (int f : far_) {
+    const double fx = d.x[f] - ox, fy = d.y[f] - oy;
+    if (!(std::abs(fx) <= extent && std::abs(fy) <= extent)) return false;  // NaN included
+  }
+  const std::vector<float> keep_x = [&] {  // restored if the patch fails
+    std::vector<float> v;
+    for (int f : far_) v.push_back(x0_[f]), v.push_back(y0_[f]);
+    return v;
+  }();
+  for (int f : far_) {
+    x0_[f] = static_cast<float>(d.x[f] - ox);
+    y0_[f] = static_cast<float>(d.y[f] - oy);
+  }
+  const double margin = 2 * rounding_;
+  const auto listed = [&](int i, int j) {
+    const PairContact key{std::min(i, j), std::max(i, j)};
+    return std::binary_search(pairs.begin(), pairs.end(), key,
+                              [](const PairContact& a, const PairContact& b) { return pair_key(a) < pair_key(b); });
+  };
+  bool complete = true;
+  for (std::size_t a = 0; a < far_.size() && complete; ++a) {
+    const int f = far_[a];
+    const double xf = x0_[f], yf = y0_[f], rf = d.r(f);
+    for (int j = 0; j < n && complete; ++j) {
+      if (j == f) continue;
+      const double dx = static_cast<double>(x0_[j]) - xf, dy = static_cast<double>(y0_[j]) - yf;
+      const double reach = rf + d.r(j) + skin + margin;
+      if (dx * dx + dy * dy < reach * reach && !listed(f, j)) complete = false;
+    }
+    const int nk = g.obstacle_count(), nw = static_cast<int>(g.walls.size());
+    for (int k = 0; k < nk && complete; ++k) {
+      if (k < nw && !g.walls[k].active) continue;
+      if (!(obstacle_distance(g, k, xf + ox, yf + oy) < rf + skin + margin)) continue;
+      const WallContact key{f, k};
+      if (!std::binary_search(walls.begin(), walls.end(), key,
+                              [](const WallContact& a, const WallContact& b) { return wall_key(a) < wall_key(b); }))
+        complete = false;
+    }
+  }
+  if (!complete) {
+    for (std::size_t a = 0; a < far_.size(); ++a) {
+      x0_[far_[a]] = keep_x[2 * a];
+      y0_[far_[a]] = keep_x[2 * a + 1];
+    }
+    return false;
+  }
+  ++patches;
+  return true;
+}
 
 void Neighbors::compact(const RemovedDiscs& removed) {
   std::size_t o = 0;

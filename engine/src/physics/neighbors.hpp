@@ -55,6 +55,12 @@ class Neighbors {
   double origin_y() const { return grid_.ymin; }
   // New lists with the history of the old ones carried over; nt threads give the same lists.
   void rebuild(const Discs& d, const Geometry& g, int nt = 1);
+  // The lists kept when at most patch_most discs are far and every candidate of theirs is
+  // already listed: each far disc's reference position moves to where it is, and nothing else
+  // changes (neighbors.cpp, "Patches"). False: nothing changed, rebuild. Fixed obstacles only.
+  bool patch(const Discs& d, const Geometry& g);
+  int patch_most = 4;  // far discs a patch takes at most (0: every far disc rebuilds the lists)
+  long patches = 0;
   double cell_size() const { return cell_; }
   // Bytes of the list scratch kept between builds (round pair lists, obstacle lists): about
   // kRoundDiscs discs' worth a thread, whatever the number of discs.
@@ -82,11 +88,14 @@ class Neighbors {
     grid_.xmin = r.ox;  // the rest of the grid serves builds only
     grid_.ymin = r.oy;
     limit2_ = r.limit2;
+    rounding_ = 0.5 * skin - std::sqrt(limit2_);  // as the build set the limit from it
   }
 
  private:
   std::vector<float> x0_, y0_;  // positions at the last rebuild, less the grid's corner
   double limit2_ = 0;           // see moved_far_limit2
+  double rounding_ = 0;         // [cm] the reference positions' largest rounding (the build's extent)
+  std::vector<int> far_;        // a patch's far discs
   double cell_ = 0;
   // Scratch kept between rebuilds to avoid reallocation.
   std::vector<int> cell_start_, order_;

@@ -309,6 +309,9 @@ void World::balance_blocks() {
 }
 
 void World::rebuild_lists() {
+  // A few far discs whose candidates are all listed: their references move, the lists stay
+  // (Neighbors::patch). Moving walls keep the lists' positions of their own (walls_listed).
+  if (moving.empty() && neighbors.patch(discs, geometry)) return;
   // Totals recorded over the old list (a build right after a recorded pass) name their pairs first.
   pair_totals.detach(neighbors.pairs);
   cross_ok_ = false;
