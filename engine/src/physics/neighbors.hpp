@@ -72,7 +72,7 @@ class Neighbors {
   // same seen from either disc (e_n, e_s are symmetric in (4), (5), (15)).
   void renumber(const std::vector<int>& new_index);
   // Forget the reference positions: the next step rebuilds (after geometry changes).
-  void invalidate() { x0_.clear(); y0_.clear(); }
+  void invalidate() { x0_.clear(); y0_.clear(); ref_boxes_.clear(); }
   // The positions of the last rebuild and the cell size: with the lists, what a checkpoint
   // needs to continue exactly as if never stopped (same lists, same rebuild steps).
   const std::vector<float>& reference_x() const { return x0_; }
@@ -89,6 +89,8 @@ class Neighbors {
     grid_.ymin = r.oy;
     limit2_ = r.limit2;
     rounding_ = 0.5 * skin - std::sqrt(limit2_);  // as the build set the limit from it
+    rmax_ = HUGE_VAL;  // unknown here: a patch then searches every block (until the next build)
+    ref_boxes_.clear();
   }
 
  private:
@@ -96,6 +98,13 @@ class Neighbors {
   double limit2_ = 0;           // see moved_far_limit2
   double rounding_ = 0;         // [cm] the reference positions' largest rounding (the build's extent)
   std::vector<int> far_;        // a patch's far discs
+  // A patch's search: the box of the reference positions of each block of kBoxDiscs discs (in
+  // the arrays' order, which is mostly cell order: a block is a short stretch of a row of cells),
+  // xlo, xhi, ylo, yhi; empty when stale (a build, a removal, a re-sort), made by the next patch.
+  static constexpr int kBoxDiscs = 256;
+  std::vector<float> ref_boxes_;
+  double rmax_ = 0;             // [cm] the largest radius at the build (removals only lower it)
+  void make_ref_boxes(int n);
   double cell_ = 0;
   // Scratch kept between rebuilds to avoid reallocation.
   std::vector<int> cell_start_, order_;
