@@ -495,7 +495,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
         "rest": REST_NOTE,
         "derived, stability": "the engine's pair table and dt bounds are not computed for a reference code",
         "points[].force": f"{code} counts a contact on a slit end in the end bin of the wall ending there",
-        "options.skin, options.cell, neighbor_rebuilds": f"{code}'s own neighbour lists",
+        "options.skin, options.cell, neighbor_rebuilds, neighbor_patches": f"{code}'s own neighbour lists",
     }
     if not any(w["profile"]["contacts"] is not None for w in walls):
         absent["walls[].contacts, wall_profiles.csv contacts (-1)"] = f"{code}'s wall forces come without contact counts"
@@ -524,7 +524,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
         "n_discs": int(len(rows)), "steps": steps, "time": steps * case.dt,
         "wall_time_s": wall_s, "particle_steps": psteps,
         "particle_steps_per_s": psteps / wall_s if wall_s > 0 else None,
-        "neighbor_rebuilds": None,
+        "neighbor_rebuilds": None, "neighbor_patches": None,
         "rest": {"reached": None, "time": None, "criterion": REST_NOTE, "mean_abs_du": None,
                  "mean_abs_dv": None, "threshold": None},
         "weight": weight, "disc_weight": float(mass[0] * g) if len(mass) else 0.0,

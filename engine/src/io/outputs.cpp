@@ -343,6 +343,7 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
 
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
                    const StabilityReport& stab, json* extra) {
+  w.require_velocities("write_outputs");
   const bool unstable = res.unstable;
   // An unstable run writes its discs as they were in the last good state (a discharge may have
   // removed some since); wall loads and the summary's counters are those of the stop.
@@ -377,6 +378,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   js["particle_steps"] = w.particle_steps;
   js["particle_steps_per_s"] = res.wall_seconds > 0 ? w.particle_steps / res.wall_seconds : 0.0;
   js["neighbor_rebuilds"] = w.neighbors.rebuilds;
+  js["neighbor_patches"] = w.neighbors.patches;
   js["disc_resorts"] = w.resorts;  // the discs put in cell order (integrator.disc_order)
   js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(res.rest_time) : json(nullptr)},
                 {"criterion", "mean over discs of |du| and of |dv| per step < rest_factor * g * dt^2 (paper note 3)"},

@@ -168,6 +168,7 @@ void read_discs(BinaryIn& r, Discs& d) {
 }
 
 void write_world(BinaryOut& o, const World& w) {
+  w.require_velocities("write_world");
   o.put(w.time);
   o.put(w.steps);
   o.put(w.dt);

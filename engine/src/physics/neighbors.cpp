@@ -114,6 +114,9 @@ void Neighbors::rebuild(const Discs& d, const Geometry& g, int nt) {
   const double rounding = std::sqrt(2.0) * std::ldexp(std::max(dxmax - dxmin, dymax - dymin), -23);
   const double allowed = std::max(0.0, 0.5 * skin - rounding);
   limit2_ = allowed * allowed;
+  rounding_ = 0.5 * skin - allowed;
+  rmax_ = rmax;
+  ref_boxes_.clear();
   sort_by_cell(d, ncell, nt);
   // Each obstacle's box grown by the largest reach: a disc outside it cannot be a candidate, so
   // most discs skip the distance to most walls (the same lists, far fewer square roots).
@@ -413,6 +416,120 @@ void Neighbors::search_walls(const Discs& d, const Geometry& g, std::vector<Wall
 
 namespace dem {
 
+// Patches. A pair is listed when its discs were within r_i + r_j + skin of each other at the
+// build; each disc then moves less than skin/2 from its reference position before the lists are
+// rebuilt, so an unlisted pair stays apart. The same holds disc by disc: if each disc's reference
+// moves to where it is (a patch) only after checking that every disc within r_i + r_j + skin of
+// it, by the others' reference positions, is listed with it, an unlisted pair was at least
+// r_i + r_j + skin apart when the later of its two references was set, and each disc has moved
+// less than skin/2 from its own since. The margin of twice the references' rounding covers the
+// floats (the far test's limit is skin/2 less it). Listed pairs that have moved apart stay
+// listed, tested apart at each force pass and adding nothing: the forces are those of a rebuilt
+// list, the same bits, and a rebuild drops them later. In a discharging silo the lists are
+// rebuilt every 11-12 steps for one disc, the one over the gate pushed out through the slit: the
+// patch costs a pass over the references instead of a rebuild.
+void Neighbors::make_ref_boxes(int n) {
+  const int nb = (n + kBoxDiscs - 1) / kBoxDiscs;
+  ref_boxes_.assign(4 * static_cast<std::size_t>(nb), 0.0f);
+  for (int b = 0; b < nb; ++b) {
+    float xlo = HUGE_VALF, xhi = -HUGE_VALF, ylo = HUGE_VALF, yhi = -HUGE_VALF;
+    for (int i = b * kBoxDiscs; i < std::min(n, (b + 1) * kBoxDiscs); ++i) {
+      xlo = std::min(xlo, x0_[i]); xhi = std::max(xhi, x0_[i]);
+      ylo = std::min(ylo, y0_[i]); yhi = std::max(yhi, y0_[i]);
+    }
+    float* box = &ref_boxes_[4 * static_cast<std::size_t>(b)];
+    box[0] = xlo; box[1] = xhi; box[2] = ylo; box[3] = yhi;
+  }
+}
+
+bool Neighbors::patch(const Discs& d, const Geometry& g) {
+  const int n = static_cast<int>(d.size());
+  if (stale(d) || !(limit2_ > 0) || patch_most <= 0) return false;
+  const double ox = grid_.xmin, oy = grid_.ymin;
+  const double* __restrict xs = d.x.data(); const double* __restrict ys = d.y.data();
+  const float* __restrict rx = x0_.data(); const float* __restrict ry = y0_.data();
+  far_.clear();
+  // The far test of the moves (World::move_block), a block at a time: a count that vectorises,
+  // then the discs of the few blocks that have one.
+  for (int b0 = 0; b0 < n; b0 += kBoxDiscs) {
+    const int b1 = std::min(n, b0 + kBoxDiscs);
+    int count = 0;
+    for (int i = b0; i < b1; ++i) {
+      const double dx = (xs[i] - ox) - rx[i], dy = (ys[i] - oy) - ry[i];
+      count += dx * dx + dy * dy > limit2_ ? 1 : 0;
+    }
+    if (count == 0) continue;
+    if (static_cast<int>(far_.size()) + count > patch_most) return false;
+    for (int i = b0; i < b1; ++i) {
+      const double dx = (xs[i] - ox) - rx[i], dy = (ys[i] - oy) - ry[i];
+      if (dx * dx + dy * dy > limit2_) far_.push_back(i);
+    }
+  }
+  if (far_.empty()) return false;
+  // A far disc's new reference is a float like the others, inside the build's extent (whose
+  // rounding the limit allows for): rounding_ = sqrt(2) 2^-23 extent.
+  const double extent = rounding_ / (std::sqrt(2.0) * std::ldexp(1.0, -23));
+  for (int f : far_) {
+    const double fx = d.x[f] - ox, fy = d.y[f] - oy;
+    if (!(std::abs(fx) <= extent && std::abs(fy) <= extent)) return false;  // NaN included
+  }
+  const std::vector<float> keep_x = [&] {  // restored if the patch fails
+    std::vector<float> v;
+    for (int f : far_) v.push_back(x0_[f]), v.push_back(y0_[f]);
+    return v;
+  }();
+  if (ref_boxes_.empty()) make_ref_boxes(n);
+  for (int f : far_) {
+    x0_[f] = static_cast<float>(d.x[f] - ox);
+    y0_[f] = static_cast<float>(d.y[f] - oy);
+    // Its block's box grown to hold it (kept if the patch fails: a box only has to hold its discs).
+    float* box = &ref_boxes_[4 * static_cast<std::size_t>(f / kBoxDiscs)];
+    box[0] = std::min(box[0], x0_[f]); box[1] = std::max(box[1], x0_[f]);
+    box[2] = std::min(box[2], y0_[f]); box[3] = std::max(box[3], y0_[f]);
+  }
+  const double margin = 2 * rounding_;
+  const auto listed = [&](int i, int j) {
+    const PairContact key{std::min(i, j), std::max(i, j)};
+    return std::binary_search(pairs.begin(), pairs.end(), key,
+                              [](const PairContact& a, const PairContact& b) { return pair_key(a) < pair_key(b); });
+  };
+  bool complete = true;
+  for (std::size_t a = 0; a < far_.size() && complete; ++a) {
+    const int f = far_[a];
+    const double xf = x0_[f], yf = y0_[f], rf = d.r(f);
+    const double far_reach = rf + rmax_ + skin + margin;  // no partner beyond it
+    for (int b0 = 0; b0 < n && complete; b0 += kBoxDiscs) {
+      const float* box = &ref_boxes_[4 * static_cast<std::size_t>(b0 / kBoxDiscs)];
+      if (xf < box[0] - far_reach || xf > box[1] + far_reach || yf < box[2] - far_reach || yf > box[3] + far_reach)
+        continue;
+      for (int j = b0; j < std::min(n, b0 + kBoxDiscs) && complete; ++j) {
+        if (j == f) continue;
+        const double dx = static_cast<double>(x0_[j]) - xf, dy = static_cast<double>(y0_[j]) - yf;
+        const double reach = rf + d.r(j) + skin + margin;
+        if (dx * dx + dy * dy < reach * reach && !listed(f, j)) complete = false;
+      }
+    }
+    const int nk = g.obstacle_count(), nw = static_cast<int>(g.walls.size());
+    for (int k = 0; k < nk && complete; ++k) {
+      if (k < nw && !g.walls[k].active) continue;
+      if (!(obstacle_distance(g, k, xf + ox, yf + oy) < rf + skin + margin)) continue;
+      const WallContact key{f, k};
+      if (!std::binary_search(walls.begin(), walls.end(), key,
+                              [](const WallContact& a, const WallContact& b) { return wall_key(a) < wall_key(b); }))
+        complete = false;
+    }
+  }
+  if (!complete) {
+    for (std::size_t a = 0; a < far_.size(); ++a) {
+      x0_[far_[a]] = keep_x[2 * a];
+      y0_[far_[a]] = keep_x[2 * a + 1];
+    }
+    return false;
+  }
+  ++patches;
+  return true;
+}
+
 void Neighbors::compact(const RemovedDiscs& removed) {
   std::size_t o = 0;
   for (const PairContact& p : pairs) {
@@ -433,6 +550,7 @@ void Neighbors::compact(const RemovedDiscs& removed) {
     walls[o++] = q;
   }
   walls.resize(o);
+  ref_boxes_.clear();  // blocks of other discs now
   if (!x0_.empty()) {  // empty: invalidated, rebuilt at the next step
     removed.compact(x0_);
     removed.compact(y0_);
@@ -451,6 +569,7 @@ void Neighbors::renumber(const std::vector<int>& new_index) {
   }
   std::sort(pairs.begin(), pairs.end(), [](const PairContact& a, const PairContact& b) { return pair_key(a) < pair_key(b); });
   for (WallContact& w : walls) w.i = new_index[w.i];
+  ref_boxes_.clear();
   std::sort(walls.begin(), walls.end(), [](const WallContact& a, const WallContact& b) { return wall_key(a) < wall_key(b); });
   if (x0_.size() == new_index.size()) {
     std::vector<float> x(x0_.size()), y(y0_.size());

@@ -55,6 +55,12 @@ class Neighbors {
   double origin_y() const { return grid_.ymin; }
   // New lists with the history of the old ones carried over; nt threads give the same lists.
   void rebuild(const Discs& d, const Geometry& g, int nt = 1);
+  // The lists kept when at most patch_most discs are far and every candidate of theirs is
+  // already listed: each far disc's reference position moves to where it is, and nothing else
+  // changes (neighbors.cpp, "Patches"). False: nothing changed, rebuild. Fixed obstacles only.
+  bool patch(const Discs& d, const Geometry& g);
+  int patch_most = 4;  // far discs a patch takes at most (0: every far disc rebuilds the lists)
+  long patches = 0;
   double cell_size() const { return cell_; }
   // Bytes of the list scratch kept between builds (round pair lists, obstacle lists): about
   // kRoundDiscs discs' worth a thread, whatever the number of discs.
@@ -66,7 +72,7 @@ class Neighbors {
   // same seen from either disc (e_n, e_s are symmetric in (4), (5), (15)).
   void renumber(const std::vector<int>& new_index);
   // Forget the reference positions: the next step rebuilds (after geometry changes).
-  void invalidate() { x0_.clear(); y0_.clear(); }
+  void invalidate() { x0_.clear(); y0_.clear(); ref_boxes_.clear(); }
   // The positions of the last rebuild and the cell size: with the lists, what a checkpoint
   // needs to continue exactly as if never stopped (same lists, same rebuild steps).
   const std::vector<float>& reference_x() const { return x0_; }
@@ -82,11 +88,23 @@ class Neighbors {
     grid_.xmin = r.ox;  // the rest of the grid serves builds only
     grid_.ymin = r.oy;
     limit2_ = r.limit2;
+    rounding_ = 0.5 * skin - std::sqrt(limit2_);  // as the build set the limit from it
+    rmax_ = HUGE_VAL;  // unknown here: a patch then searches every block (until the next build)
+    ref_boxes_.clear();
   }
 
  private:
   std::vector<float> x0_, y0_;  // positions at the last rebuild, less the grid's corner
   double limit2_ = 0;           // see moved_far_limit2
+  double rounding_ = 0;         // [cm] the reference positions' largest rounding (the build's extent)
+  std::vector<int> far_;        // a patch's far discs
+  // A patch's search: the box of the reference positions of each block of kBoxDiscs discs (in
+  // the arrays' order, which is mostly cell order: a block is a short stretch of a row of cells),
+  // xlo, xhi, ylo, yhi; empty when stale (a build, a removal, a re-sort), made by the next patch.
+  static constexpr int kBoxDiscs = 256;
+  std::vector<float> ref_boxes_;
+  double rmax_ = 0;             // [cm] the largest radius at the build (removals only lower it)
+  void make_ref_boxes(int n);
   double cell_ = 0;
   // Scratch kept between rebuilds to avoid reallocation.
   std::vector<int> cell_start_, order_;

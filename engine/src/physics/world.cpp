@@ -59,8 +59,11 @@ void World::step() {
   const bool verlet = scheme == Scheme::velocity_verlet;
   bool far = false;  // some disc is now skin/2 from its list position
   if (verlet) {
-    // (17) v(t + dt/2); (18) du = v(t + dt/2) dt; x += du; the resultants' start, m_i g, in the same sweep
-    far = move_discs(Move::kick_drift_eq18, 0.5 * dt, true);
+    if (kick_owed_ && owed_h_ != 0.5 * dt) pay_kick();  // dt changed: the owed kick with its own h
+    // (17) the last step's closing half kick if owed, then v(t + dt/2); (18) du = v(t + dt/2) dt;
+    // x += du; the resultants' start, m_i g, in the same sweep
+    far = move_discs(Move::kick_drift_eq18, 0.5 * dt, true, kick_owed_);
+    kick_owed_ = false;
     move_walls(Move::kick_drift_eq18, 0.5 * dt);
   }
   refresh_lists(far);                                    // the candidates of (3)
@@ -69,7 +72,14 @@ void World::step() {
   if (verlet && measure_increments) measure_increment_sums();  // the move's |v dt|, before the kick overwrites v
   const Move move = verlet ? Move::kick : scheme == Scheme::paper_eq18 ? Move::kick_drift_eq18 : Move::kick_drift_eq19;
   const double h = verlet ? 0.5 * dt : dt;
-  far = forces_then_move(move, h, verlet);               // (3)-(15), then (16)-(19) for the discs
+  // Verlet's closing half kick (17) of the discs owed to the next step's first sweep (defer_closing_kick)
+  const bool owe = verlet && defer_closing_kick && moving.empty() && bonds.empty();
+  far = forces_then_move(owe ? Move::none : move, h, verlet);  // (3)-(15), then (16)-(19) for the discs
+  if (owe) {
+    kick_owed_ = true;
+    owed_h_ = h;
+    pair_forces_step = record_pair_forces ? steps + 1 : pair_forces_step;  // this step's pass, as with its kick
+  }
   move_walls(move, h);                                   // (16)-(19) for the plates; the walls' turns
   if (far) rebuild_lists();                              // for the next step's forces
   time += dt;
@@ -299,6 +309,9 @@ void World::balance_blocks() {
 }
 
 void World::rebuild_lists() {
+  // A few far discs whose candidates are all listed: their references move, the lists stay
+  // (Neighbors::patch). Moving walls keep the lists' positions of their own (walls_listed).
+  if (moving.empty() && neighbors.patch(discs, geometry)) return;
   // Totals recorded over the old list (a build right after a recorded pass) name their pairs first.
   pair_totals.detach(neighbors.pairs);
   cross_ok_ = false;
@@ -355,7 +368,9 @@ struct MoveArrays {
 // vector (four with AVX2, eight with AVX-512): the same operations on each disc, the same bits.
 // RESET: the forces, once read, set to the next force pass's start (start_resultants: the same
 // m_i g, the same bits): one sweep of the force arrays a step less.
-template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>  // D: 0 kick alone, 1 eq. (18), 2 eq. (19)
+// OWED: velocity Verlet's closing half kick of the last step first (World::defer_closing_kick):
+// the two kicks one after the other on the same forces, as two sweeps would give them.
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET, bool OWED>  // D: 0 kick alone, 1 eq. (18), 2 eq. (19)
 inline __attribute__((always_inline)) long kick_drift_kernel(
     int n, double h, double dt, double* __restrict fx, double* __restrict fy,
     double* __restrict tq, const int* __restrict kd, const double* __restrict im, const double* __restrict ii,
@@ -369,9 +384,12 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
   long far = 0;
   for (int i = 0; i < n; ++i) {
     const double mi = ONE_KIND ? im0 : im[kd[i]], ji = ONE_KIND ? ii0 : ii[kd[i]];
-    const double v = kick(vx[i], fx[i] * mi, h);  // (16), (17)
-    const double w = kick(vy[i], fy[i] * mi, h);
-    const double o = kick(om[i], tq[i] * ji, h);
+    const double v0 = OWED ? kick(vx[i], fx[i] * mi, h) : vx[i];  // the owed (17) of the last step
+    const double w0 = OWED ? kick(vy[i], fy[i] * mi, h) : vy[i];
+    const double o0 = OWED ? kick(om[i], tq[i] * ji, h) : om[i];
+    const double v = kick(v0, fx[i] * mi, h);  // (16), (17)
+    const double w = kick(w0, fy[i] * mi, h);
+    const double o = kick(o0, tq[i] * ji, h);
     vx[i] = v; vy[i] = w; om[i] = o;
     if constexpr (RESET) {  // (15): m_i g, a zero torque
       fx[i] = ONE_KIND ? gx0 : km[kd[i]] * gx;
@@ -401,41 +419,42 @@ inline __attribute__((always_inline)) long kick_drift_kernel(
 #define DEM_MOVE_ARGS                                                                                           \
   a.n, a.h, a.dt, a.fx, a.fy, a.tq, a.kind, a.inv_mass, a.inv_inertia, a.mass, a.gx, a.gy, a.vx, a.vy, a.om, a.ux, a.uy, a.up, a.x, \
       a.y, a.phi, a.x0, a.y0, a.ox, a.oy, a.lim2
-template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET, bool OWED>
 long move_sse2(const MoveArrays& a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET>(DEM_MOVE_ARGS);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET, OWED>(DEM_MOVE_ARGS);
 }
 // Without AVX2 GCC does not vectorise the count of far discs (its floats widen to doubles, the
 // count is 64-bit).
 #if defined(__x86_64__) && defined(__GNUC__)
-template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET, bool OWED>
 DEM_TARGET_AVX2 long move_avx2(const MoveArrays& a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET>(DEM_MOVE_ARGS);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET, OWED>(DEM_MOVE_ARGS);
 }
-template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET>
+template <int D, bool ONE_KIND, bool PHI, bool FAR, bool RESET, bool OWED>
 DEM_TARGET_AVX512 long move_avx512(const MoveArrays& a) {
-  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET>(DEM_MOVE_ARGS);
+  return kick_drift_kernel<D, ONE_KIND, PHI, FAR, RESET, OWED>(DEM_MOVE_ARGS);
 }
 #endif
 #undef DEM_MOVE_ARGS
 
 // The move kernels (kernels.hpp): kMoves[width index][move], the move numbered
 // D * 8 + one kind * 4 + angle * 2 + skin/2 test, D as in kick_drift_kernel, or 3 for eq. (18)
-// with the resultants' reset (velocity Verlet's first half step). A kick alone has neither the
-// angle nor the test (the kernel of its row without them).
+// with the resultants' reset (velocity Verlet's first half step), 4 for that with the owed
+// closing kick of the last step before it. A kick alone has neither the angle nor the test (the
+// kernel of its row without them).
 using MoveKernel = long (*)(const MoveArrays&);
-constexpr std::size_t kMoveCount = 32;
+constexpr std::size_t kMoveCount = 40;
 template <int W, std::size_t M>
 constexpr MoveKernel move_kernel() {
-  constexpr int D = M / 8 == 3 ? 1 : static_cast<int>(M / 8);
-  constexpr bool RESET = M / 8 == 3;
+  constexpr int D = M / 8 >= 3 ? 1 : static_cast<int>(M / 8);
+  constexpr bool RESET = M / 8 >= 3, OWED = M / 8 == 4;
   constexpr bool ONE_KIND = M / 4 % 2 == 1, PHI = D != 0 && M / 2 % 2 == 1, FAR = D != 0 && M % 2 == 1;
 #if defined(__x86_64__) && defined(__GNUC__)
-  if constexpr (W == 8) return &move_avx512<D, ONE_KIND, PHI, FAR, RESET>;
-  else if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR, RESET>;
+  if constexpr (W == 8) return &move_avx512<D, ONE_KIND, PHI, FAR, RESET, OWED>;
+  else if constexpr (W == 4) return &move_avx2<D, ONE_KIND, PHI, FAR, RESET, OWED>;
   else
 #endif
-  return &move_sse2<D, ONE_KIND, PHI, FAR, RESET>;
+  return &move_sse2<D, ONE_KIND, PHI, FAR, RESET, OWED>;
 }
 template <int W, std::size_t... M>
 constexpr std::array<MoveKernel, kMoveCount> move_kernels(std::index_sequence<M...>) {
@@ -449,7 +468,7 @@ constexpr std::array<MoveKernel, kMoveCount> kMoves[3] = {move_kernels<2>(std::m
 
 // (16)-(19) for discs [i0, i1): whether some disc of them is now more than skin/2 from its list
 // position (or the lists are stale). A kick alone (Verlet's closing half) moves nothing.
-bool World::move_block(Move move, double h, int i0, int i1, bool reset) {
+bool World::move_block(Move move, double h, int i0, int i1, bool reset, bool owed) {
   if (move == Move::none) return false;
   Discs& d = discs;
   const int D = move == Move::kick ? 0 : move == Move::kick_drift_eq18 ? 1 : 2;
@@ -458,29 +477,45 @@ bool World::move_block(Move move, double h, int i0, int i1, bool reset) {
   const bool test = D != 0 && !stale;
   const auto at = [i0](auto& v) { return v.empty() ? nullptr : v.data() + i0; };  // eq. 19's and the angle's may be empty
   reset = reset && D == 1;
+  owed = owed && reset;  // only velocity Verlet's first sweep gives an owed kick
   const MoveArrays a{i1 - i0, h, dt, at(d.fx), at(d.fy), at(d.torque), at(d.kind), d.kinds.inv_mass.data(),
                      d.kinds.inv_inertia.data(), d.kinds.mass.data(), gx, gy, at(d.vx), at(d.vy), at(d.omega), at(d.dux), at(d.duy), at(d.dphi),
                      at(d.x), at(d.y), at(d.phi), test ? neighbors.reference_x().data() + i0 : nullptr,
                      test ? neighbors.reference_y().data() + i0 : nullptr, neighbors.origin_x(),
                      neighbors.origin_y(), neighbors.moved_far_limit2()};
-  const std::size_t m = (reset ? 3 : D) * 8 + (one_kind() ? 4 : 0) + (d.phi.empty() ? 0 : 2) + (test ? 1 : 0);
+  const std::size_t m = (owed ? 4 : reset ? 3 : D) * 8 + (one_kind() ? 4 : 0) + (d.phi.empty() ? 0 : 2) + (test ? 1 : 0);
   const long far = kMoves[width_index()][m](a);
   return stale || far != 0;
 }
 
 // One parallel region: each thread an equal block of discs (block_start; the force pass balances
 // its blocks by work, force_blocks: here every disc costs the same).
-bool World::move_discs(Move move, double h, bool reset) {
+bool World::move_discs(Move move, double h, bool reset, bool owed) {
   const int n = static_cast<int>(discs.size());
   const int nt = threads_for(n);
-  if (nt <= 1) return move_block(move, h, 0, n, reset);
+  if (nt <= 1) return move_block(move, h, 0, n, reset, owed);
   unsigned far = 0;
 #pragma omp parallel num_threads(nt) reduction(| : far)
   {
     const int t = omp_thread_index();
-    far |= move_block(move, h, block_start(n, nt, t), block_start(n, nt, t + 1), reset) ? 1u : 0u;
+    far |= move_block(move, h, block_start(n, nt, t), block_start(n, nt, t + 1), reset, owed) ? 1u : 0u;
   }
   return far != 0;
+}
+
+void World::pay_kick() {
+  if (!kick_owed_) return;
+  kick_owed_ = false;
+  move_discs(Move::kick, owed_h_);
+}
+
+void World::velocity_now(std::size_t i, double& vx, double& vy) const {
+  vx = discs.vx[i];
+  vy = discs.vy[i];
+  if (!kick_owed_) return;
+  const double mi = discs.inv_mass(i);  // the kernel's operations (kick_drift_kernel): kick(v, f / m, h)
+  vx = kick(vx, discs.fx[i] * mi, owed_h_);
+  vy = kick(vy, discs.fy[i] * mi, owed_h_);
 }
 
 // Gravity, the m_i g of (15a), and a zero torque: the start of the resultants of discs [i0, i1).
@@ -1040,7 +1075,12 @@ void World::mean_abs_increment(double& mx, double& my) const {
   if (n) { mx /= static_cast<double>(n); my /= static_cast<double>(n); }
 }
 
+void World::require_velocities(const char* who) const {
+  if (kick_owed_) throw std::logic_error(std::string(who) + ": the velocities are read while velocity Verlet's closing half kick is owed (pay_kick first)");
+}
+
 double World::kinetic_energy() const {
+  require_velocities("kinetic_energy");
   const Discs& d = discs;
   const long n = static_cast<long>(d.size());
   return parallel_sum(n, threads_for(static_cast<int>(n)), [&](long i) {
@@ -1050,6 +1090,7 @@ double World::kinetic_energy() const {
 }
 
 bool World::all_finite() const {
+  require_velocities("all_finite");
   const Discs& d = discs;
   const long n = static_cast<long>(d.size());
   return !parallel_any(n, threads_for(static_cast<int>(n)), [&](long i) {

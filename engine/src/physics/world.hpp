@@ -150,6 +150,19 @@ class World {
   void place_moving_walls();
   // One time step: the algorithm as a list of stages (world.cpp).
   void step();
+  // Velocity Verlet's closing half kick (17) of the discs, left owed by a step: the next step's
+  // first sweep gives it with its own half kick, in one pass over the arrays instead of two, the
+  // same operations in the same order (the same bits); pay_kick() gives it alone. While it is
+  // owed, vx, vy, omega hold v(t - dt/2) and the resultants f(t) (velocity_now gives a disc's
+  // v(t)): whoever sets defer_closing_kick (the run loop, Runner::run) pays before anything
+  // reads the velocities. Other schemes, moving walls and bonds never owe it.
+  bool defer_closing_kick = false;
+  bool kick_owed() const { return kick_owed_; }
+  void pay_kick();
+  // Disc i's velocity at the step's end, the owed kick included (the same bits as pay_kick).
+  void velocity_now(std::size_t i, double& vx, double& vy) const;
+  // Throws std::logic_error naming `who` while the kick is owed: a reader of v(t) that did not pay.
+  void require_velocities(const char* who) const;
   // Recomputes the forces from the last increments (as the start of a step does); for tests.
   void compute_forces_now() { forces_then_move(Move::none, 0.0); }
   // The move of the discs alone (public for the kernel benchmarks, benchmarks/kernels.cpp): the
@@ -239,8 +252,11 @@ class World {
   void add_cross_forces(ForceBlock& b);   // the forces on the block's discs of its cross pairs, computed by later blocks
   // (16)-(19) for discs [i0, i1); reset: the kick's forces, once read, set to the next pass's
   // start (start_resultants) in the same sweep (velocity Verlet's first half step).
-  bool move_block(Move move, double h, int i0, int i1, bool reset = false);
-  bool move_discs(Move move, double h, bool reset = false);  // move_block on equal blocks, one parallel region
+  // owed: the owed closing half kick first (kick_owed), in the same sweep.
+  bool move_block(Move move, double h, int i0, int i1, bool reset = false, bool owed = false);
+  bool move_discs(Move move, double h, bool reset = false, bool owed = false);  // move_block on equal blocks, one parallel region
+  bool kick_owed_ = false;  // see defer_closing_kick
+  double owed_h_ = 0;       // [s] the owed kick's h (dt/2 of the step that owes it)
   // velocity_verlet_onset (onset.cpp): its step, and its force pass (one thread): the forces at
   // t + dt with the dashpots on the predicted v(t + dt), and the impulses a contact or a slip that
   // started inside the step missed (onset_jx, jy, jt), added with the closing half kick.

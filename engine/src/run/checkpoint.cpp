@@ -14,7 +14,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', 'C'};  // the format's version: a checkpoint resumes only in its own
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', 'D'};  // the format's version: a checkpoint resumes only in its own
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {
@@ -127,6 +127,7 @@ void write_checkpoint(const std::string& path, const CheckpointKey& key, const W
     write_world(o, w);
     o.put(w.particle_steps);
     o.put(w.neighbors.rebuilds);
+    o.put(w.neighbors.patches);
     o.put(w.resorts);
     const Neighbors::Reference ref = w.neighbors.reference();
     o.put(ref.cell); o.put(ref.ox); o.put(ref.oy); o.put(ref.limit2);
@@ -188,6 +189,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   read_world(r, w);
   w.particle_steps = r.get<double>();
   const long rebuilds = r.get<long>();
+  const long patches = r.get<long>();
   const long resorts = r.get<long>();
   Neighbors::Reference ref{};
   ref.cell = r.get<double>();
@@ -205,6 +207,7 @@ void read_checkpoint(const std::string& path, const CheckpointKey& key, World& w
   // beside them: the pair list is the largest array).
   w.prepare(false);
   w.neighbors.rebuilds = rebuilds;
+  w.neighbors.patches = patches;
   w.resorts = resorts;
   w.neighbors.restore_reference(std::move(x0), std::move(y0), ref);
 }

@@ -434,7 +434,9 @@ Status DischargePhase::after_step(World& w) {
     if (w.discs.y[i] < f_.y_out) {
       dead_.sorted.push_back(static_cast<int>(i));
       any = true;
-      st.removals.push_back({t, w.discs.id_at(i), w.discs.mass(i), w.discs.vx[i], w.discs.vy[i], false});
+      double vx, vy;  // v(t), an owed closing kick included
+      w.velocity_now(i, vx, vy);
+      st.removals.push_back({t, w.discs.id_at(i), w.discs.mass(i), vx, vy, false});
       st.removed_mass += w.discs.mass(i);
     }
   if (any) {
@@ -469,7 +471,9 @@ Status DischargePhase::after_step(World& w) {
         if (pick < 0) {
           st.status = Status::jammed;
         } else {
-          st.removals.push_back({t, w.discs.id_at(pick), w.discs.mass(pick), w.discs.vx[pick], w.discs.vy[pick], true});
+          double vx, vy;
+          w.velocity_now(static_cast<std::size_t>(pick), vx, vy);
+          st.removals.push_back({t, w.discs.id_at(pick), w.discs.mass(pick), vx, vy, true});
           dead_.sorted.assign(1, pick);
           w.remove_discs(dead_);
           st.last_removal = t;
@@ -545,6 +549,7 @@ void DischargePhase::snapshots(World& w, double t) {
   const DischargeSpec& ds = spec_.discharge;
   const std::string snapdir = out_ + "/snapshots";
   while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
+    w.pay_kick();  // the snapshot's velocities
     char stem[32];
     std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
     write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open);

@@ -116,6 +116,7 @@ class DischargePhase : public Phase {
   Status begin(World& w, std::string& reason) override;
   void before_step(World& w, bool stopping) override;
   Status after_step(World& w) override;
+  bool pays_own_kick() const override { return true; }
   void finish(World& w, Status status) override;
   std::string progress(const World& w) const override;
   double fraction(const World& w) const override;

@@ -29,6 +29,10 @@ class Phase {
   virtual void before_step(World& w, bool stopping) = 0;
   // After each step the guard passed: the phase's measures, samples and end conditions.
   virtual Status after_step(World& w) = 0;
+  // Whether after_step and before_step read the discs' velocities only through World::velocity_now
+  // or after World::pay_kick: the run loop may then leave velocity Verlet's closing half kick owed
+  // to the next step (World::defer_closing_kick). False: the loop pays it after every step.
+  virtual bool pays_own_kick() const { return false; }
   // Once, when the run leaves the phase with `status`: its files and metrics.
   virtual void finish(World& w, Status status) = 0;
   // For the progress line: where the phase is, and the fraction done (for the rate and ETA).

@@ -25,6 +25,10 @@ class Recorder {
   // Whether step `step` is a periodic snapshot's: its contacts need the step's pair totals.
   bool snapshot_due(long step) const { return active() && snapshot_every_ > 0 && step % snapshot_every_ == 0; }
 
+  // Whether after_step records at `step` (a thermo row or a periodic snapshot): it reads the velocities.
+  bool due(long step) const {
+    return active() && ((thermo_every_ > 0 && step % thermo_every_ == 0) || snapshot_due(step));
+  }
   // A phase's fresh start, each step the guard passed that leaves it running, and its end.
   void phase_start(const World& w, const char* phase);
   void after_step(const World& w, const char* phase);

@@ -57,9 +57,11 @@ std::string duration_text(double s) {
 double Runner::wall_now() const { return running_ ? run_start_ + seconds_since(phase_start_) : wall_seconds; }
 
 // Runs every step: the unit names go into the failure messages only, so they are looked up there.
-std::string Runner::check(const World& w, const Phase& phase) {
-  if (!(w.max_overlap <= guard.overlap_limit))
+std::string Runner::check(World& w, const Phase& phase) {
+  if (!(w.max_overlap <= guard.overlap_limit)) {
+    w.pay_kick();  // the diagnosis reads the velocities
     return diagnose(w, guard.overlap_limit, phase.name(), unit_names(spec_.units).length);
+  }
   if (w.steps % kCheckEvery == 0) {
     if (!w.all_finite()) return diagnose(w, guard.overlap_limit, phase.name(), unit_names(spec_.units).length);
     if (std::string grew = guard.energy.check(w, spec_.units); !grew.empty()) return grew + " (" + phase.name() + ")";
@@ -94,8 +96,14 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     phase.before_step(w, stopping);
     if (record.snapshot_due(w.steps + 1)) w.record_pair_forces = true;  // the snapshot's contact totals
     const auto t_step = Clock::now();
+    w.defer_closing_kick = phase.pays_own_kick();
     w.step();
     thread_choice.after_step(w, seconds_since(t_step));
+    // Velocity Verlet's closing half kick is owed to the next step's first sweep (one pass over
+    // the arrays instead of two) unless this step's checks, records or checkpoint read the
+    // velocities.
+    if (w.steps % kCheckEvery == 0 || record.due(w.steps) || (checkpoint_every > 0 && w.steps % checkpoint_every == 0))
+      w.pay_kick();
     if (std::string why = check(w, phase); !why.empty()) {
       reason = why;
       status = Status::unstable;
@@ -131,6 +139,8 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     }
   }
   if (printed) std::fprintf(stderr, "\n");
+  w.pay_kick();  // what follows (the phase's end, its files, another phase) reads v(t)
+  w.defer_closing_kick = false;
   wall_seconds = run_start_ + seconds_since(phase_start_);
   running_ = false;
   phase.finish(w, status);

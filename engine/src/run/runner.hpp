@@ -52,7 +52,7 @@ class Runner {
   double wall_now() const;
 
  private:
-  std::string check(const World& w, const Phase& phase);  // "" or why the run cannot be trusted
+  std::string check(World& w, const Phase& phase);  // "" or why the run cannot be trusted
   const SceneSpec& spec_;
   double run_start_ = 0;     // wall_seconds when the current phase's loop started
   bool running_ = false;
