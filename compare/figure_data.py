@@ -451,9 +451,7 @@ def discharge_frames(run_dir, times=None):
     largest displacement in radii). A reference code's run (no contact files) has contacts None,
     with a note on stderr.
     """
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
+    summary, info = discharge_summary(run_dir)
     snaps = select_snapshots(snapshot_index(run_dir), times)
     # a reference code's run (dem run --engine) has no contact files: its discs without forces
     frames = [(s["t"], read_csv(s["discs"], SNAPSHOT_DISC_COLUMNS),
@@ -492,13 +490,19 @@ def discharge_frames(run_dir, times=None):
             "bounds": (x0, x1, y0, y1), "pad": pad, "top": top}
 
 
+def discharge_summary(run_dir):
+    """A discharge run's summary.json and its discharge block (discharge_info: refused, naming the
+    file, when the run is not a discharge)."""
+    spath = os.path.join(run_dir, "summary.json")
+    summary = read_summary(spath)
+    return summary, discharge_info(summary, spath)
+
+
 def flow_data(run_dir):
     """The data of the flow picture: ``summary``, ``info`` (summary["discharge"]), ``removals``
     (removals.csv) and ``flow`` (flow_series.csv), each sorted by t, and ``t_end`` (the
     discharge's duration or the last sample, 1 if neither is positive)."""
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
+    summary, info = discharge_summary(run_dir)
     rd = RunDir(run_dir)
     removals = _reading(rd.removals)
     flow = _reading(rd.flow_series)
@@ -517,9 +521,7 @@ def wall_ratio_data(run_dir):
     ``series`` (wall_series.csv), ``totals`` (wall_totals_series.csv), ``sides`` and ``bottoms``
     (the walls of those groups, the gate left out) and ``strips`` = [(title, walls, coordinate
     column)]: one per side wall (against depth_mid), one for the bottom walls (against x_mid)."""
-    spath = os.path.join(run_dir, "summary.json")
-    summary = read_summary(spath)
-    info = discharge_info(summary, spath)
+    summary, info = discharge_summary(run_dir)
     rd = RunDir(run_dir)
     series = _reading(rd.wall_series)
     totals = _reading(rd.wall_totals_series)
@@ -531,7 +533,7 @@ def wall_ratio_data(run_dir):
     if bottoms:
         strips.append(("bottom walls (gate left out)", bottoms, "x_mid"))
     if not strips:
-        _fail(spath, "no side or bottom wall in 'walls'")
+        _fail(os.path.join(run_dir, "summary.json"), "no side or bottom wall in 'walls'")
     return {"summary": summary, "info": info, "series": series, "totals": totals, "sides": sides,
             "bottoms": bottoms, "strips": strips}
 
