@@ -78,7 +78,6 @@ void World::step() {
   if (owe) {
     kick_owed_ = true;
     owed_h_ = h;
-    pair_forces_step = record_pair_forces ? steps + 1 : pair_forces_step;  // this step's pass, as with its kick
   }
   move_walls(move, h);                                   // (16)-(19) for the plates; the walls' turns
   if (far) rebuild_lists();                              // for the next step's forces
@@ -114,7 +113,8 @@ bool World::forces_then_move(Move move, double h, bool started) {
     (this->*k.walls)(b);                                     // (3)-(15) discs on walls and points
     return move_block(move, h, b.i0, b.i1);                  // (16)-(19)
   });
-  if (record) pair_forces_step = steps + (move == Move::none ? 0 : 1);  // a step's pass: the step it ends
+  // A step's pass (it moves, or Verlet's first sweep started it): the step it ends.
+  if (record) pair_forces_step = steps + (move != Move::none || started ? 1 : 0);
   return far;
 }
 
