@@ -416,18 +416,6 @@ void Neighbors::search_walls(const Discs& d, const Geometry& g, std::vector<Wall
 
 namespace dem {
 
-// Patches. A pair is listed when its discs were within r_i + r_j + skin of each other at the
-// build; each disc then moves less than skin/2 from its reference position before the lists are
-// rebuilt, so an unlisted pair stays apart. The same holds disc by disc: if each disc's reference
-// moves to where it is (a patch) only after checking that every disc within r_i + r_j + skin of
-// it, by the others' reference positions, is listed with it, an unlisted pair was at least
-// r_i + r_j + skin apart when the later of its two references was set, and each disc has moved
-// less than skin/2 from its own since. The margin of twice the references' rounding covers the
-// floats (the far test's limit is skin/2 less it). Listed pairs that have moved apart stay
-// listed, tested apart at each force pass and adding nothing: the forces are those of a rebuilt
-// list, the same bits, and a rebuild drops them later. In a discharging silo the lists are
-// rebuilt every 11-12 steps for one disc, the one over the gate pushed out through the slit: the
-// patch costs a pass over the references instead of a rebuild.
 void Neighbors::make_ref_boxes(int n) {
   const int nb = (n + kBoxDiscs - 1) / kBoxDiscs;
   ref_boxes_.assign(4 * static_cast<std::size_t>(nb), 0.0f);
@@ -442,6 +430,18 @@ void Neighbors::make_ref_boxes(int n) {
   }
 }
 
+// Patches. A pair is listed when its discs were within r_i + r_j + skin of each other at the
+// build; each disc then moves less than skin/2 from its reference position before the lists are
+// rebuilt, so an unlisted pair stays apart. The same holds disc by disc: if each disc's reference
+// moves to where it is (a patch) only after checking that every disc within r_i + r_j + skin of
+// it, by the others' reference positions, is listed with it, an unlisted pair was at least
+// r_i + r_j + skin apart when the later of its two references was set, and each disc has moved
+// less than skin/2 from its own since. The margin of twice the references' rounding covers the
+// floats (the far test's limit is skin/2 less it). Listed pairs that have moved apart stay
+// listed, tested apart at each force pass and adding nothing: the forces are those of a rebuilt
+// list, the same bits, and a rebuild drops them later. In a discharging silo the lists are
+// rebuilt every 11-12 steps for one disc, the one over the gate pushed out through the slit: the
+// patch costs a pass over the references instead of a rebuild.
 bool Neighbors::patch(const Discs& d, const Geometry& g) {
   const int n = static_cast<int>(d.size());
   if (stale(d) || !(limit2_ > 0) || patch_most <= 0) return false;
@@ -473,11 +473,8 @@ bool Neighbors::patch(const Discs& d, const Geometry& g) {
     const double fx = d.x[f] - ox, fy = d.y[f] - oy;
     if (!(std::abs(fx) <= extent && std::abs(fy) <= extent)) return false;  // NaN included
   }
-  const std::vector<float> keep_x = [&] {  // restored if the patch fails
-    std::vector<float> v;
-    for (int f : far_) v.push_back(x0_[f]), v.push_back(y0_[f]);
-    return v;
-  }();
+  std::vector<float> kept;  // the far discs' references, put back if the patch fails
+  for (int f : far_) kept.insert(kept.end(), {x0_[f], y0_[f]});
   if (ref_boxes_.empty()) make_ref_boxes(n);
   for (int f : far_) {
     x0_[f] = static_cast<float>(d.x[f] - ox);
@@ -521,8 +518,8 @@ bool Neighbors::patch(const Discs& d, const Geometry& g) {
   }
   if (!complete) {
     for (std::size_t a = 0; a < far_.size(); ++a) {
-      x0_[far_[a]] = keep_x[2 * a];
-      y0_[far_[a]] = keep_x[2 * a + 1];
+      x0_[far_[a]] = kept[2 * a];
+      y0_[far_[a]] = kept[2 * a + 1];
     }
     return false;
   }
