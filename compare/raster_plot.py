@@ -17,7 +17,7 @@ import os
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from compare.png_file import SAVE_DPI, png_bytes
+from compare.png_file import SAVE_DPI, png_bytes_of_rows
 
 # An axes' data drawn at twice the size, then averaged 2 x 2 (Image.reduce): antialiased edges.
 SUPERSAMPLE = 2
@@ -291,22 +291,31 @@ class Figure:
         self.text(x1 + tick + self.pt(7) + widest, (y0 + y1) / 2, label, size=label_size, ha="left",
                   va="center", rotate=True)
 
+    def png(self):
+        """The picture as PNG bytes (png_file), read from the image a strip of rows at a time."""
+        w, h = self.size
+        return png_bytes_of_rows(w, h, 3, lambda y0, y1: np.asarray(self.image.crop((0, y0, w, y1))), self.dpi)
+
     def save(self, path):
-        """Write a PNG (png_bytes) through path.tmp, renamed when complete: a killed process
-        leaves no half file."""
-        folder = os.path.dirname(path)
-        if folder:
-            os.makedirs(folder, exist_ok=True)
-        image = self.image
-        tmp = f"{path}.tmp"
-        try:
-            with open(tmp, "wb") as f:
-                f.write(png_bytes(np.asarray(image), self.dpi))
-            os.replace(tmp, path)
-        finally:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-        return path
+        """Write the PNG through path.tmp, renamed when complete: a killed process leaves no half
+        file."""
+        return write_whole(path, self.png())
+
+
+def write_whole(path, data):
+    """Write bytes to path through path.tmp, renamed when complete; returns path."""
+    folder = os.path.dirname(path)
+    if folder:
+        os.makedirs(folder, exist_ok=True)
+    tmp = f"{path}.tmp"
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return path
 
 
 # --------------------------------------------------------------------------- axes

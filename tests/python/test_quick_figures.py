@@ -1,6 +1,7 @@
 """Tests of compare.quick_figures and compare.raster_plot: a run's five pictures drawn with PIL,
 without matplotlib, on an engine run of the paper's 17/18 discharge."""
 import math
+import os
 import shutil
 import subprocess
 import sys
@@ -121,6 +122,32 @@ def test_pil_requested():
 
 
 # --------------------------------------------------------------------------- bad input
+
+
+def test_plot_run_holds_one_picture_at_a_time_and_writes_what_save_writes(run, tmp_path, monkeypatch):
+    """plot_run lets each picture go once it is encoded (at most one Figure alive while the next is
+    drawn: five pictures' pixels at once cost this process more than drawing them), and its files
+    are the bytes Figure.save writes for draw_run's pictures. A plot_run that keeps its Figures,
+    or encodes them otherwise, fails this."""
+    import gc
+    import weakref
+    out = copy_run(run, tmp_path / "run")
+    alive, most = [], []
+    real_init = rp.Figure.__init__
+
+    def counting_init(self, *args, **kwargs):
+        gc.collect()
+        most.append(sum(ref() is not None for ref in alive))   # Figures alive as this one starts
+        alive.append(weakref.ref(self))
+        real_init(self, *args, **kwargs)
+
+    monkeypatch.setattr(rp.Figure, "__init__", counting_init)
+    written = quick_figures.plot_run(str(out))
+    assert tuple(os.path.basename(p) for p in written) == PICTURES
+    assert len(most) == len(PICTURES) and max(most) == 0, most
+    monkeypatch.setattr(rp.Figure, "__init__", real_init)
+    for name, fig in quick_figures.draw_run(str(out)).items():
+        assert (out / name).read_bytes() == open(fig.save(str(tmp_path / name)), "rb").read(), name
 
 
 def test_a_missing_run_directory_is_named(tmp_path):
