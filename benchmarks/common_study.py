@@ -28,6 +28,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from compare import scene_toml  # noqa: E402
+from compare.atomic_file import replacing, write_text  # noqa: E402,F401 (the studies' writer)
 from compare.run_dir import RunDir, RunDirError  # noqa: E402
 
 
@@ -176,13 +177,7 @@ def fit_order(dts, errs, lo_err: float = 0.0, hi_err: float = math.inf, dt_max: 
 
 
 def write_json(path: Path, data) -> None:
-    from compare.common import write_text_atomic
-    write_text_atomic(Path(path), json.dumps(data, indent=1, default=_default) + "\n")
-
-
-def write_text(path: Path, text: str) -> None:
-    from compare.common import write_text_atomic
-    write_text_atomic(Path(path), text)
+    write_text(path, json.dumps(data, indent=1, default=_default) + "\n")
 
 
 def _default(o):
@@ -215,10 +210,8 @@ def g(v, digits: int = 3) -> str:
 
 
 def savefig(fig, path: Path) -> None:
-    path = Path(path)
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
-    fig.savefig(tmp, dpi=110, bbox_inches="tight")
-    os.replace(tmp, path)
+    with replacing(path) as tmp:  # NAME.png.tmp: the format named, not read from the suffix
+        fig.savefig(tmp, dpi=110, bbox_inches="tight", format=Path(path).suffix[1:])
 
 
 def scene_with(base: Path, out: Path, changes: dict | None = None, add: dict | None = None, remove=(),

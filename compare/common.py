@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import atomic_file
+
 ROOT = Path(__file__).resolve().parent.parent
 PYTHON = "/usr/bin/python3"
 
@@ -289,7 +291,7 @@ class Result:
         return dataclasses.asdict(self)
 
     def save(self, path: Path) -> None:
-        write_text_atomic(path, json.dumps(self.to_json(), indent=1, default=_json_default) + "\n")
+        atomic_file.write_text(path, json.dumps(self.to_json(), indent=1, default=_json_default) + "\n")
 
     @staticmethod
     def load(path: Path) -> "Result":
@@ -416,13 +418,6 @@ def _json_default(o):
     if isinstance(o, np.ndarray):
         return o.tolist()
     raise TypeError(type(o))
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def profiles_from_contacts(walls: list[dict], profile_bin: float, centre, contacts) -> dict:

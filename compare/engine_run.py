@@ -45,7 +45,9 @@ import numpy as np
 
 from . import engine_flow
 from .common import (Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall, outlet_y,
-                     scene_material_index, tangent, write_text_atomic)
+                     scene_material_index, tangent)
+from . import atomic_file
+from .atomic_file import write_text as write_text_atomic
 from .plan import Entry, Options, PlanError, make_plan, start_discs
 
 CODES = ("liggghts", "lammps", "yade")
@@ -199,9 +201,8 @@ def write_discs(out: Path, case: Case, rows: np.ndarray, ids: np.ndarray) -> Non
     mesh = meshio.Mesh(pts, [("vertex", np.arange(len(rows)).reshape(-1, 1))],
                        point_data={"radius": rows[:, 2], "velocity": vel, "omega": rows[:, 5],
                                    "id": ids.astype(np.int64)})
-    tmp = out / "discs.vtu.tmp"
-    meshio.write(str(tmp), mesh, file_format="vtu")
-    os.replace(tmp, out / "discs.vtu")
+    with atomic_file.replacing(out / "discs.vtu") as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")
 
 
 def wall_entries(case: Case, res: Result) -> tuple[list[dict], list[str]]:
@@ -328,9 +329,8 @@ def write_walls_vtu(path: Path, case: Case, t_world: float, wall_names: list[str
         index.append(wall_names.index(w["name"]))
     mesh = meshio.Mesh(np.array(pts, float).reshape(-1, 3), [("line", np.array(cells, int).reshape(-1, 2))],
                        cell_data={"wall": [np.array(index, np.int32)]})
-    tmp = path.with_name(path.name + ".tmp")
-    meshio.write(str(tmp), mesh, file_format="vtu")
-    os.replace(tmp, path)
+    with atomic_file.replacing(path) as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")
 
 
 def write_snapshots(out: Path, case: Case, frames: list[Snapshot], wall_names: list[str]) -> list[float]:
@@ -365,9 +365,8 @@ def write_snapshots(out: Path, case: Case, frames: list[Snapshot], wall_names: l
                            point_data={"radius": near.r, "velocity": np.column_stack([near.vx, near.vy, np.zeros(n)]),
                                        "omega": near.omega, "id": near.id.astype(np.int64),
                                        "dx": near.x - x0[:, 0], "dy": near.y - x0[:, 1]})
-        tmp = out / "snapshots" / f"{stem}.vtu.tmp"
-        meshio.write(str(tmp), mesh, file_format="vtu")
-        os.replace(tmp, out / "snapshots" / f"{stem}.vtu")
+        with atomic_file.replacing(out / "snapshots" / f"{stem}.vtu") as tmp:
+            meshio.write(tmp, mesh, file_format="vtu")
         write_walls_vtu(out / "snapshots" / f"walls_{k:04d}.vtu", case, t_open + near.t, wall_names)
         entries.append((near.t, f"snapshots/{stem}.vtu", f"snapshots/walls_{k:04d}.vtu"))
         times.append(near.t)

@@ -70,6 +70,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 
 # Reading and the pure maths (compare/figure_data.py, no matplotlib), re-exported here.
+from compare import atomic_file  # noqa: E402
 from compare import run_dir as _run_dir  # noqa: E402,F401
 from compare.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH, SHARED_LAW,  # noqa: E402,F401
                                  _cluster, _fail, _reading, common_caption, law_name, load_run,
@@ -111,20 +112,14 @@ def _save(fig, out_png):
     if fmt is None:
         plt.close(fig)
         raise ValueError(f"{out_png}: a figure is written as .png, .pdf or .svg")
-    folder = os.path.dirname(out_png)
-    if folder:
-        os.makedirs(folder, exist_ok=True)
-    tmp = f"{out_png}.tmp"
     try:
-        if fmt == "png":
-            _write_png(fig, tmp, SAVE_DPI)
-        else:
-            fig.savefig(tmp, dpi=SAVE_DPI, format=fmt)
-        os.replace(tmp, out_png)
+        with atomic_file.replacing(out_png) as tmp:
+            if fmt == "png":
+                _write_png(fig, tmp, SAVE_DPI)
+            else:
+                fig.savefig(tmp, dpi=SAVE_DPI, format=fmt)
     finally:
         plt.close(fig)
-        if os.path.exists(tmp):
-            os.remove(tmp)
     return out_png
 
 

@@ -58,7 +58,8 @@ from pathlib import Path
 import numpy as np
 
 from .common import (mpi_prefix, run_translated, SHARED_VARIANT, Case, CaseError, Result, Snapshot, failed, inward_normal, kinetic_energy, outlet_y, pair,
-                     profiles_from_contacts, tangent, write_text_atomic)
+                     profiles_from_contacts, tangent)
+from .atomic_file import write_text as write_text_atomic
 
 NAME = "lammps"
 Z_HALF = 2.0          # [cm] half thickness of the periodic z slab

@@ -54,7 +54,8 @@ import numpy as np
 
 from .common import (mpi_prefix, run_translated, outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
                      motion_steps, moved_wall,
-                     inward_normal, kinetic_energy, pair, tangent, write_text_atomic)
+                     inward_normal, kinetic_energy, pair, tangent)
+from .atomic_file import write_text as write_text_atomic
 
 NAME = "liggghts"
 Z_HALF = 2.0          # [cm] half thickness of the periodic z slab

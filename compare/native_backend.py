@@ -29,7 +29,8 @@ import numpy as np
 import meshio
 
 from .common import (Case, CaseError, Result, Snapshot, dem_binary, failed, fold_points,
-                     kinetic_energy, write_text_atomic)
+                     kinetic_energy)
+from .atomic_file import write_text as write_text_atomic
 from .run_dir import RunDir, RunDirError, read_pvd
 from .scene_toml import dumps
 

@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 from compare import paper_claims, scene_toml
-from compare.common import write_text_atomic
+from compare.atomic_file import write_text as write_text_atomic
 from compare.run_dir import RunDir
 
 REPO = Path(__file__).resolve().parents[1]

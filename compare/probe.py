@@ -54,8 +54,8 @@ from pathlib import Path
 import numpy as np
 
 from . import lammps_backend, liggghts_backend, native_backend, yade_backend
-from .common import (Case, CaseError, disc_material, inward_normal, material_names, pair, resolve,
-                     write_text_atomic)
+from .common import Case, CaseError, disc_material, inward_normal, material_names, pair, resolve
+from .atomic_file import write_text as write_text_atomic
 
 CODES = ("native", "liggghts", "yade", "lammps")
 FIELDS = ("kn", "ks", "eta_n", "eta_s", "mu")

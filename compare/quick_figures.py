@@ -30,6 +30,7 @@ from compare.figure_data import (DEAD_RADII, RATIO_LIMITS, SIDE_MARKERS, SIDE_ST
                                  ratios_title, reference_radius, scene_name, side_bins_title,
                                  side_profile, side_title, side_wall_contacts, static_ratio,
                                  wall_ratio_data, wall_series_matrix)
+from compare import atomic_file  # noqa: E402
 from compare import raster_plot as rp  # noqa: E402
 
 GREY_DEAD = (224, 224, 224)            # matplotlib's '0.88': discs that moved < 1 radius
@@ -530,7 +531,7 @@ def plot_run(run_dir):
         fig = draw(run_dir)
         encoded.append((name, fig.png()))
         del fig
-    return [rp.write_whole(os.path.join(run_dir, name), data) for name, data in encoded]
+    return [atomic_file.write_bytes(os.path.join(run_dir, name), data) for name, data in encoded]
 
 
 def _keep_freed_memory():

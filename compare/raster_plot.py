@@ -17,6 +17,7 @@ import os
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from compare import atomic_file
 from compare.png_file import SAVE_DPI, png_bytes_of_rows
 
 # An axes' data drawn at twice the size, then averaged 2 x 2 (Image.reduce): antialiased edges.
@@ -299,23 +300,7 @@ class Figure:
     def save(self, path):
         """Write the PNG through path.tmp, renamed when complete: a killed process leaves no half
         file."""
-        return write_whole(path, self.png())
-
-
-def write_whole(path, data):
-    """Write bytes to path through path.tmp, renamed when complete; returns path."""
-    folder = os.path.dirname(path)
-    if folder:
-        os.makedirs(folder, exist_ok=True)
-    tmp = f"{path}.tmp"
-    try:
-        with open(tmp, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-    return path
+        return atomic_file.write_bytes(path, self.png())
 
 
 # --------------------------------------------------------------------------- axes

@@ -13,17 +13,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import calibration  # noqa: E402
-from .common import write_text_atomic  # noqa: E402
+from . import atomic_file  # noqa: E402
+from .atomic_file import write_text as write_text_atomic  # noqa: E402
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green", "lammps": "tab:red"}
 MARKERS = {"native": "o", "liggghts": "s", "yade": "^", "lammps": "D"}
 
 
 def _savefig(fig, path: Path) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
-    os.replace(tmp, path)
+    try:
+        with atomic_file.replacing(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
 
 
 def _fmt(v) -> str:

@@ -29,6 +29,8 @@ import re
 import tomllib
 from pathlib import Path
 
+from compare import atomic_file
+
 # The keys that hold file paths relative to the scene file's folder (docs/scene.md).
 PATH_KEYS = ("fill.file", "start.from")
 
@@ -198,9 +200,7 @@ def write(path, doc: dict, header: str | None = None, comments: dict | None = No
     """Writes dumps(doc) to path atomically (``NAME.tmp`` in the same folder, then renamed)."""
     path = Path(path)
     text = dumps(doc, header=header, comments=comments)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    atomic_file.write_text(path, text)
     return path
 
 

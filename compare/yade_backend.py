@@ -92,7 +92,8 @@ import numpy as np
 
 from .common import outlet_y as common_outlet_y
 from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, motion_steps,
-                     moved_wall, pair, profiles_from_contacts, write_text_atomic)
+                     moved_wall, pair, profiles_from_contacts)
+from .atomic_file import write_text as write_text_atomic
 
 NAME = "yade"
 TEMPLATE = Path(__file__).resolve().parent / "yade_template.py"

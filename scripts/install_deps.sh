@@ -5,6 +5,7 @@ PKGS=(cmake g++ make pkg-config libeigen3-dev libtomlplusplus-dev nlohmann-json3
       libgtest-dev googletest libbenchmark-dev
       python3-dev pybind11-dev python3-pybind11 python3-setuptools    # the Python module dem (engine/python)
       python3-numpy python3-scipy python3-matplotlib python3-pil python3-meshio python3-pytest
+      python3-pytest-xdist   # pytest on every core (tests/CMakeLists.txt)
       liggghts yade lammps   # the reference codes of the comparison layer (compare/); lammps gives lmp
       time)            # GNU time: benchmarks/speed.py measures each run's peak memory with it
 missing=()
