@@ -19,9 +19,26 @@ cmake --build build-asan -j "$(nproc)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
 
-# The quick agreement study: native vs the real LIGGGHTS and YADE (fails on any disagreement),
-# then the mutants (deliberately wrong translations; fails unless every one is caught), then LAMMPS
-# on the scenes it expresses, with its mutants.
-build/dem compare reference_inputs/agreement/quick.list --out out/agreement
-build/dem compare reference_inputs/agreement/mutants.list --mutants --out out/mutants
-build/dem compare reference_inputs/agreement/lammps.list --codes lammps --mutants --out out/lammps
+# The quick agreement study: native vs the real LIGGGHTS and YADE (fails on any disagreement);
+# the mutants (deliberately wrong translations; fails unless every one is caught); LAMMPS on the
+# scenes it expresses, with its mutants. Three independent studies, each in its own folder and
+# each run single-threaded, so they run at once on the cores; each one's output is printed, in
+# this order, once it has ended, and any failure fails the script.
+mkdir -p out
+study() {  # NAME ARGS...: dem compare ARGS --out out/NAME, its output kept in out/NAME.log
+  local name=$1; shift
+  build/dem compare "$@" --out "out/$name" > "out/$name.log" 2>&1
+}
+study agreement reference_inputs/agreement/quick.list & pids=("agreement:$!")
+study mutants reference_inputs/agreement/mutants.list --mutants & pids+=("mutants:$!")
+study lammps reference_inputs/agreement/lammps.list --codes lammps --mutants & pids+=("lammps:$!")
+failed=()
+for entry in "${pids[@]}"; do
+  name=${entry%%:*}
+  wait "${entry#*:}" || failed+=("$name")
+  cat "out/$name.log"
+done
+if [ "${#failed[@]}" -gt 0 ]; then
+  echo "test.sh: dem compare failed: ${failed[*]} (out/NAME.log, out/NAME/report.md)" >&2
+  exit 1
+fi
