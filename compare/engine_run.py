@@ -608,6 +608,8 @@ def _main(argv=None) -> int:
                     help="CSV x,y of each disc's start, in the scene's order (dem ensemble --member K --engine: "
                          "the member's perturbed start)")
     ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--pictures", action="store_true",
+                    help="also draw the run's pictures into OUT with PIL (compare.quick_figures), as dem run --pictures")
     try:
         a = ap.parse_args(argv)
     except SystemExit as e:
@@ -679,6 +681,14 @@ def _main(argv=None) -> int:
     if not a.quiet:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
               f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
+    if a.pictures:
+        from compare import quick_figures
+        try:
+            written = quick_figures.plot_run(str(out), quick_figures.default_jobs())
+        except SystemExit as e:
+            return _fail_exit(code, f"--pictures: the pictures were not drawn: {e.code}", EXIT_FAILED)
+        if not a.quiet:
+            print("\n".join(written))
     return 0
 
 

@@ -30,10 +30,10 @@ Usage, from the repository root::
     /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
     /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
     /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
-    /usr/bin/python3 -m compare.figures run RUN_DIR [--renderer pil]
+    /usr/bin/python3 -m compare.figures run RUN_DIR [--renderer pil [--jobs N]]
 
 ``run --renderer pil`` draws the same five files with PIL (compare/quick_figures.py), without
-importing matplotlib.
+importing matplotlib, in two processes on two cores or more (``--jobs N``).
 """
 
 import os
@@ -55,7 +55,10 @@ if __name__ == "__main__" and pil_requested(sys.argv[1:]):
     # 0.08 s CPU).
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     from compare import quick_figures as _quick
-    raise SystemExit(_quick.main(sys.argv[1:]))
+    _status = _quick.main(sys.argv[1:])
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(_status)  # as compare.quick_figures leaves: no teardown of the pictures' memory
 
 import argparse  # noqa: E402
 import math  # noqa: E402
@@ -801,6 +804,9 @@ def main(argv=None):
     p.add_argument("--renderer", choices=("matplotlib", "pil"), default="matplotlib",
                    help="matplotlib (default), or PIL (compare.quick_figures: the same five files, "
                         "matplotlib not imported)")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="--renderer pil: processes that share the pictures out (default 2 on two "
+                        "cores or more)")
     args = parser.parse_args(argv)
 
     if args.command == "network":
@@ -821,7 +827,8 @@ def main(argv=None):
         out = "\n".join(plot_discharge(args.run_dir, args.outdir))
     elif args.renderer == "pil":
         from compare import quick_figures
-        out = "\n".join(quick_figures.plot_run(args.run_dir))
+        jobs = quick_figures.default_jobs() if args.jobs is None else args.jobs
+        out = "\n".join(quick_figures.plot_run(args.run_dir, jobs))
     else:
         out = "\n".join(plot_run(args.run_dir))
     print(out)

@@ -1,7 +1,8 @@
 """The pictures of one `dem run` directory drawn with PIL (compare/raster_plot.py), no matplotlib.
 
-    /usr/bin/python3 -m compare.quick_figures run RUN_DIR
+    /usr/bin/python3 -m compare.quick_figures run RUN_DIR [--jobs N]
     /usr/bin/python3 -m compare.figures run RUN_DIR --renderer pil      (the same)
+    build/dem run SCENE --out RUN_DIR --pictures                        (the run, then the same)
 
 Writes into RUN_DIR the files of `compare.figures run`: network.png and side_walls.png and, for
 a discharge, frames.png, wall_ratios.png and flow.png, with the same titles, panels, axes,
@@ -14,7 +15,9 @@ error names the file) rather than some.
 import ctypes
 import math
 import os
+import pickle
 import sys
+import traceback
 
 if __name__ == "__main__":
     # no linear algebra here: one OpenBLAS thread, not one a core started at numpy's import
@@ -521,17 +524,93 @@ def draw_run(run_dir):
     return {name: draw(run_dir) for name, draw in _pictures(run_dir)}
 
 
-def plot_run(run_dir):
-    """Draw the run's pictures and write them into run_dir; returns their paths. Each picture is
-    encoded as soon as it is drawn and its image let go (one picture's pixels in memory at a
-    time, not five: fresh pages cost this process more than drawing on them), and the files are
-    written once all are encoded, so that an error leaves none written."""
+# What each picture costs to read, draw and encode, relative to flow.png (CPU seconds of the 17/18
+# discharge run, benchmarks/quick_figure_times.py): the share-out of plot_run's processes.
+PICTURE_COST = {"frames.png": 3.5, "wall_ratios.png": 2.5, "side_walls.png": 1.3, "network.png": 1.2,
+                "flow.png": 1.0}
+
+
+def _encoded(run_dir, pictures):
+    """[(name, PNG bytes)] of the pictures, each encoded as soon as it is drawn and its image let
+    go (one picture's pixels in memory at a time, not five: fresh pages cost this process more
+    than drawing on them)."""
     encoded = []
-    for name, draw in _pictures(run_dir):
+    for name, draw in pictures:
         fig = draw(run_dir)
         encoded.append((name, fig.png()))
         del fig
+    return encoded
+
+
+def _shares(pictures, jobs):
+    """The pictures dealt to `jobs` processes, the costliest first, each to the least loaded."""
+    shares, loads = [[] for _ in range(jobs)], [0.0] * jobs
+    for k in sorted(range(len(pictures)), key=lambda k: -PICTURE_COST.get(pictures[k][0], 1.0)):
+        least = loads.index(min(loads))
+        shares[least].append(k)
+        loads[least] += PICTURE_COST.get(pictures[k][0], 1.0)
+    return [sorted(share) for share in shares if share]
+
+
+def _encoded_in_processes(run_dir, pictures, jobs):
+    """_encoded over `jobs` processes: this one and jobs - 1 forked children, each with its share
+    (_shares), the children's PNG bytes sent back through a pipe. A child's error (a missing or
+    malformed file) stops this process with the child's message. In the pictures' order."""
+    shares = _shares(pictures, jobs)
+    children = []
+    for share in shares[1:]:
+        read_end, write_end = os.pipe()
+        pid = os.fork()
+        if pid == 0:                                   # the child: its share, then out at once
+            os.close(read_end)
+            try:
+                reply = ("ok", _encoded(run_dir, [pictures[k] for k in share]))
+            except SystemExit as stop:
+                reply = ("error", str(stop.code))
+            except BaseException:                      # noqa: B902 - told to the parent, whatever it is
+                reply = ("error", traceback.format_exc())
+            with os.fdopen(write_end, "wb") as pipe:
+                pickle.dump(reply, pipe, protocol=pickle.HIGHEST_PROTOCOL)
+            os._exit(0)
+        os.close(write_end)
+        children.append((pid, read_end, share))
+    try:
+        encoded = dict(zip(shares[0], _encoded(run_dir, [pictures[k] for k in shares[0]])))
+    finally:
+        replies = []
+        for pid, read_end, share in children:          # read the whole reply, then reap
+            with os.fdopen(read_end, "rb") as pipe:
+                try:
+                    replies.append((share, pickle.load(pipe)))
+                except EOFError:
+                    replies.append((share, ("error", "a picture process ended without its pictures")))
+            os.waitpid(pid, 0)
+    for share, (status, value) in replies:
+        if status != "ok":
+            raise SystemExit(value)
+        encoded.update(zip(share, value))
+    return [encoded[k] for k in range(len(pictures))]
+
+
+def plot_run(run_dir, jobs=1):
+    """Draw the run's pictures and write them into run_dir; returns their paths. ``jobs`` > 1
+    shares the pictures out to that many processes (forked: Linux and macOS; one process
+    elsewhere), the same bytes. The files are written once all are encoded, so that an error
+    leaves none written."""
+    pictures = _pictures(run_dir)
+    jobs = min(jobs, len(pictures)) if hasattr(os, "fork") else 1
+    encoded = _encoded_in_processes(run_dir, pictures, jobs) if jobs > 1 else _encoded(run_dir, pictures)
     return [atomic_file.write_bytes(os.path.join(run_dir, name), data) for name, data in encoded]
+
+
+def default_jobs():
+    """Processes for the pictures: two where this process may run on two cores or more (the five
+    pictures share out to two about evenly: _shares), else one."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cores = os.cpu_count() or 1
+    return 2 if cores >= 2 else 1
 
 
 def _keep_freed_memory():
@@ -547,19 +626,46 @@ def _keep_freed_memory():
         pass
 
 
-def main(argv=None):
-    """Command line: `run RUN_DIR` (also as compare.figures' `run RUN_DIR --renderer pil`)."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+def _options(argv):
+    """(run_dir, jobs, wait, quiet) of the command line, or None: `run RUN_DIR [--jobs N]
+    [--wait] [--quiet]`, compare.figures' `--renderer pil` taken out."""
     rest = [a for k, a in enumerate(argv) if a not in ("--renderer=pil", "--renderer")
             and not (a == "pil" and k > 0 and argv[k - 1] == "--renderer")]
+    wait, quiet = "--wait" in rest, "--quiet" in rest
+    rest = [a for a in rest if a not in ("--wait", "--quiet")]
+    jobs = default_jobs()
+    if len(rest) == 4 and rest[2] == "--jobs":
+        if not rest[3].isdigit() or int(rest[3]) < 1:
+            return None
+        jobs, rest = int(rest[3]), rest[:2]
     if len(rest) != 2 or rest[0] != "run":
-        sys.stderr.write("usage: python3 -m compare.quick_figures run RUN_DIR\n"
-                         "       python3 -m compare.figures run RUN_DIR --renderer pil\n")
+        return None
+    return rest[1], jobs, wait, quiet
+
+
+def main(argv=None):
+    """Command line: `run RUN_DIR [--jobs N] [--wait] [--quiet]` (also as compare.figures' `run
+    RUN_DIR --renderer pil`). --wait: `dem run --pictures` starts this process with the run, so
+    that the imports are done while the engine runs; it reads a line on stdin when the run has
+    ended, and draws when the line is "draw" (anything else, or the end of stdin: the run did not
+    end well, nothing is drawn, exit 0). --quiet: the files written are not listed."""
+    options = _options(sys.argv[1:] if argv is None else list(argv))
+    if options is None:
+        sys.stderr.write("usage: python3 -m compare.quick_figures run RUN_DIR [--jobs N] [--wait] [--quiet]\n"
+                         "       python3 -m compare.figures run RUN_DIR --renderer pil [--jobs N]\n")
         return 2
+    run_dir, jobs, wait, quiet = options
     _keep_freed_memory()
-    print("\n".join(plot_run(rest[1])))
+    if wait and sys.stdin.readline().strip() != "draw":
+        return 0
+    written = plot_run(run_dir, jobs)
+    if not quiet:
+        print("\n".join(written))
     return 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    status = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)

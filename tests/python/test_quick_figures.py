@@ -150,6 +150,74 @@ def test_plot_run_holds_one_picture_at_a_time_and_writes_what_save_writes(run, t
         assert (out / name).read_bytes() == open(fig.save(str(tmp_path / name)), "rb").read(), name
 
 
+def test_two_processes_share_the_pictures_and_write_the_same_bytes(run, tmp_path, monkeypatch):
+    """plot_run(jobs=2) draws in this process and a forked one (each draws some pictures: the
+    calls are logged by pid) and writes the bytes of plot_run(jobs=1); the share-out gives every
+    picture to one process, the costliest first to the least loaded."""
+    one, two = copy_run(run, tmp_path / "one"), copy_run(run, tmp_path / "two")
+    quick_figures.plot_run(str(one), jobs=1)
+    log = tmp_path / "pids.txt"
+    real = quick_figures._encoded
+
+    def logged(run_dir, pictures):
+        with open(log, "a") as f:
+            f.write(f"{os.getpid()} {' '.join(name for name, _ in pictures)}\n")
+        return real(run_dir, pictures)
+
+    monkeypatch.setattr(quick_figures, "_encoded", logged)
+    written = quick_figures.plot_run(str(two), jobs=2)
+    assert tuple(os.path.basename(p) for p in written) == PICTURES
+    calls = [line.split() for line in log.read_text().splitlines()]
+    assert len(calls) == 2 and calls[0][0] != calls[1][0], calls           # two processes
+    assert sorted(name for call in calls for name in call[1:]) == sorted(PICTURES)
+    for name in PICTURES:
+        assert (two / name).read_bytes() == (one / name).read_bytes(), name
+    pictures = [(name, None) for name in PICTURES]
+    assert quick_figures._shares(pictures, 2) == [[0, 2], [1, 3, 4]]        # 3.5 + 1.2 against 2.5 + 1.3 + 1.0
+    assert sorted(k for share in quick_figures._shares(pictures, 9) for k in share) == list(range(5))
+
+
+def test_dem_run_pictures_draws_the_same_files_after_the_run(run, tmp_path, dem_binary):
+    """`dem run SCENE --out DIR --pictures`: the run's outputs, then the five pictures of
+    `compare.quick_figures run DIR`, byte for byte (the run is deterministic), the files named on
+    stdout unless --quiet."""
+    out = tmp_path / "both"
+    p = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(out), "--pictures", "--quiet"],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout == "", p.stdout
+    reference = copy_run(run, tmp_path / "reference")
+    quick_figures.plot_run(str(reference), jobs=1)
+    for name in PICTURES:
+        assert (out / name).read_bytes() == (reference / name).read_bytes(), name
+    p = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(out), "--pictures"],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert [line for line in p.stdout.splitlines() if line.endswith(".png")] == [str(out / n) for n in PICTURES]
+    assert "--pictures draws them next" in p.stdout
+
+
+def test_dem_run_pictures_draws_nothing_for_an_unstable_run_and_says_when_they_fail(tmp_path, dem_binary):
+    """An unstable run (eq. 18 on the discharge: exit 3) gets no pictures, and its picture process
+    ends with it; a picture that cannot be written (a folder in its place) exits 4 naming the
+    pictures, the run's outputs written; a bad scene exits 2 before anything starts."""
+    out = tmp_path / "unstable"
+    p = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(out), "--pictures", "--quiet",
+                        "--scheme", "paper_eq18", "--force-dt"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 3, p.stderr
+    assert (out / "discs.csv").exists() and not list(out.glob("*.png"))
+    out = tmp_path / "blocked"
+    (out / "flow.png").mkdir(parents=True)
+    p = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(out), "--pictures", "--quiet"],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 4, p.stderr
+    assert "dem run --pictures: the pictures were not drawn" in p.stderr and "flow.png" in p.stderr
+    assert (out / "summary.json").exists()
+    p = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(tmp_path / "bad"), "--pictures",
+                        "--set", "integrator.dt=-1"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 2 and not (tmp_path / "bad").exists(), p.stderr
+
+
 def test_a_missing_run_directory_is_named(tmp_path):
     p = draw("-m", "compare.quick_figures", "run", str(tmp_path / "nowhere"))
     assert p.returncode != 0
@@ -174,7 +242,8 @@ def test_a_broken_run_names_the_file_and_writes_nothing(run, tmp_path, broken):
     else:
         lines = (out / name).read_text().splitlines()
         (out / name).write_text("\n".join(",".join(line.split(",")[:-1]) for line in lines) + "\n")
-    for entry in (["-m", "compare.quick_figures", "run", str(out)],
+    for entry in (["-m", "compare.quick_figures", "run", str(out), "--jobs", "1"],
+                  ["-m", "compare.quick_figures", "run", str(out), "--jobs", "2"],
                   ["-m", "compare.figures", "run", str(out), "--renderer", "pil"]):
         p = draw(*entry)
         assert p.returncode != 0, entry

@@ -216,3 +216,30 @@ def test_plain_files_read_as_csv_reader_reads_them(tmp_path, monkeypatch):
         (tmp_path / name).write_text(text + ("1,left,2\n" if name == "plain.csv" else "1, left, 2\n"))
         with pytest.raises(RunDirError, match=rf"{name}: line 6: expected 4 fields"):
             read_csv(tmp_path / name, columns, empty=float("nan"))
+
+
+def test_numbers_read_by_numpy_are_those_of_float_and_int(tmp_path, monkeypatch):
+    """A plain file's numbers go through np.loadtxt: the same doubles as Python's float() (random
+    bit patterns written as repr and as %.17g, subnormals, infinities and NaN among them), the same
+    ints as int(), and an integer column holding 1.0 still refused with read_csv's message."""
+    rng = np.random.default_rng(7)
+    bits = rng.integers(0, 2**63, size=4000, dtype=np.uint64) | (rng.integers(0, 2, 4000, dtype=np.uint64) << 63)
+    values = [float(v) for v in bits.view(np.float64)] + [5e-324, -0.0, 1e308, float("inf")]
+    lines = ["t,wall,bin,normal"]
+    for k, v in enumerate(values):
+        lines.append(f"{v!r},w{k % 7},{k - 2000},{'%.17g' % v}")
+    (tmp_path / "a.csv").write_text("\n".join(lines) + "\n")
+    columns = ("t", "wall", "bin", "normal")
+    import compare.run_dir
+    fast = read_csv(tmp_path / "a.csv", columns)
+    monkeypatch.setattr(compare.run_dir, "PLAIN_MAX_BYTES", 10)        # csv.reader, float(), int()
+    slow = read_csv(tmp_path / "a.csv", columns)
+    monkeypatch.undo()
+    for k in columns:
+        assert fast[k].dtype == slow[k].dtype, k
+        np.testing.assert_array_equal(fast[k], slow[k])
+    assert fast["t"].view(np.uint64).tolist() == slow["t"].view(np.uint64).tolist()     # the bits, NaNs too
+    assert fast["normal"].view(np.uint64).tolist() == fast["t"].view(np.uint64).tolist()
+    (tmp_path / "b.csv").write_text("t,wall,bin,normal\n0,left,1.0,2\n")
+    with pytest.raises(RunDirError, match=r"line 2: column 'bin' is not a number: '1.0'"):
+        read_csv(tmp_path / "b.csv", columns)

@@ -11,6 +11,7 @@
 
 #include <unistd.h>
 
+#include "cli/picture_process.hpp"
 #include "io/out_dir.hpp"
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
@@ -49,9 +50,9 @@ const char* kMainHelp =
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
-    "               [--quiet] [--no-vtu] [--from STATE] [--save-state FILE] [--checkpoint-every S] [--resume]\n"
-    "               [--set KEY=VALUE ...]\n"
-    "       dem run SCENE.toml --engine liggghts|lammps|yade [--np N] [--settle S] [--timeout S] --out DIR\n"
+    "               [--quiet] [--no-vtu] [--pictures] [--from STATE] [--save-state FILE] [--checkpoint-every S]\n"
+    "               [--resume] [--set KEY=VALUE ...]\n"
+    "       dem run SCENE.toml --engine liggghts|lammps|yade [--np N] [--settle S] [--timeout S] [--pictures] --out DIR\n"
     "\n"
     "  --out DIR       output directory (created, or cleared of an earlier run's files unless\n"
     "                  --resume; see docs/outputs.md)\n"
@@ -69,6 +70,9 @@ const char* kRunHelp =
     "                  the result is bit-identical to a run never stopped\n"
     "  --quiet         no header and no progress line\n"
     "  --no-vtu        no VTU files and no PVD indexes: the CSV files alone (output.vtu = \"none\")\n"
+    "  --pictures      also draw the run's pictures into DIR, with PIL (compare.quick_figures: the\n"
+    "                  files of compare.figures run DIR), in a Python process started with the run;\n"
+    "                  none when the run stops unstable or interrupted; exit 4 if they fail\n"
     "  --engine CODE   run the scene in the real LIGGGHTS, LAMMPS or YADE with the shared law and write\n"
     "                  the same outputs (docs/compare.md, \"Running a scene in a reference code\");\n"
     "                  exit 2 when the code cannot express the scene (the field named)\n"
@@ -172,7 +176,7 @@ std::string resume_command(int argc, char** argv) {
 struct RunArgs {
   std::string scene, out, save_to;
   SceneOverrides ov;
-  bool quiet = false, resume = false;
+  bool quiet = false, resume = false, pictures = false;
   double checkpoint_every = -1;  // [s] -1: the scene's output.checkpoint_every
 };
 
@@ -232,6 +236,8 @@ int parse_run_args(int argc, char** argv_in, RunArgs& a_) {
       ov.threads = static_cast<int>(x);
     } else if (k == "--quiet") {
       quiet = true;
+    } else if (k == "--pictures") {
+      a_.pictures = true;
     } else if (k == "--from") {
       const char* v = value();
       if (!v) return bad("--from needs a state file");
@@ -296,6 +302,7 @@ int cmd_run(int argc, char** argv) {
   const std::string &scene = args.scene, &out = args.out, &save_to = args.save_to;
   const SceneOverrides& ov = args.ov;
   const bool quiet = args.quiet, resume = args.resume;
+  PictureProcess pictures;  // --pictures: started once the scene is known good
   double checkpoint_every = args.checkpoint_every;
   SceneSpec spec;
   World world;
@@ -331,6 +338,10 @@ int cmd_run(int argc, char** argv) {
     } catch (const std::runtime_error& e) {
       return bad(std::string("--resume: ") + e.what());
     }
+  }
+  if (args.pictures) {
+    std::string error;
+    if (!pictures.start(out, quiet, error)) return bad("--pictures: " + error);
   }
   // Only a valid scene creates its output directory; a fresh run clears what an earlier run left.
   std::error_code ec;
@@ -371,10 +382,19 @@ int cmd_run(int argc, char** argv) {
   log.say("  %s at t = %.4f s after %ld steps; fill rest %s", to_string(status), world.time, world.steps,
           summary.rest_reached ? "reached" : "not reached");
   if (summary.rest_reached) log.say(" at t = %.4f s", summary.rest_time);
-  log.say("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s (pictures: %s -m compare.figures run %s)\n",
-          summary.wall_seconds, summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0,
-          out.c_str(), DEM_PYTHON_EXE, shell_quote(out).c_str());
+  const std::string picture_hint = args.pictures ? std::string("pictures: --pictures draws them next")
+                                                 : std::string("pictures: ") + DEM_PYTHON_EXE + " -m compare.figures run " + shell_quote(out);
+  log.say("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s (%s)\n", summary.wall_seconds,
+          summary.wall_seconds > 0 ? world.particle_steps / summary.wall_seconds : 0.0, out.c_str(), picture_hint.c_str());
   log.write(out, resume);
+  if (args.pictures) {
+    const int drawn = pictures.draw();
+    if (drawn != 0) {
+      std::fprintf(stderr, "dem run --pictures: the pictures were not drawn (%s exited with %d); the run's outputs are in %s\n",
+                   DEM_PYTHON_EXE, drawn, out.c_str());
+      return 4;
+    }
+  }
   return 0;
 }
 
