@@ -1,7 +1,7 @@
 """The paper's job, timed: its parts for one or more checkouts, interleaved, with medians.
 
     /usr/bin/python3 benchmarks/paper_job.py --out out/paper_job [--repeats 3] \
-        [--variant NAME REPO DEM ...] [--parts single,single_plots,single_pil,static,discharge] \
+        [--variant NAME REPO DEM ...] [--parts single,single_plots,single_pil,single_pictures,static,discharge] \
         [--members 8]
 
 Each variant is a checkout (REPO: its compare/ and scenes) and an engine binary (DEM); default:
@@ -11,6 +11,8 @@ this checkout and build/dem. Parts:
 - ``single_plots``: that run, then `python3 -m compare.figures run DIR` (its five pictures);
 - ``single_pil``:   that run, then `python3 -m compare.figures run DIR --renderer pil` (the same
   five pictures drawn with PIL, compare/quick_figures.py);
+- ``single_pictures``: `dem run ... --quiet --pictures` (the run and the same PIL pictures in one
+  command: the picture process starts with the run);
 - ``static``:       `python3 -m compare.paper_static --out DIR --dem DEM`;
 - ``discharge``:    `python3 -m compare.paper_discharge --out DIR --dem DEM --members M`.
 
@@ -75,6 +77,8 @@ def part_commands(part, repo, dem, out, members):
     if part == "single_pil":
         return [[dem, "run", scene, "--out", out, "--quiet"],
                 [PY, "-m", "compare.figures", "run", out, "--renderer", "pil"]]
+    if part == "single_pictures":
+        return [[dem, "run", scene, "--out", out, "--quiet", "--pictures"]]
     if part == "static":
         return [[PY, "-m", "compare.paper_static", "--out", out, "--dem", dem]]
     if part == "discharge":
@@ -110,12 +114,13 @@ def main(argv=None):
                 print(f"[{r}] {part:13s} {name:8s} {wall:7.2f} s wall {cpu:7.2f} s cpu  load {load:.1f}", flush=True)
     (out / "times.json").write_text(json.dumps(rows, indent=1) + "\n")
     print(f"\nmedians over {args.repeats} interleaved repeats (cpu: {'perf task-clock' if use_perf else 'rusage'})")
-    print("| part | variant | wall [s] | cpu [s] | load (1 min) |\n|---|---|---|---|---|")
+    print("| part | variant | wall [s] | cpu [s] | wall range [s] | load (1 min) |\n|---|---|---|---|---|---|")
     for part in args.parts.split(","):
         for name, _, _ in variants:
             mine = [x for x in rows if x["part"] == part and x["variant"] == name]
             print(f"| {part} | {name} | {statistics.median(x['wall_s'] for x in mine):.2f} | "
                   f"{statistics.median(x['cpu_s'] for x in mine):.2f} | "
+                  f"{min(x['wall_s'] for x in mine):.2f}-{max(x['wall_s'] for x in mine):.2f} | "
                   f"{min(x['load1'] for x in mine):.1f}-{max(x['load1'] for x in mine):.1f} |")
     return 0
 

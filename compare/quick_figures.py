@@ -9,7 +9,8 @@ a discharge, frames.png, wall_ratios.png and flow.png, with the same titles, pan
 legends and colour bars, from the same data (compare/figure_data.py). Importing matplotlib
 costs more than drawing all five pictures so (benchmarks/README.md). Every picture is drawn
 before the first is written, so a run directory with a missing or malformed file gets none (the
-error names the file) rather than some.
+error names the file) rather than some. On two cores or more the pictures are shared out to two
+processes (--jobs N; the same bytes).
 """
 
 import ctypes
