@@ -583,7 +583,7 @@ def _encoded_in_processes(run_dir, pictures, jobs):
             with os.fdopen(read_end, "rb") as pipe:
                 try:
                     replies.append((share, pickle.load(pipe)))
-                except EOFError:
+                except (EOFError, pickle.UnpicklingError):   # it ended (a signal) before its reply was whole
                     replies.append((share, ("error", "a picture process ended without its pictures")))
             os.waitpid(pid, 0)
     for share, (status, value) in replies:

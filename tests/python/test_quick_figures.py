@@ -177,6 +177,24 @@ def test_two_processes_share_the_pictures_and_write_the_same_bytes(run, tmp_path
     assert sorted(k for share in quick_figures._shares(pictures, 9) for k in share) == list(range(5))
 
 
+def test_a_picture_process_that_dies_stops_the_pictures_and_writes_none(run, tmp_path, monkeypatch):
+    """A forked picture process killed before its reply (SIGKILL): plot_run stops with a message
+    and writes no picture, its own pictures included."""
+    import signal
+    out = copy_run(run, tmp_path / "run")
+    parent, real = os.getpid(), quick_figures._encoded
+
+    def dying(run_dir, pictures):
+        if os.getpid() != parent:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(run_dir, pictures)
+
+    monkeypatch.setattr(quick_figures, "_encoded", dying)
+    with pytest.raises(SystemExit, match="a picture process ended without its pictures"):
+        quick_figures.plot_run(str(out), jobs=2)
+    assert not list(out.glob("*.png")) and not list(out.glob("*.tmp"))
+
+
 def test_dem_run_pictures_draws_the_same_files_after_the_run(run, tmp_path, dem_binary):
     """`dem run SCENE --out DIR --pictures`: the run's outputs, then the five pictures of
     `compare.quick_figures run DIR`, byte for byte (the run is deterministic), the files named on

@@ -610,10 +610,13 @@ DEM_TARGET_AVX512 static void pair_block_law_avx512(PairBlock& b, int n, const P
   pair_block_law<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>(b, n, props, inv_dt, sum1, uf);
 }
 #endif
-// The block law at W doubles a vector (a row of the kernel table holds each width's).
+// The block law at W doubles a vector (a row of the kernel table holds each width's). A
+// sanitizer build (DEM_LAW_ONE_WIDTH, -O1: no vector code at any width) compiles it once, for
+// every width: the three would be the same scalar code there, and a third of this file's
+// compile time.
 template <int W, NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool ONE_KIND>
 constexpr auto pair_block_law_at() {
-#if defined(__x86_64__) && defined(__GNUC__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(DEM_LAW_ONE_WIDTH)
   if constexpr (W == 8) return &pair_block_law_avx512<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
   else if constexpr (W == 4) return &pair_block_law_avx2<NS, NT, FC, LA, SHEAR, DASH, ONE_KIND>;
   else
