@@ -46,7 +46,7 @@ const char* kMainHelp =
     "before it is validated, as if the file said it (integrator.dt=5e-5; docs/scene.md)\n"
     "\n"
     "exit codes: 0 ok, 2 bad input, 3 unstable run, 4 a run that could not go on (a file it could not\n"
-    "write or read; the message names it), 130/143 interrupted by SIGINT/SIGTERM\n";
+    "write or read; the message names it) or whose --pictures failed, 130/143 interrupted by SIGINT/SIGTERM\n";
 
 const char* kRunHelp =
     "usage: dem run SCENE.toml --out DIR [--dt S] [--scheme NAME] [--end-time S] [--force-dt] [--threads N]\n"
@@ -84,7 +84,8 @@ const char* kRunHelp =
     "                  file (docs/scene.md, \"Changing values from the command line\")\n"
     "\n"
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
-    "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR.\n"
+    "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR,\n"
+    "or with the run by --pictures.\n"
     "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
     "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
     "end.max_overlap x r_min) stops with 3 and writes the last good state. SIGINT or SIGTERM stops\n"
