@@ -135,18 +135,15 @@ def read_csv(path, columns, empty=None, extra=False):
                 rows = [(n, [c.strip() for c in row]) for n, row in enumerate(csv.reader(f), 1) if row]
         except (OSError, UnicodeDecodeError, csv.Error) as err:
             raise RunDirError(path, f"cannot be read: {err}") from None
-    names = list(columns)
-    first = rows[0][1] if rows else []
-    if first == names or (set(names) <= set(first) and not _numeric(first)):
-        header = first                 # columns by name; others kept only with ``extra``
-        rows = rows[1:]
-        names_out = header if extra else names
-    elif first and not _numeric(first) and 2 * len(set(first) & set(names)) >= len(first):
+    layout = _layout(rows[0][1] if rows else [], columns, extra)
+    if layout is None:
+        first, names = rows[0][1], list(columns)
         missing = [c for c in names if c not in first]
         raise RunDirError(path, f"line 1: the header {','.join(first)} has no column "
                                 f"{', '.join(repr(c) for c in missing)}")
-    else:
-        header = names_out = names
+    header, has_header, names_out = layout
+    if has_header:
+        rows = rows[1:]
     index = {name: k for k, name in enumerate(header)}
     if any(len(row) != len(header) for _, row in rows):
         line, row = next((line, row) for line, row in rows if len(row) != len(header))
@@ -208,6 +205,19 @@ def _plain_text(path):
     return text
 
 
+def _layout(first, columns, extra):
+    """(header, whether the first row is it, the columns returned) of a file whose first row is
+    ``first``: a header naming every column asked for maps them by name (the others returned only
+    with ``extra``); a first row of numbers, or of cells that are mostly not column names, is data
+    and the file holds ``columns`` in order. None: a header without some column asked for."""
+    names = list(columns)
+    if first == names or (set(names) <= set(first) and not _numeric(first)):
+        return first, True, (first if extra else names)
+    if first and not _numeric(first) and 2 * len(set(first) & set(names)) >= len(first):
+        return None
+    return names, False, names
+
+
 def _numpy_columns(text, columns, extra):
     """read_csv's arrays of a plain file, its numbers converted by numpy's C reader (np.loadtxt:
     4-8x faster than a Python split of every line, and the same doubles: both round correctly,
@@ -218,15 +228,11 @@ def _numpy_columns(text, columns, extra):
     lines = [line for line in text.split("\n") if line]
     if not lines:
         return None
-    names = list(columns)
-    first = lines[0].split(",")
-    if first == names or (set(names) <= set(first) and not _numeric(first)):
-        header, body = first, lines[1:]
-        names_out = header if extra else names
-    elif first and not _numeric(first) and 2 * len(set(first) & set(names)) >= len(first):
-        return None                    # a header without a column asked for: the error
-    else:
-        header, body, names_out = names, lines, names
+    layout = _layout(lines[0].split(","), columns, extra)
+    if layout is None:                 # a header without a column asked for: read_csv's error
+        return None
+    header, has_header, names_out = layout
+    body = lines[1:] if has_header else lines
     if not body or set(map(operator.methodcaller("count", ","), body)) != {len(header) - 1}:
         return None
     index = {name: k for k, name in enumerate(header)}
