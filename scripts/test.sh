@@ -4,20 +4,25 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
+phase() { echo "test.sh: $1 done, ${SECONDS} s since the start"; }  # where CI's time goes
 bash scripts/build.sh
+phase "release build"
 /usr/bin/python3 scripts/make_paper_scenes.py --check
 /usr/bin/python3 scripts/make_janssen_scene.py --check
 /usr/bin/python3 scripts/make_calibration_scenes.py --check
 DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m compare translate --check
 ctest --test-dir build --output-on-failure -j "$(nproc)"
+phase "release tests"
 
 # The same tests on an AddressSanitizer + UndefinedBehaviorSanitizer build (any report fails).
 # -O1 -g1 (line tables for the reports' stack traces) compiles in half the time of -O2 -g.
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
   -DDEM_SANITIZE=ON -DDEM_PYTHON=/usr/bin/python3 >/dev/null
 cmake --build build-asan -j "$(nproc)"
+phase "sanitizer build"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$(nproc)"
+phase "sanitizer tests"
 
 # The quick agreement study: native vs the real LIGGGHTS and YADE (fails on any disagreement);
 # the mutants (deliberately wrong translations; fails unless every one is caught); LAMMPS on the
@@ -38,6 +43,7 @@ for entry in "${pids[@]}"; do
   wait "${entry#*:}" || failed+=("$name")
   cat "out/$name.log"
 done
+phase "agreement studies"
 if [ "${#failed[@]}" -gt 0 ]; then
   echo "test.sh: dem compare failed: ${failed[*]} (out/NAME.log, out/NAME/report.md)" >&2
   exit 1
