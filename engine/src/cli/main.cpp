@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "cli/picture_process.hpp"
+#include "cli/python_path.hpp"
 #include "io/out_dir.hpp"
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
@@ -277,9 +278,7 @@ int exec_python(std::vector<const char*> module, int argc, char** argv, const ch
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
-  const char* old = std::getenv("PYTHONPATH");
-  const std::string path = std::string(DEM_SOURCE_DIR) + (old && *old ? std::string(":") + old : "");
-  setenv("PYTHONPATH", path.c_str(), 1);
+  setenv("PYTHONPATH", comparison_python_path().c_str(), 1);
   std::vector<char*> args = {const_cast<char*>(DEM_PYTHON_EXE), const_cast<char*>("-m")};
   for (const char* m : module) args.push_back(const_cast<char*>(m));
   for (int k = 0; k < argc; ++k) args.push_back(argv[k]);

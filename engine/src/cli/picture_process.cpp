@@ -9,6 +9,8 @@
 #include <unistd.h>
 #include <vector>
 
+#include "cli/python_path.hpp"
+
 extern char** environ;
 
 namespace dem {
@@ -24,8 +26,7 @@ bool PictureProcess::start(const std::string& out, bool quiet, std::string& erro
   // first touch of its pictures' memory some 0.1 s CPU in all; benchmarks/README.md, "The
   // paper's job").
   std::vector<std::string> env;
-  const char* path = std::getenv("PYTHONPATH");
-  env.push_back(std::string("PYTHONPATH=") + DEM_SOURCE_DIR + (path && *path ? std::string(":") + path : ""));
+  env.push_back("PYTHONPATH=" + comparison_python_path());
   if (!std::getenv("GLIBC_TUNABLES")) env.push_back("GLIBC_TUNABLES=glibc.malloc.hugetlb=1");
   for (char** e = environ; *e; ++e)
     if (std::strncmp(*e, "PYTHONPATH=", 11) != 0) env.push_back(*e);
