@@ -157,3 +157,81 @@ TEST(ThreadChoice, LargeStepsMakeShortProbes) {
   EXPECT_LE(c.steps_at[0], 4) << "steps of one thread";  // 9 with windows of kWindow steps
   EXPECT_EQ(w.threads_for(kDiscs), 2);
 }
+
+namespace {
+
+// Steps as run_steps, where the steps builds(s) says (s counted from 1) build the lists afresh and
+// take t(threads, true).
+void run_steps_building(World& w, ThreadChoice& c, long steps, const std::function<bool(long)>& builds,
+                        const std::function<double(int, bool)>& t) {
+  for (long s = 1; s <= steps; ++s) {
+    const int nt = w.threads_for(static_cast<int>(w.discs.size()));
+    ++w.steps;
+    const bool build = builds(s);
+    if (build) ++w.neighbors.rebuilds;
+    c.after_step(w, t(nt, build));
+  }
+}
+
+// A million discs discharging (the settled 1M silo of benchmarks/speed.py, 600 steps): 8.5 ms a
+// step with two threads, 16 with one; a list build 60 / 100 ms.
+double million(int nt, bool build) { return nt == 2 ? (build ? 0.060 : 0.0085) : (build ? 0.100 : 0.016); }
+
+}  // namespace
+
+TEST(ThreadChoice, ListBuildsSetOffNoProbe) {
+  // A build every 60 steps, 7 times the steps around it: one in the last 8 steps made their
+  // mean 1.75 times the probe's, a probe for nothing at each build (10 in 600 steps). Only the
+  // holds' probes: one at the start, one after the hold (32 probes' time, some 3 s).
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps_building(w, c, 600, [](long s) { return s % 60 == 0; }, million);
+  EXPECT_LE(c.probes, 2);
+  EXPECT_LE(c.steps_at[0], 8) << "steps of one thread";
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+}
+
+TEST(ThreadChoice, AListBuildInTheThreadsWindowKeepsThem) {
+  // The first probe: one thread for steps 1-4 (the settling step and a window of 3), threads from
+  // step 5 (settling), their window from step 6. A build at step 6 counted in that window made the
+  // threads' mean (60 + 8.5 + 8.5) / 3 = 26 ms against one thread's 16: one thread chosen.
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps_building(w, c, 40, [](long s) { return s == 6; }, million);
+  EXPECT_EQ(c.probes, 1);
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+}
+
+TEST(ThreadChoice, OneStepUnlikeTheRestSetsOffNoProbe) {
+  // Holding the threads, one step of 60 ms that built nothing (a phase's first step), then a list
+  // build (the phase's new walls): not a neighbour taking a core, which slows most steps
+  // (ProbesAgainWhenTheThreadsSlowDown).
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps_building(w, c, 100, [](long) { return false; }, million);
+  ASSERT_EQ(c.probes, 1);
+  run_steps_building(w, c, 1, [](long) { return false; }, [](int, bool) { return 0.060; });
+  run_steps_building(w, c, 20, [](long s) { return s == 1; }, million);
+  EXPECT_EQ(c.probes, 1);
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+}
+
+TEST(ThreadChoice, BuildsAtEveryStepAreMeasured) {
+  // A flow that builds its lists at every step: no other steps to measure, so those count. The
+  // probe ends and keeps the faster threads; beside a neighbour that makes them slower, one thread.
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  c.start(w, true);
+  run_steps_building(w, c, 40, [](long) { return true; }, million);
+  EXPECT_EQ(c.probes, 1);
+  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  World busy = world_of(kDiscs, 2);
+  ThreadChoice b;
+  b.start(busy, true);
+  run_steps_building(busy, b, 40, [](long) { return true; }, [](int nt, bool) { return nt == 2 ? 0.09 : 0.07; });
+  EXPECT_EQ(b.probes, 1);
+  EXPECT_EQ(busy.threads_for(kDiscs), 1);
+}

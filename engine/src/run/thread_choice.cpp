@@ -16,7 +16,17 @@ void ThreadChoice::start(World& w, bool enabled) {
   asked_ = w.threads;
   enabled_ = enabled && asked_ > 1;
   w.threads_allowed = 0;  // the scene's count, until a probe says otherwise
+  builds_ = w.neighbors.rebuilds;
   if (enabled_) begin_probe(w);
+}
+
+double ThreadChoice::mean_but_largest(const std::vector<double>& v) {
+  double s = 0, largest = 0;
+  for (double x : v) {
+    s += x;
+    largest = std::max(largest, x);
+  }
+  return (s - largest) / static_cast<double>(v.size() - 1);
 }
 
 double ThreadChoice::close_window() {
@@ -54,18 +64,23 @@ void ThreadChoice::after_step(World& w, double seconds) {
   ++steps_at[w.threads_for(n) > 1 ? 1 : 0];
   if (!enabled_) return;
   const double per_disc = seconds / std::max(n, 1);  // a discharge loses discs as it goes
+  const bool built = w.neighbors.rebuilds != builds_;
+  const bool unlike = built && !built_;  // a list build after a step without one (thread_choice.hpp)
+  builds_ = w.neighbors.rebuilds;
+  built_ = built;
   if (state_ == State::hold) {
     held_ += seconds;
-    if (many_) {  // the last steps, as many as the probe's window of threads, against its mean
+    if (many_ && !unlike) {  // the last steps, as many as the probe's window of threads, against its mean
       const std::size_t size = static_cast<std::size_t>(std::max(window_steps_, kWindow));
       if (recent_.size() < size) recent_.push_back(per_disc);
       else recent_[recent_at_++ % size] = per_disc;
-      if (recent_.size() == size && mean(recent_) > kSlower * probe_many_) return begin_probe(w);
+      if (recent_.size() == size && mean_but_largest(recent_) > kSlower * probe_many_) return begin_probe(w);
     }
     if (held_ >= std::max(hold_, kHoldProbes * probe_s_)) begin_probe(w);
     return;
   }
   probe_s_ += seconds;
+  if (unlike && (state_ == State::one || state_ == State::many)) return;
   window_s_ += seconds;
   switch (state_) {
     case State::settle_one: state_ = State::one; window_s_ = 0; return;

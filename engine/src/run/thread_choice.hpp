@@ -47,8 +47,15 @@ class ThreadChoice {
   static constexpr int kHoldProbes = 32;
   // Holding the scene's threads, a probe starts at once when the mean of the last steps, as
   // many as the probe's window of threads had (kWindow at least), is kSlower times the probe's
-  // (another process took a core).
+  // (another process took a core). The largest of them is left out of that mean: a process that
+  // takes a core slows most steps, and one step unlike the rest (a phase's first step, 60 ms
+  // against 8.5 at 1M discs with 2 threads) must not set off a probe.
   static constexpr double kSlower = 1.5;
+  // A step that builds the neighbour lists afresh does the work of 4-9 steps (1M discs, 2
+  // threads; a discharge builds every 50-90 steps). It enters neither a probe's window, which it
+  // would tip to one thread, nor the last steps, whose mean it would take past kSlower: counted,
+  // the builds set off 5 probes of one thread in a discharge of 600 steps. Unless the step
+  // before it built the lists too: a flow that builds at every step has no other steps to measure.
 
   // Before the run's first step: whether to choose at all (integrator.thread_choice, more than
   // one thread asked). A probe starts at once: the threads' blocks of a run from rest are set by
@@ -72,6 +79,8 @@ class ThreadChoice {
   std::vector<double> window_;      // per-disc step times of the current window
   double window_s_ = 0;             // [s] its steps' time
   int window_steps_ = 0;            // the steps of the last window closed
+  long builds_ = 0;                 // the lists' builds (Neighbors::rebuilds) at the last step
+  bool built_ = false;              // the last step built them
   bool window_full() const {
     const std::size_t n = window_.size();
     return (n >= static_cast<std::size_t>(kWindow) && window_s_ >= kWindowSeconds) ||
@@ -85,6 +94,7 @@ class ThreadChoice {
   std::vector<double> recent_;      // the last kWindow per-disc step times while holding
   std::size_t recent_at_ = 0;
   static double mean(const std::vector<double>& v);
+  static double mean_but_largest(const std::vector<double>& v);  // v of 2 at least
   double close_window();  // the window's mean; the window emptied
   void begin_probe(World& w);
   void decide(World& w);
