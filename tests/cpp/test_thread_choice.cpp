@@ -177,61 +177,58 @@ void run_steps_building(World& w, ThreadChoice& c, long steps, const std::functi
 // step with two threads, 16 with one; a list build 60 / 100 ms.
 double million(int nt, bool build) { return nt == 2 ? (build ? 0.060 : 0.0085) : (build ? 0.100 : 0.016); }
 
+// A choice started on a world of kDiscs asking for two threads.
+struct Started {
+  World w = world_of(kDiscs, 2);
+  ThreadChoice c;
+  Started() { c.start(w, true); }
+};
+
 }  // namespace
 
 TEST(ThreadChoice, ListBuildsSetOffNoProbe) {
-  // A build every 60 steps, 7 times the steps around it: one in the last 8 steps made their
+  // A build every 60 steps, 7 times the steps around it: one in the last 8 steps would make their
   // mean 1.75 times the probe's, a probe for nothing at each build (10 in 600 steps). Only the
   // holds' probes: one at the start, one after the hold (32 probes' time, some 3 s).
-  World w = world_of(kDiscs, 2);
-  ThreadChoice c;
-  c.start(w, true);
-  run_steps_building(w, c, 600, [](long s) { return s % 60 == 0; }, million);
-  EXPECT_LE(c.probes, 2);
-  EXPECT_LE(c.steps_at[0], 8) << "steps of one thread";
-  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  Started r;
+  run_steps_building(r.w, r.c, 600, [](long s) { return s % 60 == 0; }, million);
+  EXPECT_LE(r.c.probes, 2);
+  EXPECT_LE(r.c.steps_at[0], 8) << "steps of one thread";
+  EXPECT_EQ(r.w.threads_for(kDiscs), 2);
 }
 
 TEST(ThreadChoice, AListBuildInTheThreadsWindowKeepsThem) {
   // The first probe: one thread for steps 1-4 (the settling step and a window of 3), threads from
-  // step 5 (settling), their window from step 6. A build at step 6 counted in that window made the
-  // threads' mean (60 + 8.5 + 8.5) / 3 = 26 ms against one thread's 16: one thread chosen.
-  World w = world_of(kDiscs, 2);
-  ThreadChoice c;
-  c.start(w, true);
-  run_steps_building(w, c, 40, [](long s) { return s == 6; }, million);
-  EXPECT_EQ(c.probes, 1);
-  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  // step 5 (settling), their window from step 6. A build at step 6 counted in that window would make the
+  // threads' mean (60 + 8.5 + 8.5) / 3 = 26 ms against one thread's 16, and one thread chosen.
+  Started r;
+  run_steps_building(r.w, r.c, 40, [](long s) { return s == 6; }, million);
+  EXPECT_EQ(r.c.probes, 1);
+  EXPECT_EQ(r.w.threads_for(kDiscs), 2);
 }
 
 TEST(ThreadChoice, OneStepUnlikeTheRestSetsOffNoProbe) {
   // Holding the threads, one step of 60 ms that built nothing (a phase's first step), then a list
   // build (the phase's new walls): not a neighbour taking a core, which slows most steps
   // (ProbesAgainWhenTheThreadsSlowDown).
-  World w = world_of(kDiscs, 2);
-  ThreadChoice c;
-  c.start(w, true);
-  run_steps_building(w, c, 100, [](long) { return false; }, million);
-  ASSERT_EQ(c.probes, 1);
-  run_steps_building(w, c, 1, [](long) { return false; }, [](int, bool) { return 0.060; });
-  run_steps_building(w, c, 20, [](long s) { return s == 1; }, million);
-  EXPECT_EQ(c.probes, 1);
-  EXPECT_EQ(w.threads_for(kDiscs), 2);
+  Started r;
+  run_steps_building(r.w, r.c, 100, [](long) { return false; }, million);
+  ASSERT_EQ(r.c.probes, 1);
+  run_steps_building(r.w, r.c, 1, [](long) { return false; }, [](int, bool) { return 0.060; });
+  run_steps_building(r.w, r.c, 20, [](long s) { return s == 1; }, million);
+  EXPECT_EQ(r.c.probes, 1);
+  EXPECT_EQ(r.w.threads_for(kDiscs), 2);
 }
 
 TEST(ThreadChoice, BuildsAtEveryStepAreMeasured) {
   // A flow that builds its lists at every step: no other steps to measure, so those count. The
   // probe ends and keeps the faster threads; beside a neighbour that makes them slower, one thread.
-  World w = world_of(kDiscs, 2);
-  ThreadChoice c;
-  c.start(w, true);
-  run_steps_building(w, c, 40, [](long) { return true; }, million);
-  EXPECT_EQ(c.probes, 1);
-  EXPECT_EQ(w.threads_for(kDiscs), 2);
-  World busy = world_of(kDiscs, 2);
-  ThreadChoice b;
-  b.start(busy, true);
-  run_steps_building(busy, b, 40, [](long) { return true; }, [](int nt, bool) { return nt == 2 ? 0.09 : 0.07; });
-  EXPECT_EQ(b.probes, 1);
-  EXPECT_EQ(busy.threads_for(kDiscs), 1);
+  Started r;
+  run_steps_building(r.w, r.c, 40, [](long) { return true; }, million);
+  EXPECT_EQ(r.c.probes, 1);
+  EXPECT_EQ(r.w.threads_for(kDiscs), 2);
+  Started busy;
+  run_steps_building(busy.w, busy.c, 40, [](long) { return true; }, [](int nt, bool) { return nt == 2 ? 0.09 : 0.07; });
+  EXPECT_EQ(busy.c.probes, 1);
+  EXPECT_EQ(busy.w.threads_for(kDiscs), 1);
 }
