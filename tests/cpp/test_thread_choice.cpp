@@ -199,8 +199,8 @@ TEST(ThreadChoice, ListBuildsSetOffNoProbe) {
 
 TEST(ThreadChoice, AListBuildInTheThreadsWindowKeepsThem) {
   // The first probe: one thread for steps 1-4 (the settling step and a window of 3), threads from
-  // step 5 (settling), their window from step 6. A build at step 6 counted in that window would make the
-  // threads' mean (60 + 8.5 + 8.5) / 3 = 26 ms against one thread's 16, and one thread chosen.
+  // step 5 (settling), their window from step 6. A build at step 6 counted in that window would
+  // make the threads' mean (60 + 8.5 + 8.5) / 3 = 26 ms against one thread's 16: one thread.
   Started r;
   run_steps_building(r.w, r.c, 40, [](long s) { return s == 6; }, million);
   EXPECT_EQ(r.c.probes, 1);
@@ -228,7 +228,8 @@ TEST(ThreadChoice, BuildsAtEveryStepAreMeasured) {
   EXPECT_EQ(r.c.probes, 1);
   EXPECT_EQ(r.w.threads_for(kDiscs), 2);
   Started busy;
-  run_steps_building(busy.w, busy.c, 40, [](long) { return true; }, [](int nt, bool) { return nt == 2 ? 0.09 : 0.07; });
+  run_steps_building(busy.w, busy.c, 40, [](long) { return true; },
+                     [](int nt, bool) { return nt == 2 ? 0.09 : 0.07; });
   EXPECT_EQ(busy.c.probes, 1);
   EXPECT_EQ(busy.w.threads_for(kDiscs), 1);
 }
