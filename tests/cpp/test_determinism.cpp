@@ -13,6 +13,7 @@
 #include <cstring>
 #include <string>
 
+#include "janssen_bin.hpp"
 #include "scene/scene.hpp"
 #include "physics/parallel.hpp"
 #include "physics/world.hpp"
@@ -41,8 +42,7 @@ struct Outcome {
 };
 
 Outcome run(int threads, bool paper_law, long steps) {
-  SceneSpec spec = load_scene(std::string(DEM_SOURCE_DIR) + "/reference_inputs/scenes/janssen_w15.toml");
-  spec.threads = threads;
+  SceneSpec spec = dem::testing::janssen_bin(threads);
   spec.rotation_angle = true;  // phi is in the hash (stored before the angle became an option)
   if (paper_law) {  // the paper's law and scheme (all defaults) on the same packing
     spec.contact = ContactOptions{};

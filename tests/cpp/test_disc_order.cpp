@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "helpers.hpp"
+#include "janssen_bin.hpp"
 #include "io/outputs.hpp"
 #include "io/state.hpp"
 #include "physics/world.hpp"
@@ -27,11 +28,7 @@ namespace {
 
 // The Janssen bin: 4500 discs in a 15 cm bin, a loose start listed row by row (the lattice-like
 // order a fill has), which settles: contacts form within a few hundred steps.
-SceneSpec janssen(int threads = 1) {
-  SceneSpec spec = load_scene(std::string(DEM_SOURCE_DIR) + "/reference_inputs/scenes/janssen_w15.toml");
-  spec.threads = threads;
-  return spec;
-}
+SceneSpec janssen(int threads = 1) { return dem::testing::janssen_bin(threads); }
 
 // The same fill in a seeded random order: a user's file listing the discs in any order.
 SceneSpec shuffled(SceneSpec spec, unsigned seed = 7) {
@@ -212,7 +209,7 @@ TEST(DiscOrder, OnsetSchemeResortsToo) {
   // would mix two discs' velocities in the dashpots' prediction.
   SceneSpec off = shuffled(janssen());
   off.scheme = Scheme::velocity_verlet_onset;
-  off.dt = 1.3e-5;  // under the scheme's bound for this bin, 1.32e-5 s
+  off.dt = 1.3e-5;  // forced (janssen_bin): 1.6x the scheme's bound for the bin's smallest discs
   off.contact = dem::testing::shared_law();
   off.disc_order = DiscOrder::off;
   SceneSpec on = off;

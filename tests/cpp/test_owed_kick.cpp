@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "physics/world.hpp"
+#include "janssen_bin.hpp"
 #include "scene/scene.hpp"
 
 using namespace dem;
@@ -19,8 +20,7 @@ namespace {
 // The Janssen bin (velocity Verlet, 4500 discs of several radii) under 100 g: its loose start
 // packs into contact within a few hundred steps.
 SceneSpec janssen(int threads) {
-  SceneSpec spec = load_scene(std::string(DEM_SOURCE_DIR) + "/reference_inputs/scenes/janssen_w15.toml");
-  spec.threads = threads;
+  SceneSpec spec = dem::testing::janssen_bin(threads);
   spec.gx *= 100;
   spec.gy *= 100;
   return spec;

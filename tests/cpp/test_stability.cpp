@@ -35,6 +35,43 @@ TEST(Stability, Eq19IsStableBeyondCentralDifferenceForThePaperContact) {
   EXPECT_GT(scheme_dt_bound(Scheme::paper_eq19, m, k, c), scheme_dt_bound(Scheme::paper_eq18, m, k, c));
 }
 
+TEST(Stability, TheLightestDiscOfAMaterialSetsItsBounds) {
+  // Every bound grows as sqrt(m): discs of 0.4 and 0.6 cm of one material are bounded by the
+  // 0.4 cm disc's modes (m* = m/2 for two of them, rotation mass m/2 for the four contacts),
+  // whatever the number of larger discs beside it.
+  PairProps p;  // Table 2 constants for rho g = 2.65 * 980
+  const double rg = 2.65 * 980.0;
+  p.kn = 3.64e4 * rg; p.ks = 0.91e4 * rg; p.eta_n = 15.3 * rg; p.eta_s = 7.65 * rg; p.mu = 0.5;
+  const auto world = [&](int large) {
+    World w;
+    w.n_materials = 1;
+    w.props = {p};
+    w.scheme = Scheme::velocity_verlet;
+    w.discs.add(0, 0, 0.4, 2.65, 0);
+    for (int k = 0; k < large; ++k) w.discs.add(2.0 + 1.5 * k, 0, 0.6, 2.65, 0);
+    return w;
+  };
+  const double m = 2.65 * M_PI * 0.4 * 0.4;
+  const double rot = scheme_dt_bound(Scheme::velocity_verlet, m / 2, 4 * p.ks, 4 * p.eta_s);
+  const double normal = scheme_dt_bound(Scheme::velocity_verlet, m / 2, p.kn, p.eta_n);
+  for (int large : {1, 9}) {
+    const StabilityReport rep = stability_report(world(large), {"sand"});
+    ASSERT_EQ(rep.pairs.size(), 1u);
+    EXPECT_DOUBLE_EQ(rep.pairs[0].m_eff, m / 2) << large << " large discs";
+    EXPECT_DOUBLE_EQ(rep.pairs[0].dt_normal, normal) << large << " large discs";
+    EXPECT_DOUBLE_EQ(rep.dt_rot_z4, rot) << large << " large discs";
+    EXPECT_DOUBLE_EQ(rep.dt_bound, std::min(rep.dt_single, rot)) << large << " large discs";
+  }
+  // The 0.6 cm discs alone: their own, larger bound.
+  World large = world(3);
+  large.discs = Discs{};
+  large.discs.add(0, 0, 0.6, 2.65, 0);
+  const double m6 = 2.65 * M_PI * 0.6 * 0.6;
+  const double rot6 = stability_report(large, {"sand"}).dt_rot_z4;
+  EXPECT_DOUBLE_EQ(rot6, scheme_dt_bound(Scheme::velocity_verlet, m6 / 2, 4 * p.ks, 4 * p.eta_s));
+  EXPECT_GT(rot6, 1.2 * rot);
+}
+
 // Paper 2's clusters: the bound of a whole bonded cluster from its step matrix.
 namespace {
 World two_bonded_discs(Scheme scheme, double gap_over_r) {

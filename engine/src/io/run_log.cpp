@@ -74,7 +74,7 @@ std::string run_header(const SceneSpec& s, const World& w, const StabilityReport
                 p.m_eff, p.omega0, p.zeta_n, tc, p.restitution, p.zeta_t, p.dt_normal, p.dt_tangential, p.dt_eq26,
                 p.dt_eq21, p.dt_rot_z4);
   }
-  h += format("  (m* in %s, omega0 in 1/s, t_c in s)\n", u.mass);
+  h += format("  (each row of the lightest discs of its materials; m* in %s, omega0 in 1/s, t_c in s)\n", u.mass);
   h += format("  stability bound of %s: %.4g s (single contact %.4g s, rotation on 4 contacts %.4g s), set by %s;"
               " dt/bound = %.3f\n", to_string(w.scheme), st.dt_bound, st.dt_single, st.dt_rot_z4, st.limited_by.c_str(),
               w.dt / st.dt_bound);

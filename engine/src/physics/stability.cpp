@@ -258,9 +258,16 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
   StabilityReport rep;
   const Discs& d = w.discs;
   const int nm = w.n_materials;
-  // Mean disc mass per material present among the discs.
-  std::vector<double> msum(nm, 0), cnt(nm, 0);
-  for (std::size_t i = 0; i < d.size(); ++i) { msum[d.material(i)] += d.mass(i); cnt[d.material(i)] += 1; }
+  // The lightest disc of each material present: every mode below is faster the lighter its disc
+  // (bound ~ sqrt(m)), so a fill of several sizes is bounded by its smallest discs. The mean
+  // disc's bound lets the Janssen column's small discs rattle with a period of two steps
+  // (benchmarks/README.md, "Stability").
+  std::vector<double> mmin(nm, std::numeric_limits<double>::infinity());
+  std::vector<bool> present(nm, false);
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    mmin[d.material(i)] = std::min(mmin[d.material(i)], d.mass(i));
+    present[d.material(i)] = true;
+  }
   std::vector<bool> obstacle_mat(nm, false);
   for (const auto& wl : w.geometry.walls) obstacle_mat[wl.material] = true;
   for (const auto& p : w.geometry.points) obstacle_mat[p.material] = true;
@@ -268,10 +275,10 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
   rep.dt_bound = std::numeric_limits<double>::infinity();
   rep.dt_rot_z4 = rep.dt_rot_z6 = std::numeric_limits<double>::infinity();
   for (int a = 0; a < nm; ++a) {
-    if (cnt[a] == 0) continue;
-    const double ma = msum[a] / cnt[a];
+    if (!present[a]) continue;
+    const double ma = mmin[a];
     for (int b = 0; b < nm; ++b) {
-      const bool disc_b = cnt[b] > 0 && b >= a;
+      const bool disc_b = present[b] && b >= a;
       if (!disc_b && !obstacle_mat[b]) continue;
       for (int kind = 0; kind < 2; ++kind) {  // 0: disc-disc, 1: disc-obstacle
         if (kind == 0 && !disc_b) continue;
@@ -281,7 +288,7 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
         r.name = names[a] + (kind == 0 ? "-" : "|") + names[b];
         r.p = w.pair(a, b);
         if (r.disc_disc) {
-          const double mb = msum[b] / cnt[b];
+          const double mb = mmin[b];
           r.m_eff = ma * mb / (ma + mb);
           r.m_t = 1.0 / (3.0 / ma + 3.0 / mb);  // 1/m + r^2/I = 3/m per disc
         } else {

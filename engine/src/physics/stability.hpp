@@ -21,7 +21,9 @@ double scheme_dt_bound(Scheme scheme, double m, double k, double c);
 struct PairReport {
   std::string name;          // e.g. "sand-sand", "sand-wall"
   bool disc_disc = true;
-  double m_eff = 0;          // m_i m_j / (m_i + m_j), or m_i against an obstacle
+  // Of the lightest disc of each material (the fastest modes): m_i m_j / (m_i + m_j), or m_i
+  // against an obstacle.
+  double m_eff = 0;
   double m_t = 0;            // tangential effective mass (rotation included): m/6 or m/3
   PairProps p;
   double omega0 = 0, zeta_n = 0;  // sqrt(k_n/m*), eta_n / (2 sqrt(m* k_n))
