@@ -20,6 +20,16 @@ ETA = ZETA * 2 * math.sqrt(M * 2 * KN) / 2     # each contact's: zeta of m v'' =
 # velocity Verlet on m x'' = -k x - c x': dt < (2 / w0) (sqrt(1 + zeta^2) - zeta)
 BOUND = 2 / math.sqrt(2 * KN / M) * (math.sqrt(1 + ZETA * ZETA) - ZETA)
 
+# both pairs (disc-disc, disc-wall) alike: the one disc touches only the walls
+PAIRS = "".join(f"""[[pairs]]
+materials = ["sand", "{other}"]
+kn = {KN!r}
+ks = 0.0
+eta_n = {ETA!r}
+eta_s = 0.0
+mu = 0.5
+""" for other in ("sand", "wall"))
+
 SCENE = f"""
 [scene]
 name = "squeezed_disc"
@@ -33,21 +43,7 @@ normal_spring = "overlap"
 [materials.sand]
 density = {RHO}
 [materials.wall]
-[[pairs]]
-materials = ["sand", "sand"]
-kn = {KN!r}
-ks = 0.0
-eta_n = {ETA!r}
-eta_s = 0.0
-mu = 0.5
-[[pairs]]
-materials = ["sand", "wall"]
-kn = {KN!r}
-ks = 0.0
-eta_n = {ETA!r}
-eta_s = 0.0
-mu = 0.5
-[[walls]]
+{PAIRS}[[walls]]
 name = "floor"
 from = [-5.0, 0.0]
 to = [5.0, 0.0]
