@@ -258,16 +258,13 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
   StabilityReport rep;
   const Discs& d = w.discs;
   const int nm = w.n_materials;
-  // The lightest disc of each material present: every mode below is faster the lighter its disc
-  // (bound ~ sqrt(m)), so a fill of several sizes is bounded by its smallest discs. The mean
-  // disc's bound lets the Janssen column's small discs rattle with a period of two steps
-  // (benchmarks/README.md, "Stability").
+  // The lightest disc of each material (infinite: no disc of it): every bound below grows with
+  // the disc's mass (as sqrt(m), as m when overdamped), so a fill of several sizes is bounded by
+  // its smallest discs. The mean disc's bound lets the Janssen column's small discs rattle with a
+  // period of two steps (benchmarks/README.md, "Fills of several sizes").
   std::vector<double> mmin(nm, std::numeric_limits<double>::infinity());
-  std::vector<bool> present(nm, false);
-  for (std::size_t i = 0; i < d.size(); ++i) {
-    mmin[d.material(i)] = std::min(mmin[d.material(i)], d.mass(i));
-    present[d.material(i)] = true;
-  }
+  for (std::size_t i = 0; i < d.size(); ++i) mmin[d.material(i)] = std::min(mmin[d.material(i)], d.mass(i));
+  const auto present = [&](int m) { return std::isfinite(mmin[m]); };
   std::vector<bool> obstacle_mat(nm, false);
   for (const auto& wl : w.geometry.walls) obstacle_mat[wl.material] = true;
   for (const auto& p : w.geometry.points) obstacle_mat[p.material] = true;
@@ -275,10 +272,10 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
   rep.dt_bound = std::numeric_limits<double>::infinity();
   rep.dt_rot_z4 = rep.dt_rot_z6 = std::numeric_limits<double>::infinity();
   for (int a = 0; a < nm; ++a) {
-    if (!present[a]) continue;
+    if (!present(a)) continue;
     const double ma = mmin[a];
     for (int b = 0; b < nm; ++b) {
-      const bool disc_b = present[b] && b >= a;
+      const bool disc_b = present(b) && b >= a;
       if (!disc_b && !obstacle_mat[b]) continue;
       for (int kind = 0; kind < 2; ++kind) {  // 0: disc-disc, 1: disc-obstacle
         if (kind == 0 && !disc_b) continue;
