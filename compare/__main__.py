@@ -3,16 +3,16 @@ python3 -m compare report --out DIR [--full]     the project's study: reference_
 python3 -m compare translate [--check]
 
 Runs scenes in the native engine and the real reference codes with the shared law and writes
-DIR/report.md, DIR/agreement.json and the PNGs. Exit 0 when every metric passes (with --mutants:
-and every mutant fails), 1 when any check fails (a failed reference run counts as a failure), 2
-for bad arguments or a scene a reference code cannot express (nothing is run then).
+DIR/report.md, DIR/agreement.json and the PNGs. Every metric agrees, disagrees or is
+inconclusive (compare/verdict.py); the exit code says which of the three the report is, 2 for bad
+input refused before any run.
 """
 import argparse
 import json
 import sys
 from pathlib import Path
 
-from . import mutants, pipeline, plan, report
+from . import mutants, pipeline, plan, report, sequential, verdict
 
 CODES = ("native",) + plan.REFERENCE_CODES
 
@@ -37,8 +37,15 @@ with these same options; the project's CI and full studies are such lists
 (reference_inputs/agreement/quick.list, full.list); a list line's --codes names the codes that line
 runs (a scene one reference code cannot express).
 
-exit codes: 0 agreement (with --mutants: and every mutant caught), 1 a check failed, 2 bad
-arguments or a scene a reference code cannot express (refused before any run)."""
+A statistical metric agrees when the 90 % interval of the difference (code vs native, relative to
+native's mean) lies inside its margin (--margin KIND=DELTA; defaults docs/compare.md), disagrees
+when its interval lies entirely outside, and is inconclusive otherwise (with the members that
+would decide it). A failed run, too few members or a native fill that did not rest is
+inconclusive, never disagree.
+
+exit codes: 0 agree (with --mutants: and every mutant caught, by a metric that disagrees), 1
+disagree (or a mutant that agrees), 2 bad input or a scene a code cannot express, or a dt above
+the engine's bound (refused before any run), 3 inconclusive (or a mutant left undecided)."""
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -80,6 +87,14 @@ def _common(p) -> None:
                    help="read back every run of OUT that finished (result.json ok) from byte-identical translated "
                         "inputs instead of running it again; failed, missing or changed runs run (a long study "
                         "stopped or timed out midway continues)")
+    p.add_argument("--until-decided", action="store_true",
+                   help="add members in batches (as many as the first) to every ensemble scene with an "
+                        "inconclusive statistical metric until each agrees or disagrees, --max-members or --budget "
+                        "(the level split over the planned looks; compare/sequential.py)")
+    p.add_argument("--budget", type=float, default=60.0, metavar="MINUTES",
+                   help="with --until-decided: no new look that would end after this many minutes (default 60)")
+    p.add_argument("--max-members", type=int, default=0, metavar="N",
+                   help=f"with --until-decided: members per code at most (default {sequential.DEFAULT_MAX_MEMBERS})")
     p.add_argument("--jobs", type=int, default=1,
                    help="ensemble members run at once (default 1; each member's codes run one after another, "
                         "every run single-threaded: up to one job a core)")
@@ -98,6 +113,10 @@ def main(argv=None) -> int:
     codes = ("native",) + tuple(c for c in codes if c != "native")    # native, the reference, always runs
     if a.jobs < 1:
         print(f"--jobs: {a.jobs} is not a count of parallel members (give 1 or more)", file=sys.stderr)
+        return 2
+    if a.max_members < 0 or a.max_members == 1 or a.budget <= 0:
+        print("--max-members: give 2 or more" if a.max_members < 0 or a.max_members == 1 else
+              f"--budget: {a.budget:g} is not a number of minutes (give more than 0)", file=sys.stderr)
         return 2
     base = plan.Options(profile="full" if a.full else "quick", timeout=a.timeout, jobs=a.jobs,
                         resume=a.resume)
@@ -130,7 +149,10 @@ def main(argv=None) -> int:
     log = lambda m: print(m, flush=True)  # noqa: E731
     for old in a.out.glob("*.png") if a.out.is_dir() else ():   # no pictures of an earlier scene
         old.unlink()
-    rep = pipeline.run(entries, a.out, codes, log=log, plans=plans)
+    if a.until_decided:
+        rep = sequential.run(plans, a.out, codes, log, a.budget, a.max_members or sequential.DEFAULT_MAX_MEMBERS)
+    else:
+        rep = pipeline.run(entries, a.out, codes, log=log, plans=plans)
     rep["profile"] = base.profile
     if any(p.options.native_law == "scene" for p in plans):
         from . import attribution
@@ -138,12 +160,22 @@ def main(argv=None) -> int:
     if a.mutants:
         rep["mutants"] = run_mutants(plans, rep, a.out, codes, log, a.mutant)
     report.write(rep, a.out)
-    n_fail = sum(not m["pass"] for m in rep["metrics"])
-    verdict = rep["passed"] and (not a.mutants or rep["mutants"]["all_caught"])
-    print(f"{a.out / 'report.md'}: {'PASS' if rep['passed'] else 'FAIL'} "
-          f"({len(rep['metrics']) - n_fail} of {len(rep['metrics'])} metrics within tolerance)"
+    counts = {v: sum(m["verdict"] == v for m in rep["metrics"]) for v in verdict.ORDER}
+    print(f"{a.out / 'report.md'}: {rep['verdict'].upper()} ({counts['agree']} agree, {counts['disagree']} disagree, "
+          f"{counts['inconclusive']} inconclusive of {len(rep['metrics'])} metrics)"
           + (f"; mutants caught: {rep['mutants']['n_caught']} of {rep['mutants']['n_applicable']}" if a.mutants else ""))
-    return 0 if verdict else 1
+    return exit_code(rep, a.mutants)
+
+
+def exit_code(rep: dict, with_mutants: bool) -> int:
+    """0 agree (with --mutants: and every mutant caught), 1 disagree (or a mutant that agrees: a
+    blind spot), 3 inconclusive (or a mutant left undecided)."""
+    if rep["verdict"] != verdict.AGREE or not with_mutants:
+        return verdict.EXIT[rep["verdict"]]
+    live = [r for r in rep["mutants"]["rows"] if r["applicable"] and not r["caught"]]
+    if not live:
+        return 0
+    return 1 if any(r.get("verdict") == verdict.AGREE for r in live) else verdict.EXIT[verdict.INCONCLUSIVE]
 
 
 def with_set(entries, assignments, folder: Path):
@@ -173,10 +205,12 @@ def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dic
                          "caught_physically": False, "metrics": []})
             log(f"mutant {mu.label}: changes nothing in these scenes (left out)")
             continue
-        rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=plans)
+        rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=plans,
+                           looks=baseline.get("looks", {}).get("planned", 1))
         c = mutants.caught(baseline, rep)
         rows.append({"mutant": mu.name, "code": mu.code, "applicable": True, **c})
-        log(f"mutant {mu.label}: {'caught by ' + ', '.join(sorted({r['metric'] for r in c['metrics']})) if c['caught'] else 'NOT CAUGHT'}")
+        log(f"mutant {mu.label}: {rep['verdict']}"
+            + (f", caught by {', '.join(sorted({r['metric'] for r in c['metrics']}))}" if c["caught"] else ": NOT CAUGHT"))
     live = [r for r in rows if r["applicable"]]
     n = sum(r["caught"] for r in live)
     res = {"rows": rows, "n_caught": n, "n_applicable": len(live),

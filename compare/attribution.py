@@ -43,7 +43,7 @@ def attribute(plans, report: dict, out: Path, log=print) -> list:
     for p in plans:
         if p.options.native_law != "scene":
             continue
-        failing = sorted({m["metric"] for m in report["metrics"] if m["scene"] == p.name and not m["pass"]
+        failing = sorted({m["metric"] for m in report["metrics"] if m["scene"] == p.name and m["verdict"] == "disagree"
                           and not m["metric"].startswith("translation constants")})
         diff = {k: v for k, v in SHARED_VARIANT.items() if p.resolved["contact"].get(k) != v}
         entry = {"scene": p.name, "failing": len(failing), "failing_metrics": failing,
@@ -57,7 +57,7 @@ def attribute(plans, report: dict, out: Path, log=print) -> list:
             log(f"attribution {p.name}: native with {k} = {v} ...")
             rep = pipeline.run([], out, report["codes"].keys(), log=log, mutation=sw, plans=[p],
                                check_translation=False)
-            still = sorted({m["metric"] for m in rep["metrics"] if not m["pass"]})
+            still = sorted({m["metric"] for m in rep["metrics"] if m["metric"] in failing and m["verdict"] != "agree"})
             entry["rows"].append({"option": f"{k} = {v}", "failing": len(still), "still_failing": still})
         best = min(entry["rows"], key=lambda r: r["failing"]) if entry["rows"] else None
         if best and best["failing"] == 0:

@@ -12,6 +12,7 @@ import numpy as np
 from . import calibration as cal
 from .common import Case
 from .study import failures, metric
+from .verdict import unjudged
 
 
 def _worst(measured: dict, target: dict, tol: dict) -> float:
@@ -48,8 +49,7 @@ def judge(name: str, case: Case, results: dict) -> tuple[list, dict]:
     for c in results:
         mname = f"collision against the reference ({c})"
         if c not in ok:
-            metrics.append(metric(mname, name, {}, "calibration.tolerances", False,
-                                  f"run failed: {row['codes'][c]['failed']}"))
+            metrics.append(unjudged(mname, name, f"run failed: {row['codes'][c]['failed']}"))
             continue
         bad = [f"{q} {ok[c][q]:.7g} vs {ref[q]:.7g} (tol {tol[q]:.2g})" for q, p in row["pass"][c].items() if not p]
         metrics.append(metric(mname, name, {"max_diff_over_tolerance": _worst(ok[c], ref, tol)},
@@ -60,8 +60,7 @@ def judge(name: str, case: Case, results: dict) -> tuple[list, dict]:
             continue
         mname = f"collision ({c} vs native)"
         if c not in ok or "native" not in ok:
-            metrics.append(metric(mname, name, {}, f"{cal.CODE_REL:g} x scale", False,
-                                  "run failed: " + row["failures"]))
+            metrics.append(unjudged(mname, name, "run failed: " + row["failures"]))
             continue
         agree = row["agree"][f"{c} vs native"]
         bad = [f"{q} {ok[c][q]:.9g} vs {ok['native'][q]:.9g}" for q, p in agree.items() if not p]

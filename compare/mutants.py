@@ -103,19 +103,31 @@ def mutations(codes, names=None) -> list[Mutation]:
 
 
 def caught(baseline: dict, mutant_report: dict) -> dict:
-    """Which metrics the mutant failed (that the baseline passed), with their margins."""
+    """The metrics that say disagree under the mutant where the baseline did not, with how far off
+    they are; and the mutant's measured effect on every statistical metric (its estimate and
+    interval against the margin), whatever its verdict."""
     base = {(m["scene"], m["metric"]): m for m in baseline["metrics"]}
-    rows = []
+    rows, effects = [], []
     for m in mutant_report["metrics"]:
         b = base.get((m["scene"], m["metric"]))
-        if not m["pass"] and (b is None or b["pass"]):
+        if m["verdict"] == "disagree" and (b is None or b["verdict"] != "disagree"):
             rows.append({"scene": m["scene"], "metric": m["metric"], "by": margin(m), "note": m.get("note", "")})
-    physical = [r for r in rows if not r["metric"].startswith("translation constants")]
-    return {"caught": bool(rows), "caught_physically": bool(physical), "metrics": rows}
+        if m.get("kind") == "statistical" and "stat" in m:
+            effects.append({"scene": m["scene"], "metric": m["metric"], "verdict": m["verdict"],
+                            "estimate": m["stat"].get("estimate"), "ci": m.get("ci"), "margin": m["margin"],
+                            "relative": m.get("relative", True)})
+    physical = [r for r in rows if not r["metric"].startswith("translation ")]
+    return {"caught": bool(rows), "caught_physically": bool(physical), "metrics": rows, "effects": effects,
+            "verdict": mutant_report.get("verdict")}
 
 
 def margin(m: dict) -> float:
-    """How many tolerances the metric is off (value / tolerance, or diff / critical)."""
+    """How many tolerances (or margins) the metric is off: value / tolerance, or for a statistical
+    metric the distance of its interval's nearer end from zero over the margin."""
+    if m.get("kind") == "statistical" and m.get("ci"):
+        lo, hi = m["ci"]
+        near = 0.0 if lo <= 0 <= hi else min(abs(lo), abs(hi))
+        return near / m["margin"]
     v = m.get("values") or {}
     if "max_diff_over_critical" in v:
         return float(v["max_diff_over_critical"])

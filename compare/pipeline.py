@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from . import collision_judge
-from . import janssen, stats, study
+from . import janssen, preflight, stats, study, verdict
 from .common import Case, Result, scene_material_index
 from .plan import Entry, Plan, PlanError, codes_of, make_plan, member_case, refusals, start_discs
 
@@ -93,8 +93,8 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
         pcase = case_for(c, case, plan, mutation)
         pr = _probe_cached(probe, c, pcase, out, plan.options.timeout)
         if pr.get("status") != "ok":
-            metrics.append(_metric(f"translation constants read back ({c})", plan.name, {}, 1e-9, False,
-                                   f"probe failed: {pr.get('reason', '')}"))
+            metrics.append(verdict.unjudged(f"translation constants read back ({c})", plan.name,
+                                            f"probe failed: {pr.get('reason', '')}"))
             continue
         rows = probe.compare_constants(expected, pr)
         bad = [r for r in rows if not r["pass"]]
@@ -203,8 +203,6 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
             for c, runs in per.items()}
     keys = [(w["name"], "normal") for w in walls] + \
            [(w["name"], "shear") for w in walls if w["group"].startswith("side")]
-    n_tests = len(keys) * (len(codes) - 1)
-    alpha = stats.FAMILY_ALPHA / max(n_tests, 1)
     metrics, summary = [], {}
     for c in codes:
         summary[c] = {f"{w}.{k}": stats.mean_se([t[w][k] for t in tots[c] if t]) for w, k in keys}
@@ -215,11 +213,16 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
         for w, k in keys:
             name = f"static {w} {k} total, members from the scene's start ({c} vs native)"
             if summary[c]["failed"] or summary["native"]["failed"]:
-                metrics.append(_metric(name, plan.name, {}, "", False, "failed members: " + "; ".join(
+                metrics.append(verdict.unjudged(name, plan.name, "failed members: " + "; ".join(
                     (summary[c]["failed"] + summary["native"]["failed"])[:2]), "statistical"))
                 continue
-            t = stats.compare_means(summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], alpha)
-            metrics.append(_stat_metric(name, plan.name, t, summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"], c))
+            if plan.options.metrics and "wall_load" not in plan.options.metrics:
+                continue
+            st = stats.difference([t[w][k] if t else None for t in tots["native"]],
+                                  [t[w][k] if t else None for t in tots[c]], relative=True, paired=True)
+            a, b = summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"]
+            metrics.append(verdict.statistical(name, plan.name, st, "wall_load", plan.options,
+                                               {"native": list(a[:2]), c: list(b[:2])}))
     if np.linalg.norm(plan.shared["gravity"]) > 0:       # every member at rest carries its weight
         for c in codes:
             worst = None
@@ -266,24 +269,13 @@ def weight_metrics(name: str, results: dict, case: Case, resolved: dict) -> list
     for c, r in results.items():
         mname = f"weight carried by the walls at rest ({c} vs rho pi r^2 g)"
         if not r.ok:
-            out.append(_metric(mname, name, {}, TOL_WEIGHT, False, f"run failed: {r.reason}"))
+            out.append(verdict.unjudged(mname, name, f"run failed: {r.reason}"))
             continue
         got = _with_weight(study.wall_totals(r), walls, case)["all walls"]["weight"]
         rel = abs(got - weight) / weight if weight else float("nan")
         out.append(_metric(mname, name, {"walls": got, "weight": weight, "rel_diff": rel}, TOL_WEIGHT,
                            rel <= TOL_WEIGHT, "" if rel <= TOL_WEIGHT else "not at rest, or a wrong density or gravity"))
     return out
-
-
-def _stat_metric(name, scene, t, a, b, code) -> dict:
-    vals = {"native": [a[0], a[1]], code: [b[0], b[1]]}
-    if "p" in t:
-        vals.update({"p": t["p"], "detectable_rel": t["detectable_rel"]})
-    tol = (f"Welch, level {t['alpha']:.2g}" if "alpha" in t else "")
-    note = t.get("reason", "")
-    if "detectable_rel" in t:
-        note = (note + "; " if note else "") + f"detects {abs(t['detectable_rel']):.1%} (80 % power)"
-    return _metric(name, scene, vals, tol, t["pass"], note, "statistical")
 
 
 JANSSEN_SERIES = 0.05   # [s] wall-force samples of a Janssen member (the mobilisation before the lowering)
@@ -312,10 +304,11 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
         ok = [m for m in records[c] if m.get("status") == "ok"]
         fails = [m["reason"] for m in records[c] if m.get("status") != "ok"]
         if fails or len(ok) < 2:
-            metrics.append(_metric(f"Janssen fit ({c})", plan.name, {}, "", False,
-                                   "failed members: " + "; ".join(fails[:2]) if fails else "fewer than 2 members"))
+            metrics.append(verdict.unjudged(f"Janssen fit ({c})", plan.name,
+                                            "failed members: " + "; ".join(fails[:2]) if fails else "fewer than 2 members"))
             continue
         fits[c] = f = janssen.ensemble_fit(ok)
+        f["members"] = len(ok)
         chk = f["checks"]
         bal = max(abs(b) for b in chk["balance"])
         metrics.append(_metric(f"Janssen column: floor force + wall friction = weight, every member ({c})",
@@ -329,24 +322,8 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
                                                f"{f['bin_width']:g} cm"))
     if "native" in fits:
         for c, f in fits.items():
-            if c == "native":
-                continue
-            cmp = janssen.compare_fits(fits["native"], f)
-            worst_key = max(cmp["params"], key=lambda k: abs(cmp["params"][k]["diff"]) / cmp["params"][k]["tol"]
-                            if cmp["params"][k]["tol"] > 0 else math.inf)
-            v = cmp["params"][worst_key]
-            worst = abs(v["diff"]) / v["tol"] if v["tol"] > 0 else math.inf
-            off = [k for k, q in cmp["params"].items() if not q["agree"]]
-            note = "; ".join(x for x in (
-                "" if cmp["r2_ok"] else (f"r^2 {cmp['r2'][0]:.3f} (native), {cmp['r2'][1]:.3f} ({c}): a fit counts "
-                                         f"only with r^2 >= {janssen.R2_MIN}"),
-                "outside the combined interval: " + ", ".join(
-                    f"{k} {cmp['params'][k]['a']:.4g} vs {cmp['params'][k]['b']:.4g} (+- {cmp['params'][k]['tol']:.2g})"
-                    for k in off) if off else "") if x)
-            metrics.append(_metric(f"Janssen p_inf, lambda, z0, K, mu_w,eff within the combined 95 % intervals, "
-                                   f"both fits r^2 >= {janssen.R2_MIN} ({c} vs native)", plan.name,
-                                   {"max_diff_over_interval": worst, "worst": worst_key, "outside": off,
-                                    "r2": cmp["r2"]}, "combined 95 % interval", cmp["agree"], note, "statistical"))
+            if c != "native":
+                metrics += janssen_metrics(plan, fits["native"], f, c)
     table += ["| code | members | bin [cm] | points | r² | p_inf | lambda [cm] | K | mu_w,eff | "
               "mobilised F_t/(mu_w F_n): before lowering, after (all; top half) | balance (max) | wall time / member [s] |",
               "|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -376,11 +353,38 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png, "fits": summary}
 
 
+JANSSEN_JUDGED = ("K", "lambda", "mu_w_eff")   # the fit's parameters with a margin (compare/margins.py)
+
+
+def janssen_metrics(plan: Plan, a: dict, b: dict, code: str) -> list:
+    """Each judged parameter of code's fit against the native fit: relative difference b/a - 1 with
+    the delta-method standard error of the two fits' (curve_fit) errors; a fit below r^2_min on
+    either side leaves the parameters inconclusive (the profile is not Janssen's)."""
+    out = []
+    for k in JANSSEN_JUDGED:
+        name = f"Janssen {k} ({code} vs native)"
+        if min(a["r2"], b["r2"]) < janssen.R2_MIN:
+            out.append(verdict.unjudged(name, plan.name, f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a "
+                                                         f"fit counts only with r^2 >= {janssen.R2_MIN}", "statistical"))
+            continue
+        ra = b[k] / a[k]
+        se = math.hypot(b["se"][k], ra * a["se"][k]) / abs(a[k])
+        st = {"type": "t", "relative": True, "n": [a.get("members", 0), b.get("members", 0)], "estimate": ra - 1,
+              "se": se, "df": FIT_DF, "design": "fit", "mean": [a[k], b[k]]}
+        out.append(verdict.statistical(name, plan.name, st, "janssen", plan.options,
+                                       {"native": [a[k], a["se"][k]], code: [b[k], b["se"][k]]},
+                                       "ensemble-averaged profile's fit, standard errors from its covariance"))
+    return out
+
+
+FIT_DF = 1e6   # a fit's parameter interval is normal (curve_fit's covariance, many bins)
+
+
 def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
     per = ensemble_runs(plan, codes, out, mutation)
     per_code = {c: [(r, study.discharge_measures(r, case) if r.ok else {}) for r, case in runs]
                 for c, runs in per.items()}
-    metrics, summary = study.discharge_compare(plan.name, per_code)
+    metrics, summary = study.discharge_compare(plan.name, per_code, plan.options)
     if mutation is None:
         study.save_series(out / "series.json", per_code)
     return metrics, summary
@@ -397,7 +401,7 @@ def shear_box(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
     per = ensemble_runs(plan, codes, out, mutation)
     metrics, detail = shear.judge(plan.name, {c: [r for r, _ in runs] for c, runs in per.items()},
                                   float(plan.shared["shear"]["max_strain"]),
-                                  float(plan.shared["shear"]["sample_strain"]))
+                                  float(plan.shared["shear"]["sample_strain"]), plan.options)
     detail["dt"], detail["settle"] = plan.dt, plan.settle
     if mutation is None and detail["curves"]:
         detail["png"] = f"shear_{plan.name}.png"
@@ -430,13 +434,16 @@ def plans_of(entries: list[Entry], codes) -> list[Plan]:
         names.add(p.name)
         plans.append(p)
         refused += refusals(p, codes_of(p, codes))
+        if not refused:        # the engine's own refusal (dt above its bound), before any reference code
+            why = preflight.refusal(p, member_case(p, 0))
+            refused += [why] if why else []
     if refused:
         raise PlanError("\n".join(refused))
     return plans
 
 
 def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=None,
-        check_translation: bool = True) -> dict:
+        check_translation: bool = True, looks: int = 1) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     plans = plans if plans is not None else plans_of(entries, codes)
     report = {"codes": {}, "metrics": [], "scenes": [], "calibration": [], "static": [], "discharge": {},
@@ -457,8 +464,7 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
         report["metrics"] += metrics
         report["scenes"].append({"scene": str(p.entry.scene), "name": p.name, "kind": p.kind,
                                  "members": p.members, "dt": p.dt, "duration": p.duration,
-                                 "native_law": p.options.native_law, "elapsed_s": time.monotonic() - t1,
-                                 "passed": all(x["pass"] for x in metrics)})
+                                 "native_law": p.options.native_law, "elapsed_s": time.monotonic() - t1})
         if p.kind == "collision":
             report["calibration"].append(detail)
         elif p.kind == "discharge":
@@ -470,5 +476,16 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
         else:
             report["static"].append(detail)
     report["elapsed_s"] = time.monotonic() - t0
-    report["passed"] = bool(report["metrics"]) and all(m["pass"] for m in report["metrics"])
+    return judged(report, looks)
+
+
+def judged(report: dict, looks: int = 1) -> dict:
+    """Every metric judged (the statistical ones against their margins, the disagree level split
+    over the report's statistical metrics and ``looks``), then each scene's and the report's verdict."""
+    verdict.finalize(report["metrics"], looks)
+    for sc in report["scenes"]:
+        sc["verdict"] = verdict.combine(m["verdict"] for m in report["metrics"] if m["scene"] == sc["name"])
+        sc["passed"] = sc["verdict"] == verdict.AGREE
+    report["verdict"] = verdict.combine(m["verdict"] for m in report["metrics"])
+    report["passed"] = report["verdict"] == verdict.AGREE
     return report

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import margins
 from .common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
 KINDS = ("collision", "static", "janssen", "discharge", "shear")
@@ -70,6 +71,8 @@ class Options:
     jobs: int = 1                # ensemble members run at once (each member's codes one after another)
     resume: bool = False         # reuse finished runs whose translated inputs are unchanged
     codes: tuple = ()            # a list line's --codes: the codes this entry runs (empty: the command's)
+    margins: dict = dataclasses.field(default_factory=dict)   # --margin KIND=DELTA overrides (compare/margins.py)
+    metrics: tuple = ()          # --metrics: the statistical metric kinds judged (empty: all of the kind's)
 
     def resolved_members(self) -> int:
         return self.members or PROFILE_DEFAULTS[self.profile]["members"]
@@ -90,6 +93,11 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--settle", type=float, default=0.0,
                     help="[s] discharge: settling before the opening; static frozen: the native fill (default 1)")
     ap.add_argument("--perturb", type=float, default=1e-3, help="[cm] members' jitter of x and y (default 1e-3)")
+    ap.add_argument("--margin", action="append", default=[], metavar="KIND=DELTA",
+                    help="the margin of agreement of one metric kind (repeatable): " + ", ".join(margins.MARGINS)
+                         + " (default: quick 10 %% / full 5 %% for flow rate, discs out and wall loads; docs/compare.md)")
+    ap.add_argument("--metrics", default="", metavar="KIND,KIND",
+                    help="judge only these statistical metric kinds of the scene (default: all of its kind)")
     ap.add_argument("--native-law", choices=("shared", "scene"), default="shared",
                     help="scene: the native engine runs the scene's own contact law against the references' "
                          "shared law (a failing metric is then attributed to a law option)")
@@ -100,6 +108,15 @@ def options_from(ns: argparse.Namespace, base: Options) -> Options:
     for f in ("kind", "start", "members", "dt", "duration", "settle", "perturb"):
         setattr(o, f, getattr(ns, f))
     o.native_law = ns.native_law
+    try:
+        o.margins = {**base.margins, **margins.parse(ns.margin)}
+    except ValueError as e:
+        raise PlanError(str(e)) from None
+    kinds = tuple(k.strip() for k in ns.metrics.split(",") if k.strip())
+    bad = [k for k in kinds if k not in margins.MARGINS]
+    if bad:
+        raise PlanError(f"--metrics: unknown {', '.join(bad)} (known: {', '.join(margins.MARGINS)})")
+    o.metrics = kinds or base.metrics
     for f, lo in (("members", 0), ("dt", 0.0), ("duration", 0.0), ("settle", 0.0), ("perturb", 0.0)):
         if getattr(o, f) < lo:
             raise PlanError(f"--{f}: must be >= {lo}, got {getattr(o, f)!r}")

@@ -163,6 +163,57 @@ def plot_flow_profiles(summary: dict, png: Path, name: str) -> None:
     _savefig(fig, png)
 
 
+VERDICT_COLORS = {"agree": "tab:green", "disagree": "tab:red", "inconclusive": "tab:gray"}
+
+
+def plot_forest(metrics: list, png: Path, scene: str) -> bool:
+    """Every statistical metric of a scene: its agree interval (thick) and disagree interval (thin)
+    of the difference against its margin band, coloured by verdict. False when there is none."""
+    rows = [m for m in metrics if m["scene"] == scene and m.get("kind") == "statistical" and "margin" in m]
+    if not rows:
+        return False
+    fig, ax = plt.subplots(figsize=(8.5, 0.9 + 0.36 * len(rows)))
+    scale = lambda m: 100.0 if m.get("relative", True) else 1.0  # noqa: E731 - % for relative margins
+    for k, m in enumerate(rows):
+        y, sc, col = len(rows) - 1 - k, scale(m), VERDICT_COLORS[m["verdict"]]
+        ax.fill_betweenx([y - 0.4, y + 0.4], -m["margin"] * sc, m["margin"] * sc, color="0.9", lw=0)
+        ci, cid = m.get("ci") or [np.nan] * 2, m.get("ci_disagree") or [np.nan] * 2
+        if all(np.isfinite(ci)):
+            ax.plot([cid[0] * sc, cid[1] * sc], [y, y], color=col, lw=1)
+            ax.plot([ci[0] * sc, ci[1] * sc], [y, y], color=col, lw=4, solid_capstyle="butt")
+            est = m["stat"].get("estimate", np.nan) * sc
+            ax.plot([est], [y], "|", color="k", ms=10)
+        else:
+            ax.text(0, y, "not judged: " + (m.get("note") or "no interval")[:70], ha="center", va="center", fontsize=7)
+    ax.axvline(0, color="k", lw=0.6)
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels([_short(m) for m in reversed(rows)], fontsize=7)
+    ax.set_xlabel("difference from native: % of native's mean (jam fraction: absolute x 100)")
+    ax.set_title(f"{scene}: each metric's 90 % interval (thick) and disagree interval (thin)\n"
+                 "against its margin (grey); green agree, red disagree, grey inconclusive", fontsize=9)
+    ax.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    _savefig(fig, png)
+    return True
+
+
+def _short(m: dict) -> str:
+    name = m["metric"].replace("discharge ", "").replace(" during flow", "").replace(", cumulative", "")
+    return (name[:58] + "…" if len(name) > 59 else name) + f"  [{m['verdict']}]"
+
+
+def _interval(m: dict) -> str:
+    """The metric's interval and margin as the report prints them."""
+    if m.get("kind") != "statistical" or "margin" not in m:
+        return ""
+    ci = m.get("ci") or [float("nan")] * 2
+    if not all(math.isfinite(x) for x in ci):
+        return "n/a"
+    if m.get("relative", True):
+        return f"[{ci[0]:+.1%}, {ci[1]:+.1%}] in ±{m['margin']:.0%}"
+    return f"[{ci[0]:+.3f}, {ci[1]:+.3f}] in ±{m['margin']:g}"
+
+
 def _ms(v) -> str:
     """(mean, se, n) as 'mean ± se (n)'."""
     if isinstance(v, (list, tuple)) and len(v) == 3:
@@ -196,6 +247,27 @@ METHOD = [
 ]
 
 
+def _verdict(v: str) -> str:
+    return v if v == "agree" else f"**{v}**"
+
+
+def headline(report: dict) -> list:
+    """The report's first lines: the verdict, the count of each, the margins used."""
+    ms = report["metrics"]
+    n = {v: sum(m["verdict"] == v for m in ms) for v in ("agree", "disagree", "inconclusive")}
+    margins = sorted({(m["margin_kind"], m["margin"]) for m in ms if m.get("kind") == "statistical" and "margin_kind" in m})
+    L = [f"**Overall: {report['verdict'].upper()}** — {n['agree']} agree, {n['disagree']} disagree, "
+         f"{n['inconclusive']} inconclusive of {len(ms)} metrics; {report.get('elapsed_s', float('nan')):.0f} s."]
+    if margins:
+        L.append("Margins: " + ", ".join(f"{k} ±{d:.0%}" if k != "jam_fraction" else f"{k} ±{d:g}" for k, d in margins)
+                 + " (a statistical metric agrees when its 90 % interval lies inside its margin).")
+    lk = report.get("looks")
+    if lk:
+        L.append(f"Sequential: {lk['done']} of at most {lk['planned']} looks (each at alpha / {lk['planned']}); "
+                 f"members at the end: " + ", ".join(f"{k} {v}" for k, v in lk["history"][-1]["members"].items()) + ".")
+    return L
+
+
 def write(report: dict, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     pngs = []
@@ -223,18 +295,20 @@ def write(report: dict, out: Path) -> None:
             plot_flow_profiles(report["discharge"][name], out / f"flow_profiles_{name}.png", name)
             pngs.append((f"Time-averaged wall profiles during flow, {name}", f"flow_profiles_{name}.png"))
 
-    agreement = {"profile": report.get("profile"), "codes": report["codes"], "passed": report["passed"],
-                 "scenes": report.get("scenes", []), "metrics": report["metrics"]}
+    for sc in report.get("scenes", []):
+        if plot_forest(report["metrics"], out / f"verdict_{sc['name']}.png", sc["name"]):
+            pngs.append((f"Each metric's interval against its margin, {sc['name']}", f"verdict_{sc['name']}.png"))
+    agreement = {"verdict": report["verdict"], "profile": report.get("profile"), "codes": report["codes"],
+                 "passed": report["passed"], "scenes": report.get("scenes", []), "metrics": report["metrics"]}
+    if report.get("looks"):
+        agreement["looks"] = report["looks"]
     if report.get("mutants"):
         agreement["mutants"] = report["mutants"]
     if report.get("attribution"):
         agreement["attribution"] = report["attribution"]
     write_text_atomic(out / "agreement.json", json.dumps(agreement, indent=1, default=float) + "\n")
 
-    n_pass = sum(m["pass"] for m in report["metrics"])
-    L = [f"# Agreement report ({report.get('profile', 'quick')} profile)", "",
-         f"**Overall: {'PASS' if report['passed'] else 'FAIL'}** — {n_pass} of {len(report['metrics'])} metrics "
-         f"within tolerance; {report.get('elapsed_s', float('nan')):.0f} s."]
+    L = [f"# Agreement report ({report.get('profile', 'quick')} profile)", ""] + headline(report)
     mu = report.get("mutants")
     if mu:
         L.append(f"**Mutants: {mu['n_caught']} of {mu['n_applicable']} caught** "
@@ -246,22 +320,30 @@ def write(report: dict, out: Path) -> None:
               "|---|---|---|---|---|---|---|---|"]
         for s in report["scenes"]:
             L.append(f"| {s['name']} | {s['kind']} | {s['members']} | {s['dt']:g} | {s['duration']:g} | "
-                     f"{s['native_law']} | {s['elapsed_s']:.0f} | {'PASS' if s['passed'] else '**FAIL**'} |")
-    L += ["", "## Agreement table", "", "| scene | metric | values | tolerance | pass | note |", "|---|---|---|---|---|---|"]
+                     f"{s['native_law']} | {s['elapsed_s']:.0f} | {_verdict(s['verdict'])} |")
+    L += ["", "## Agreement table", "",
+          "| scene | metric | values | tolerance or margin | 90 % interval of the difference | verdict | note |",
+          "|---|---|---|---|---|---|---|"]
     for m in report["metrics"]:
-        L.append(f"| {m['scene']} | {m['metric']} | {_fmt(m['values'])} | {_fmt(m['tolerance'])} | "
-                 f"{'PASS' if m['pass'] else '**FAIL**'} | {m['note']} |")
+        need = m.get("members_to_decide")
+        note = "; ".join(x for x in (m["note"], f"about {need} members per code would decide it" if need else "") if x)
+        L.append(f"| {m['scene']} | {m['metric']} | {_fmt(m['values'])} | {_fmt(m['tolerance'])} | {_interval(m)} | "
+                 f"{_verdict(m['verdict'])} | {note} |")
     if mu:
         L += ["", "## Mutants (one constant of one reference code's translation changed)", "",
-              "| mutant | code | caught | by a physical metric | metrics that caught it (tolerances off) |",
-              "|---|---|---|---|---|"]
+              "A mutant is caught when a metric says disagree under it (the baseline agreeing there). Its effect on "
+              "each statistical metric is its interval of the difference from native, against the margin.", "",
+              "| mutant | code | verdict | caught | by a physical metric | metrics that disagree (tolerances or margins "
+              "off) | effect on the statistical metrics |", "|---|---|---|---|---|---|---|"]
         for r in mu["rows"]:
             by = "; ".join(f"{x['scene']}: {x['metric']} ({_fmt(x['by'])})" for x in r["metrics"][:6])
             if not r.get("applicable", True):
-                L.append(f"| {r['mutant']} | {r['code']} | n/a: changes nothing in these scenes | | |")
+                L.append(f"| {r['mutant']} | {r['code']} | | n/a: changes nothing in these scenes | | | |")
                 continue
-            L.append(f"| {r['mutant']} | {r['code']} | {'yes' if r['caught'] else '**NO**'} | "
-                     f"{'yes' if r['caught_physically'] else 'no'} | {by} |")
+            eff = "; ".join(f"{e['metric']}: {_interval(dict(e, kind='statistical'))} {e['verdict']}"
+                            for e in r.get("effects", [])[:8])
+            L.append(f"| {r['mutant']} | {r['code']} | {r.get('verdict', '')} | {'yes' if r['caught'] else '**NO**'} | "
+                     f"{'yes' if r['caught_physically'] else 'no'} | {by} | {eff} |")
     if report.get("attribution"):
         L += ["", "## Attribution: which law option closes a failing metric", "",
               "| scene | native law option switched to the shared value | metrics failing before | after |",

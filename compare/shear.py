@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import stats
+from . import stats, verdict
 from .common import CaseError
 
 WINDOW = 0.011           # strain over which the windowed peak averages tau/sigma
@@ -203,16 +203,13 @@ def label(key: str) -> str:
     return LABELS.get(key, key)
 
 
-def judge(name: str, per_code: dict, max_strain: float, sample_strain: float, family_alpha: float | None = None
-          ) -> tuple[list, dict]:
+def judge(name: str, per_code: dict, max_strain: float, sample_strain: float, options) -> tuple[list, dict]:
     """per_code: code -> [Result] over the members (Result.extra["shear"] from read_outputs).
     Returns the metrics and the detail for the report (ensemble means, curves)."""
     from .study import metric
-    family_alpha = stats.FAMILY_ALPHA if family_alpha is None else family_alpha
     keys = ["sigma0", "peak_windowed"] + [band_key(lo, hi) for lo, hi in bands(max_strain)] + ["dilation"]
     codes = list(per_code)
     refs = [c for c in codes if c != "native"]
-    alpha = family_alpha / max(len(keys) * len(refs), 1)
     meas, failed = {}, {}
     for c, runs in per_code.items():
         meas[c], failed[c] = [], []
@@ -239,20 +236,14 @@ def judge(name: str, per_code: dict, max_strain: float, sample_strain: float, fa
         for k in keys:
             mname = f"shear {label(k)} ({c} vs native)"
             if failed[c] or failed.get("native"):
-                metrics.append(dict(metric(mname, name, {}, "", False, "failed members: " + "; ".join(
-                    (failed[c] + failed.get("native", []))[:2])), kind="statistical"))
+                metrics.append(verdict.unjudged(mname, name, "failed members: " + "; ".join(
+                    (failed[c] + failed.get("native", []))[:2]), "statistical"))
                 continue
+            st = stats.difference([m.get(k) if m else None for m in meas["native"]],
+                                  [m.get(k) if m else None for m in meas[c]], relative=True, paired=True)
             a, b = summary["native"][k], summary[c][k]
-            t = stats.compare_means(a, b, alpha)
-            vals = {"native": [a[0], a[1]], c: [b[0], b[1]]}
-            if "p" in t:
-                vals.update({"p": t["p"], "detectable_rel": t["detectable_rel"], "detectable": t["detectable"]})
-            note = t.get("reason", "")
-            if "detectable_rel" in t:
-                note = (note + "; " if note else "") + (f"detects {abs(t['detectable_rel']):.1%} "
-                                                        f"({t['detectable']:.3g}) (80 % power)")
-            metrics.append(dict(metric(mname, name, vals, f"Welch, level {alpha:.2g}", t["pass"], note),
-                                kind="statistical"))
+            metrics.append(verdict.statistical(mname, name, st, "shear", options,
+                                               {"native": [a[0], a[1]], c: [b[0], b[1]]}))
     grid = np.round(np.arange(0.0, max_strain + 0.5 * sample_strain, sample_strain), 12)
     curves = {}
     for c, runs in per_code.items():
@@ -268,7 +259,7 @@ def judge(name: str, per_code: dict, max_strain: float, sample_strain: float, fa
             se = np.nanstd(ys, axis=0, ddof=1) / np.sqrt(np.maximum(n, 1)) if len(ok) > 1 else np.full(len(grid), np.nan)
             cur[col] = {"mean": mean.tolist(), "se": se.tolist()}
         curves[c] = cur
-    detail = {"case": name, "members": max(len(r) for r in per_code.values()), "keys": keys, "alpha": alpha,
+    detail = {"case": name, "members": max(len(r) for r in per_code.values()), "keys": keys,
               "summary": summary, "strain": grid.tolist(), "curves": curves}
     return metrics, detail
 

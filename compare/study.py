@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import stats
+from . import stats, verdict
 from .common import ROOT, SHARED_VARIANT, Case, Result, failed, resolve
 
 CODES = ("native", "liggghts", "yade", "lammps")
@@ -89,8 +89,9 @@ def same_inputs(be, case: Case, out: Path, threads: int = 1) -> bool:
 
 
 def metric(name, scene, values: dict, tol, passed, note="", unit="") -> dict:
+    """A deterministic metric: agree within its tolerance, else disagree (compare/verdict.py)."""
     return {"metric": name, "scene": scene, "values": values, "tolerance": tol, "pass": bool(passed),
-            "note": note, "unit": unit}
+            "verdict": "agree" if passed else "disagree", "note": note, "unit": unit}
 
 
 def failures(results: dict) -> str:
@@ -175,10 +176,9 @@ def static_compare(case: Case, results: dict, tolerances=(TOL_TOTAL, TOL_SHEAR_T
         if c == "native":
             continue
         if not (r.ok and ref is not None and ref.ok):
-            metrics.append(metric(f"static wall totals ({c} vs native)", case.name, {}, TOL_TOTAL, False,
-                                  "run failed: " + failures(results)))
-            metrics.append(metric(f"static profile ({c} vs native)", case.name, {}, TOL_CUMULATIVE, False,
-                                  "run failed: " + failures(results)))
+            metrics.append(verdict.unjudged(f"static wall totals ({c} vs native)", case.name,
+                                    "run failed: " + failures(results)))
+            metrics.append(verdict.unjudged(f"static profile ({c} vs native)", case.name, "run failed: " + failures(results)))
             continue
         ta, tb = wall_totals(ref), wall_totals(r)
         worst, worst_s = 0.0, 0.0
@@ -347,119 +347,88 @@ def ensemble_profile(members: list) -> dict:
     return out
 
 
-def flow_profile_metric(scene_name: str, code: str, group: str, ref: dict, other: dict, n_a: int, n_b: int,
-                        alpha: float) -> dict:
-    """Cumulative time-averaged normal profiles of the walls of ``group`` (side or bottom), point by
-    point: a Welch test at each point, the level ``alpha`` split over the points (Bonferroni).
-    Values: the largest |difference| / critical difference (<= 1 passes), the largest difference
-    relative to the wall total, and the smallest difference detected at the worst-resolved point
-    relative to its wall total."""
-    name = f"discharge time-averaged {group}-wall normal profile during flow, cumulative ({code} vs native)"
+def profile_stat(ref: dict, other: dict, group: str, n_a: int, n_b: int) -> dict:
+    """The cumulative time-averaged normal profiles of the walls of ``group`` (side or bottom) as a
+    profile statistic: at each point the difference of the ensemble means (Welch), relative to its
+    wall's total in the reference (compare/stats.py judges every point against the margin)."""
     walls = [w for w, p in ref.items() if p["group"].startswith(group)]
+    base = {"type": "profile", "relative": True, "n": [n_a, n_b], "walls": walls}
     if not walls or any(w not in other or len(other[w]["normal"]) != len(ref[w]["normal"]) for w in walls):
-        return metric(name, scene_name, {}, "", False, "time-averaged profile missing in one code")
-    n_points = sum(len(ref[w]["cumulative"]) for w in walls)
-    a_pt = alpha / max(n_points, 1)
-    worst, worst_rel, mde_rel = 0.0, 0.0, 0.0
+        return dict(base, reason="time-averaged profile missing in one code")
+    points = []
     for w in walls:
         a, b = ref[w], other[w]
         total = abs(a["cumulative"][-1]) or 1.0
         for k in range(len(a["cumulative"])):
-            t = stats.compare_means((a["cumulative"][k], a["cumulative_se"][k], n_a),
-                                    (b["cumulative"][k], b["cumulative_se"][k], n_b), a_pt)
-            if "p" not in t:
-                return metric(name, scene_name, {}, "", False, t.get("reason", ""))
-            crit = t["critical"]
-            d = abs(t["diff"])
-            worst = max(worst, d / crit if crit > 0 else (0.0 if d == 0 else math.inf))
-            worst_rel = max(worst_rel, d / total)
-            mde_rel = max(mde_rel, t["detectable"] / total)
-    return metric(name, scene_name, {"max_diff_over_critical": worst, "max_rel_to_total": worst_rel,
-                                     "detectable_rel_to_total": mde_rel},
-                  f"Welch at each of {n_points} points, level {alpha:.2g} in all", worst <= 1.0,
-                  f"walls {', '.join(walls)} (gate left out; slit ends in the end bins); detects "
-                  f"{mde_rel:.1%} of the wall total (80 % power)")
-
-
-def _members_for(a: tuple, b: tuple, alpha: float, rel: float = 0.05) -> int | None:
-    """Members per code that would detect a relative difference ``rel`` (80 % power), from the
-    pooled member-to-member spread of both codes relative to the mean of ``a``."""
-    (ma, sa, na), (_, sb, nb) = a, b
-    if na < 2 or nb < 2 or not ma or not (math.isfinite(sa) and math.isfinite(sb)):
-        return None
-    sd = math.sqrt(((na - 1) * na * sa ** 2 + (nb - 1) * nb * sb ** 2) / (na + nb - 2))
-    return stats.members_for(rel, sd / abs(ma), alpha)
+            sa, sb = a["cumulative_se"][k], b["cumulative_se"][k]
+            df = stats.welch_df(sa, n_a, sb, n_b)
+            points.append([(b["cumulative"][k] - a["cumulative"][k]) / total, math.hypot(sa, sb) / total, df])
+    if any(not math.isfinite(p[1]) for p in points):
+        return dict(base, reason="needs 2 members in each code for a profile's spread")
+    return dict(base, points=points)
 
 
 DISCHARGE_MEANS = ("discs_out", "flow_rate") + FLOW_TOTALS + ("peak_window_side", "peak_window_bottom")
+MARGIN_KIND = {"discs_out": "discs_out", "flow_rate": "flow_rate", "flow_side_normal": "wall_load",
+               "flow_side_shear": "wall_load", "flow_bottom_normal": "wall_load", "peak_window_side": "peak",
+               "peak_window_bottom": "peak"}
 
 
-def discharge_compare(scene_name: str, per_code: dict) -> tuple[list, dict]:
-    """per_code: code -> list of (Result, measures). Every mean by a Welch test, the jam fraction by
-    Fisher's exact test, the cumulative profiles point by point; the family level
-    stats.FAMILY_ALPHA is split over all the tests of the scene (Bonferroni), and each metric says
-    the smallest difference it detects with 80 % power."""
-    metrics, summary = [], {}
-    for c, runs in per_code.items():
-        ok = [m for r, m in runs if r.ok]
-        fails = [r.reason for r, _ in runs if not r.ok]
-        summary[c] = {"members": len(runs), "failed": len(fails), "failures": fails,
-                      **{k: stats.mean_se([m.get(k, float("nan")) for m in ok]) for k in DISCHARGE_MEANS},
-                      "jammed": sum(bool(m["jammed"]) for m in ok), "ok_members": len(ok),
-                      "jam_fraction": (sum(m["jammed"] for m in ok) / len(ok)) if ok else float("nan"),
-                      "peak_ratio_side": stats.bootstrap_median([m["peak_ratio_side"] for m in ok]),
-                      "peak_ratio_bottom": stats.bootstrap_median([m["peak_ratio_bottom"] for m in ok]),
-                      "flow_profile": ensemble_profile([m.get("flow_profile", {}) for m in ok]),
-                      "flow_window": next((m["flow_window"] for m in ok if "flow_window" in m), None)}
+def discharge_summary(runs: list) -> dict:
+    """One code's members [(Result, measures)]: means, jams, medians and the ensemble profile."""
+    ok = [m for r, m in runs if r.ok]
+    fails = [r.reason for r, _ in runs if not r.ok]
+    return {"members": len(runs), "failed": len(fails), "failures": fails,
+            **{k: stats.mean_se([m.get(k, float("nan")) for m in ok]) for k in DISCHARGE_MEANS},
+            "values": {k: [m.get(k, float("nan")) if r.ok else None for r, m in runs] for k in DISCHARGE_MEANS},
+            "jammed": sum(bool(m["jammed"]) for m in ok), "ok_members": len(ok),
+            "jam_fraction": (sum(m["jammed"] for m in ok) / len(ok)) if ok else float("nan"),
+            "peak_ratio_side": stats.bootstrap_median([m["peak_ratio_side"] for m in ok]),
+            "peak_ratio_bottom": stats.bootstrap_median([m["peak_ratio_bottom"] for m in ok]),
+            "flow_profile": ensemble_profile([m.get("flow_profile", {}) for m in ok]),
+            "flow_window": next((m["flow_window"] for m in ok if "flow_window" in m), None)}
+
+
+def discharge_compare(scene_name: str, per_code: dict, options) -> tuple[list, dict]:
+    """per_code: code -> list of (Result, measures), members in the same order in every code (member
+    k of every code starts from the same state: paired where that narrows the interval). Every
+    kept metric kind (options.metrics, default all) is an equivalence metric with its margin
+    (compare/margins.py): the means, the cumulative profiles point by point, the jam fraction."""
+    keep = set(options.metrics) if options.metrics else None
+    summary = {c: discharge_summary(runs) for c, runs in per_code.items()}
     ref = summary.get("native")
-    others = [c for c in summary if c != "native"]
-    n_tests = len(others) * (len(DISCHARGE_MEANS) + 3)
-    alpha = stats.FAMILY_ALPHA / max(n_tests, 1)
-    for c in others:
+    metrics = []
+    for c in (c for c in summary if c != "native"):
         s = summary[c]
         if s["failed"] or not ref or ref["failed"]:
             why = "; ".join(s["failures"][:2] + (ref["failures"][:2] if ref else []))
-            metrics.append(metric(f"discharge ensemble ({c} vs native)", scene_name, {}, "", False,
-                                  f"failed members: {why}"))
+            metrics.append(verdict.unjudged(f"discharge ensemble ({c} vs native)", scene_name,
+                                            f"failed members: {why}", "statistical"))
             continue
         for key in DISCHARGE_MEANS:
-            (ma, sa, na), (mb, sb, nb) = ref[key], s[key]
-            name = f"discharge {key} ({c} vs native)"
-            if na < 2 or nb < 2:
-                # A mean defined in fewer than 2 members of a code (a flow rate needs 10 removals, so
-                # jammed members have none) has no standard error: this behaviour is judged by the
-                # jam fraction and the discs out, which every member has.
+            if keep is not None and MARGIN_KIND[key] not in keep:
                 continue
-            t = stats.compare_means(ref[key], s[key], alpha)
+            st = stats.difference(ref["values"][key], s["values"][key], relative=True, paired=True)
             note = ""
             if key in FLOW_TOTALS and ref.get("flow_window"):
                 note = "time average over t = {:g} .. {:g} s after opening".format(*ref["flow_window"])
             elif key.startswith("peak_window"):
                 note = f"largest {PEAK_WINDOW:g} s average of the group total / its value at the opening"
-            m = metric(name, scene_name, {"native": [ma, sa], c: [mb, sb], "p": t.get("p"),
-                                          "detectable_rel": t.get("detectable_rel"),
-                                          "members_for_5pct": _members_for(ref[key], s[key], alpha)},
-                       f"Welch, level {alpha:.2g}", t["pass"],
-                       "; ".join(x for x in (note, t.get("reason", ""),
-                                             f"detects {abs(t['detectable_rel']):.1%} (80 % power)"
-                                             if "detectable_rel" in t else "") if x))
-            m["kind"] = "statistical"
-            metrics.append(m)
-        for group in ("side", "bottom"):
-            m = flow_profile_metric(scene_name, c, group, ref["flow_profile"], s["flow_profile"],
-                                    ref["ok_members"], s["ok_members"], alpha)
-            m["kind"] = "statistical"
-            metrics.append(m)
-        t = stats.compare_proportions(ref["jammed"], ref["ok_members"], s["jammed"], s["ok_members"], alpha)
-        m = metric(f"discharge jam fraction ({c} vs native)", scene_name,
-                   {"native": [t.get("a"), t.get("ci_a")], c: [t.get("b"), t.get("ci_b")], "p": t.get("p")},
-                   f"Fisher's exact test, level {alpha:.2g}", t["pass"],
-                   "Wilson 95 % intervals; " + (
-                       f"detects a difference of {t['detectable']:.2f} in the fraction (80 % power)"
-                       if math.isfinite(t.get("detectable", float("nan"))) else
-                       "these members cannot detect any difference in the fraction at this level"))
-        m["kind"] = "statistical"
-        metrics.append(m)
+            metrics.append(verdict.statistical(f"discharge {key} ({c} vs native)", scene_name, st, MARGIN_KIND[key],
+                                               options, {"native": list(ref[key][:2]), c: list(s[key][:2])}, note))
+        if keep is None or "wall_profile" in keep:
+            for group in ("side", "bottom"):
+                st = profile_stat(ref["flow_profile"], s["flow_profile"], group, ref["ok_members"], s["ok_members"])
+                metrics.append(verdict.statistical(
+                    f"discharge time-averaged {group}-wall normal profile during flow, cumulative ({c} vs native)",
+                    scene_name, st, "wall_profile", options, {},
+                    f"walls {', '.join(st['walls'])} (gate left out); each point / its wall's total"))
+        if keep is None or "jam_fraction" in keep:
+            st = stats.proportions(ref["jammed"], ref["ok_members"], s["jammed"], s["ok_members"])
+            metrics.append(verdict.statistical(
+                f"discharge jam fraction ({c} vs native)", scene_name, st, "jam_fraction", options,
+                {"native": [ref["jammed"], ref["ok_members"]], c: [s["jammed"], s["ok_members"]]},
+                "Newcombe's interval of the difference of the fractions"))
     return metrics, summary
 
 
