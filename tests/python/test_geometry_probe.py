@@ -171,6 +171,37 @@ def test_the_real_code_sees_moved_slit_ends(silo, code, tmp_path):
     assert {i for i in bad if i.startswith("walls[gate]")} == {"walls[gate].from", "walls[gate].to"}
 
 
+def test_a_backend_mistake_is_read_from_the_code_not_from_the_case(silo, tmp_path, monkeypatch):
+    """The case stays right; LIGGGHTS' STL writer moves the right wall and YADE's translation grows
+    a radius, each by 10 REL L: the read-back, from the codes' own state, fails on that item."""
+    e = G.expected_geometry(silo)
+    eps = 10 * G.REL * e["length"]
+    if liggghts_backend.available():
+        orig = liggghts_backend.write_wall_stl
+
+        def stl(wall, profile_bin, path):
+            if wall["name"] == "right":
+                wall = dict(wall, **{k: [wall[k][0] + eps, wall[k][1]] for k in ("from", "to")})
+            return orig(wall, profile_bin, path)
+        monkeypatch.setattr(liggghts_backend, "write_wall_stl", stl)
+        res = G.probe("liggghts", silo, tmp_path / "liggghts")
+        rows = G.compare_geometry(e, res["geometry"])
+        assert _failing(rows) == {"walls[right].from", "walls[right].to", "walls[right].face"}
+        assert all(r["deviation"] == pytest.approx(eps, rel=1e-6) for r in rows if not r["pass"])
+    if yade_backend.available():
+        orig_data = yade_backend.case_data
+
+        def data(case):
+            d = orig_data(case)
+            d["discs"][2][2] += eps
+            return d
+        monkeypatch.setattr(yade_backend, "case_data", data)
+        res = G.probe("yade", silo, tmp_path / "yade")
+        rows = G.compare_geometry(e, res["geometry"])
+        assert _failing(rows) == {"discs[2].radius"}
+        assert next(r for r in rows if not r["pass"])["deviation"] == pytest.approx(eps, rel=1e-6)
+
+
 # ------------------------------------------------------------------------------------------
 # The cache key: the bytes of what the probe runs
 def _old_key(code: str, case: Case) -> str:
