@@ -4,7 +4,9 @@
 reference_inputs/agreement/) both call ``run``. For each entry (compare/plan.py) it
 1. refuses what a reference code cannot express, before any run (PlanError, exit 2);
 2. reads each reference code's effective constants back from the code itself and compares them
-   with ``dem resolve`` (compare/probe.py: the translation check, a metric of every scene);
+   with ``dem resolve`` (compare/probe.py), and its walls, points, radii and start positions after
+   its setup against the case's (compare/geometry_probe.py): the translation check, metrics of
+   every scene;
 3. runs the members in every code (compare/study.py's runners and readers) and judges them:
    deterministic kinds against tolerances matched to the codes' measured agreement, ensembles
    by tests whose level and detectable difference are stated (compare/stats.py).

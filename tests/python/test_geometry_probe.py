@@ -248,6 +248,10 @@ def test_resume_into_probes_of_the_clean_translation_probes_a_mutant_anew(silo, 
     module = types.SimpleNamespace(write_probe_inputs=P.write_probe_inputs, probe=fake_probe)
     first = pipeline._probe_cached(module, "lammps", silo, tmp_path, 1)
     assert pipeline._probe_cached(module, "lammps", silo, tmp_path, 1) == first and len(calls) == 1
-    _lammps_mu_disc_disc_bug(monkeypatch)
+    mutant = Mutation("lammps_mu_disc_disc_x0.9", "lammps", "mu", "disc-disc", 0.9, "all")
+    mutated = pipeline._probe_cached(module, "lammps", dataclasses.replace(silo, resolved=mutant.apply(silo.resolved)),
+                                     tmp_path, 1)
+    assert len(calls) == 2 and mutated["n"] == 2 and calls[1] != calls[0]
+    _lammps_mu_disc_disc_bug(monkeypatch)              # the same mistake made by the backend itself
     again = pipeline._probe_cached(module, "lammps", silo, tmp_path, 1)
-    assert len(calls) == 2 and again["n"] == 2 and calls[1] != calls[0]
+    assert len(calls) == 3 and again["n"] == 3 and calls[2] not in calls[:2]
