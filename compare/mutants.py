@@ -17,7 +17,10 @@ import numpy as np
 # (name, what, pairs, factor, scope): what = pair constant (kn, ks, eta_n, eta_s, mu) of the
 # "disc-disc", "disc-wall" or "all" pairs, or "density" / "gravity", or "bonds" (clusters bonded
 # only where their discs touch: the gap bonds of closed triangles dropped; changes only scenes whose
-# [clusters] bond every pair); scope "gravity" = only cases with gravity.
+# [clusters] bond every pair), or "geometry" (pairs: "wall_right", the rightmost side wall moved
+# outwards, or "points", each point moved away from the points' middle along x, with the wall ends
+# at it; by factor x the smallest disc radius); scope "gravity" = only cases with gravity, "points"
+# = only codes that build points (not LAMMPS: a static scene's points are joints of one plane).
 SPECS = [
     ("kn_x1.05", "kn", "all", 1.05, "all"),
     ("ks_x0.5", "ks", "all", 0.5, "all"),
@@ -28,6 +31,8 @@ SPECS = [
     ("density_x1.01", "density", "", 1.01, "all"),
     ("gravity_x1.01", "gravity", "", 1.01, "all"),
     ("bonds_touching_only", "bonds", "", 1.0, "all"),
+    ("wall_right_shift_0.01r", "geometry", "wall_right", 0.01, "all"),
+    ("slit_ends_0.2r", "geometry", "points", 0.2, "points"),
 ]
 # Run only when named (--mutant NAME): the Janssen column's power check (docs/compare.md).
 EXTRA_SPECS = [
@@ -51,6 +56,8 @@ class Mutation:
             return False
         if self.scope == "gravity" and not float(np.hypot(*case.resolved["gravity"])) > 0:
             return False
+        if self.scope == "points" and code == "lammps":
+            return False
         return self.apply(case.resolved) != case.resolved
 
     def apply(self, resolved: dict) -> dict:
@@ -60,6 +67,8 @@ class Mutation:
         elif self.what == "bonds":
             if "clusters" in r and r["clusters"].get("bonds") == "all":
                 r["clusters"] = dict(r["clusters"], bonds="touching")
+        elif self.what == "geometry":
+            _move_geometry(r, self.pairs, self.factor)
         elif self.what == "density":
             for m in r["materials"]:
                 m["density"] = m["density"] * self.factor
@@ -77,6 +86,35 @@ class Mutation:
     @property
     def label(self) -> str:
         return f"{self.code}: {self.name}"
+
+
+def _move_geometry(r: dict, what: str, factor: float) -> None:
+    """Moves, by factor x the smallest disc radius along x, the rightmost side wall (walls of a
+    group "side*", outwards) or each point away from the points' middle (one point: to +x) with
+    the wall ends at it; a scene without such a wall or points is left as it is."""
+    radii = [float(d[2]) for d in r.get("discs", [])]
+    if not radii:
+        return
+    step = factor * min(radii)
+    if what == "wall_right":
+        sides = [w for w in r["walls"] if w.get("active", True) and str(w.get("group", "")).startswith("side")]
+        if sides:
+            w = max(sides, key=lambda w: w["from"][0] + w["to"][0])
+            w["from"] = [w["from"][0] + step, w["from"][1]]
+            w["to"] = [w["to"][0] + step, w["to"][1]]
+        return
+    if what != "points":
+        raise ValueError(f"mutant geometry {what!r}: not 'wall_right' or 'points'")
+    pts = r["points"]
+    mid = sum(p["at"][0] for p in pts) / len(pts) if pts else 0.0
+    for p in pts:
+        old = list(p["at"])
+        dx = step if len(pts) == 1 or old[0] >= mid else -step
+        p["at"] = [old[0] + dx, old[1]]
+        for w in r["walls"]:
+            for end in ("from", "to"):
+                if abs(w[end][0] - old[0]) <= 1e-9 and abs(w[end][1] - old[1]) <= 1e-9:
+                    w[end] = [w[end][0] + dx, w[end][1]]
 
 
 def mutations(codes, names=None) -> list[Mutation]:

@@ -4,7 +4,9 @@
 reference_inputs/agreement/) both call ``run``. For each entry (compare/plan.py) it
 1. refuses what a reference code cannot express, before any run (PlanError, exit 2);
 2. reads each reference code's effective constants back from the code itself and compares them
-   with ``dem resolve`` (compare/probe.py: the translation check, a metric of every scene);
+   with ``dem resolve`` (compare/probe.py), and its walls, points, radii and start positions after
+   its setup against the case's (compare/geometry_probe.py): the translation check, metrics of
+   every scene;
 3. runs the members in every code (compare/study.py's runners and readers) and judges them:
    deterministic kinds against tolerances matched to the codes' measured agreement, ensembles
    by tests whose level and detectable difference are stated (compare/stats.py).
@@ -81,12 +83,14 @@ def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:
 
 def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
     """Each reference code's constants read back from the code (compare/probe.py) against
-    ``dem resolve`` to 1e-9 relative."""
-    from . import probe
+    ``dem resolve`` to 1e-9 relative, and its walls, points, radii and start positions read back
+    after its setup (compare/geometry_probe.py) against the case's to 1e-9 of the scene's length."""
+    from . import geometry_probe, probe
     codes = codes_of(plan, codes)
     metrics = []
     case = member_case(plan, 0, start_discs(plan.shared))
     expected = probe.expected_constants(plan.shared, case.discs, plan.dt, case.material_index())
+    geometry = geometry_probe.expected_geometry(case)
     for c in codes:
         if c == "native":
             continue
@@ -95,32 +99,72 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
         if pr.get("status") != "ok":
             metrics.append(verdict.unjudged(f"translation constants read back ({c})", plan.name,
                                             f"probe failed: {pr.get('reason', '')}"))
-            continue
-        rows = probe.compare_constants(expected, pr)
-        bad = [r for r in rows if not r["pass"]]
-        worst = max((r["rel_diff"] for r in rows if math.isfinite(r["rel_diff"])), default=float("nan"))
-        metrics.append(_metric(f"translation constants read back ({c})", plan.name,
-                               {"quantities": len(rows), "max_rel_diff": worst}, 1e-9, not bad,
-                               "; ".join(f"{r['quantity']}: {r['probed']!r} vs {r['expected']!r}" for r in bad[:4])))
+        else:
+            rows = probe.compare_constants(expected, pr)
+            bad = [r for r in rows if not r["pass"]]
+            worst = max((r["rel_diff"] for r in rows if math.isfinite(r["rel_diff"])), default=float("nan"))
+            metrics.append(_metric(f"translation constants read back ({c})", plan.name,
+                                   {"quantities": len(rows), "max_rel_diff": worst}, 1e-9, not bad,
+                                   "; ".join(f"{r['quantity']}: {r['probed']!r} vs {r['expected']!r}"
+                                             for r in bad[:4])))
+        if plan.kind != "shear":     # the shear box's walls are boxes the shear script builds: not read
+            metrics.append(_geometry_metric(geometry_probe, c, pcase, geometry, plan, out))
     return metrics
 
 
-def _probe_cached(probe, code: str, case: Case, out: Path, timeout: float) -> dict:
-    """A code's probe of a case's translation, kept under the run's folder ``out`` by the translated
-    constants (the same constants translate the same way: a list of collisions with one set of
-    constants probes once)."""
+def _geometry_metric(geometry_probe, code: str, case: Case, expected: dict, plan: Plan, out: Path) -> dict:
+    """One code's geometry read back against the (unmutated) case's: max deviation / length scale."""
+    name = f"translation geometry read back ({code})"
+    gr = _probe_cached(geometry_probe, code, case, out, plan.options.timeout, kind="geometry")
+    if gr.get("status") != "ok":
+        return verdict.unjudged(name, plan.name, f"geometry run failed: {gr.get('reason', '')}")
+    rows = geometry_probe.compare_geometry(expected, gr["geometry"])
+    s = geometry_probe.summary(rows)
+    bad = [r for r in rows if not r["pass"]]
+    note = "; ".join(f"{r['item']}: off by {r['deviation']:.3g} cm{' (' + r['note'] + ')' if r['note'] else ''}"
+                     for r in sorted(bad, key=lambda r: -r["rel"])[:4])
+    if gr["geometry"].get("points") is None and expected["points"]:
+        note = (note + "; " if note else "") + "points: not read (the code has no point contact)"
+    return _metric(name, plan.name, {"items": s["items"], "max_rel_diff": s["max_rel_diff"], "worst": s["worst"],
+                                     "length_scale": expected["length"]}, geometry_probe.REL, not bad, note)
+
+
+def input_key(write) -> str:
+    """sha1 of the names and bytes of every file ``write(folder)`` writes into an empty folder."""
     import hashlib
-    r = case.resolved
-    key = json.dumps({"code": code, "pairs": r["pairs"], "materials": r["materials"], "gravity": r["gravity"],
-                      "contact": r["contact"], "dt": case.dt,
-                      "radii": sorted({(float(x), int(m)) for x, m in zip(np.asarray(case.discs)[:, 2],
-                                                                          case.material_index())})}, sort_keys=True)
-    h = hashlib.sha1(key.encode()).hexdigest()[:16]
-    d = out / "probes" / code / h
+    import tempfile
+    h = hashlib.sha1()
+    with tempfile.TemporaryDirectory() as t:
+        write(Path(t))
+        for f in sorted(p for p in Path(t).rglob("*") if p.is_file()):
+            rel = f.relative_to(t).as_posix().encode()
+            h.update(len(rel).to_bytes(8, "little") + rel)
+            data = f.read_bytes()
+            h.update(len(data).to_bytes(8, "little") + data)
+    return h.hexdigest()[:16]
+
+
+def probe_key(module, code: str, case: Case) -> str:
+    """The cache key of a probe (``module``: compare.probe or compare.geometry_probe): the bytes of
+    the inputs it runs, written by the backend's own translation; any change to the translation
+    (a mutant, a backend bug) gets its own probe, and cases that translate alike share one."""
+    writer = module.write_probe_inputs if hasattr(module, "write_probe_inputs") else module.write_inputs
+    return input_key(lambda d: writer(code, case, d))
+
+
+def _probe_cached(module, code: str, case: Case, out: Path, timeout: float, kind: str = "constants") -> dict:
+    """A code's probe of a case's translation, kept under the run's folder ``out`` by the bytes of
+    the probe's translated inputs (``probe_key``: a list of collisions whose probes translate to
+    the same bytes probes once). A case the backend refuses is probed (and fails) anew."""
+    try:
+        h = probe_key(module, code, case)
+    except (ValueError, KeyError, OSError):     # a refused translation (CaseError): the probe says why
+        return module.probe(code, case, out / "probes" / code / kind / "refused", timeout)
+    d = out / "probes" / code / kind / h
     cached = d / "probe.json"
     if cached.exists():
         return json.loads(cached.read_text())
-    pr = probe.probe(code, case, d, timeout)
+    pr = module.probe(code, case, d, timeout)
     d.mkdir(parents=True, exist_ok=True)
     cached.write_text(json.dumps(pr, indent=1, default=float))
     return pr

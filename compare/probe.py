@@ -310,7 +310,9 @@ def layout(case: Case) -> Layout:
 
 def _probe_case(case: Case, lay: Layout) -> Case:
     index = {m["name"]: k for k, m in enumerate(case.resolved["materials"])}
-    return dataclasses.replace(case, name=case.name + "_probe", discs=lay.discs, mode="static", settle=0.0,
+    # one name for every case: the probe's inputs, and so its cache key (their bytes), depend on
+    # what is translated only
+    return dataclasses.replace(case, name="probe", discs=lay.discs, mode="static", settle=0.0,
                                duration=case.dt, series_interval=case.dt, snapshot_interval=0.0,
                                materials=np.array([index[m] for m in lay.materials], int))
 
@@ -401,16 +403,7 @@ with open("yade_probe.json", "w") as _f:
 
 def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    lay = layout(case)
-    pc = _probe_case(case, lay)
-    data = yade_backend.case_data(pc)
-    yade_backend._write(data, out_dir, 1)
-    roles = {"disc_pairs": {key: ij["rest"] for key, ij in lay.disc_pairs.items()},
-             "wall_pairs": {key: roles["rest"] for key, roles in lay.walls.items()},
-             "bodies": {_radius_key(m, rad): ij[0] for m, by in lay.spins.items() for rad, ij in by.items()}}
-    write_text_atomic(out_dir / YADE_ROLES, json.dumps(roles) + "\n")
-    write_text_atomic(out_dir / YADE_PROBE_SCRIPT, _YADE_PROBE)
+    _lay, roles = write_probe_inputs("yade", case, out_dir)
     (out_dir / YADE_PROBE_OUT).unlink(missing_ok=True)
     rc, log = _run(["yade", "-n", "-j1", "-x", YADE_PROBE_SCRIPT], out_dir, timeout, out_dir / "yade_probe.log")
     if rc != 0 or not (out_dir / YADE_PROBE_OUT).exists():
@@ -595,11 +588,7 @@ def _solve_one_step(case: Case, lay: Layout, s0: dict, s1: dict, dt: float, kine
 
 def probe_liggghts(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     out_dir = Path(out_dir)
-    lay = layout(case)
-    pc = _probe_case(case, lay)
-    script = liggghts_backend.write_inputs(pc, out_dir)
-    probe_in = out_dir / "in.probe"
-    write_text_atomic(probe_in, liggghts_script(script.read_text()))
+    lay, probe_in = write_probe_inputs("liggghts", case, out_dir)
     for old in out_dir.glob(LIGGGHTS_DUMP):
         old.unlink()
     rc, log = _run(liggghts_backend.command(probe_in), out_dir, timeout, out_dir / "liggghts_probe.log")
@@ -700,15 +689,7 @@ def probe_lammps(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     plane acts on its own probe discs only (the discs of the other probes lie beyond the walls'
     ends, where LAMMPS's infinite plane would still act)."""
     out_dir = Path(out_dir)
-    lay = _lammps_layout(case)
-    pc = _probe_case(case, lay)
-    rows_of = {}
-    for roles in lay.walls.values():
-        for row, wname in roles.values():
-            rows_of.setdefault(wname, []).append(row)
-    script = lammps_backend.write_inputs(pc, out_dir, wall_rows=rows_of, centre=case.centre)
-    probe_in = out_dir / "in.probe"
-    write_text_atomic(probe_in, lammps_script(script.read_text()))
+    lay, probe_in = write_probe_inputs("lammps", case, out_dir)
     for old in out_dir.glob(LAMMPS_DUMP):
         old.unlink()
     rc, log = _run(lammps_backend.command(probe_in), out_dir, timeout, out_dir / "lammps_probe.log")
@@ -740,6 +721,40 @@ def probe_lammps(case: Case, out_dir: Path, timeout: float = 120) -> dict:
 
 
 # ---------------------------------------------------------------------------------------------
+def write_probe_inputs(code: str, case: Case, out_dir: Path) -> tuple:
+    """Writes every file the probe of ``code`` runs into out_dir, through the backend's own
+    translation (the cache key of a probe is their bytes); returns (layout, the probe's script)
+    for LIGGGHTS and LAMMPS, (layout, roles) for YADE."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if code == "yade":
+        lay = layout(case)
+        yade_backend._write(yade_backend.case_data(_probe_case(case, lay)), out_dir, 1)
+        roles = {"disc_pairs": {key: ij["rest"] for key, ij in lay.disc_pairs.items()},
+                 "wall_pairs": {key: roles["rest"] for key, roles in lay.walls.items()},
+                 "bodies": {_radius_key(m, rad): ij[0] for m, by in lay.spins.items() for rad, ij in by.items()}}
+        write_text_atomic(out_dir / YADE_ROLES, json.dumps(roles) + "\n")
+        write_text_atomic(out_dir / YADE_PROBE_SCRIPT, _YADE_PROBE)
+        return lay, roles
+    if code == "liggghts":
+        lay = layout(case)
+        script = liggghts_backend.write_inputs(_probe_case(case, lay), out_dir)
+        write_text_atomic(out_dir / "in.probe", liggghts_script(script.read_text()))
+        return lay, out_dir / "in.probe"
+    if code == "lammps":
+        lay = _lammps_layout(case)
+        rows_of = {}
+        for roles in lay.walls.values():
+            for row, wname in roles.values():
+                rows_of.setdefault(wname, []).append(row)
+        script = lammps_backend.write_inputs(_probe_case(case, lay), out_dir, wall_rows=rows_of, centre=case.centre)
+        write_text_atomic(out_dir / "in.probe", lammps_script(script.read_text()))
+        return lay, out_dir / "in.probe"
+    if code == "native":
+        return None, native_backend.write_inputs(case, out_dir)
+    raise ValueError(f"code: {code!r} is not one of {CODES}")
+
+
 def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
     """The effective constants of ``code`` for ``case`` (see the module doc); never raises for a
     failed probe: status "failed" and the reason."""

@@ -28,7 +28,8 @@ def test_a_collision_scene_through_dem_compare(dem_binary, tmp_path):
     assert p.returncode == 0, p.stdout + p.stderr
     rep = json.loads((out / "agreement.json").read_text())
     names = [m["metric"] for m in rep["metrics"]]
-    assert names == ["translation constants read back (liggghts)", "collision against the reference (native)",
+    assert names == ["translation constants read back (liggghts)", "translation geometry read back (liggghts)",
+                     "collision against the reference (native)",
                      "collision against the reference (liggghts)", "collision (liggghts vs native)"]
     assert rep["passed"] and (out / "report.md").read_text().startswith("# Agreement report")
     assert (out / "calibration.png").exists()
