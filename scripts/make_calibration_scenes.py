@@ -151,11 +151,12 @@ def scenes():
         launch, 0.3, [("floor_left", (-10.0, 0.0), (3.0, 0.0)), ("gate", (3.0, 0.0), (20.0, 0.0)),
                       ("floor_right", (20.0, 0.0), (40.0, 0.0))],
         points=[("L", (3.0, 0.0)), ("R", (20.0, 0.0))], gravity=g)
-    # an open slit (x = 3 .. 3.5) bridged by the disc: it pivots over the slit end L, strikes the
-    # far end R (a point contact) below its centre, hops and rolls over R onto the floor beyond
-    add("slit_roll_over", "F4", "disc rolling at 10 cm/s over an open slit 0.5 cm wide: pivots over the slit end L, "
+    # an open slit (x = 3 .. 3.5) bridged by the disc, launched without spin so that it still slides
+    # when it reaches the slit: it pivots over the slit end L with the friction at its cap, strikes
+    # the far end R (a point contact) below its centre, hops and rolls over R onto the floor beyond
+    add("slit_roll_over", "F4", "disc launched at 15 cm/s onto an open slit 0.5 cm wide: slides over the slit end L, "
         "strikes the far end R (a point contact) and rolls over it",
-        [[2.5, R + 1e-5, R, 10.0, 0.0, -10.0]], 0.15,
+        [[2.8, R + 1e-5, R, 15.0, 0.0, 0.0]], 0.1,
         [("floor_left", (-10.0, 0.0), (3.0, 0.0)), ("floor_right", (3.5, 0.0), (40.0, 0.0))],
         points=[("L", (3.0, 0.0)), ("R", (3.5, 0.0))], gravity=g)
     # tan 45 deg > 3 mu: the contact point slides down the incline throughout, the friction at mu F_n.
