@@ -132,6 +132,11 @@ def scenes():
     r2 = 0.6
     add("unequal_discs", 8, "oblique impact of discs of radius 1 and 0.6 cm (mass ratio 2.8)",
         [[-r2 - GAP / 2, 0.0, r2, V, 20.0, 0.0], [R + GAP / 2, 0.0, R, 0.0, 0.0, 0.0]], T, far)
+    # no dashpots: LAMMPS's cap on the total tangential force is then the shared law's cap on the
+    # spring (docs/compare.md, "LAMMPS"), so the sliding is one law in every code
+    add("sliding_disc_disc_undamped", 7, "undamped grazing disc-disc impact that slides throughout (normal 20, "
+        "tangential 150 cm/s)",
+        [[-R - GAP / 2, 0.0, R, 20.0, 150.0, 0.0], [R + GAP / 2, 0.0, R, 0.0, 0.0, 0.0]], T, far, zeta=0.0)
     add("grazing_disc_disc", 7, "grazing disc-disc impact that slides throughout (normal 20, tangential 150 cm/s)",
         [[-R - GAP / 2, 0.0, R, 20.0, 150.0, 0.0], [R + GAP / 2, 0.0, R, 0.0, 0.0, 0.0]], T, far)
     g = (0.0, -G)
@@ -146,6 +151,24 @@ def scenes():
         launch, 0.3, [("floor_left", (-10.0, 0.0), (3.0, 0.0)), ("gate", (3.0, 0.0), (20.0, 0.0)),
                       ("floor_right", (20.0, 0.0), (40.0, 0.0))],
         points=[("L", (3.0, 0.0)), ("R", (20.0, 0.0))], gravity=g)
+    # an open slit (x = 3 .. 3.5) bridged by the disc, launched without spin so that it still slides
+    # when it reaches the slit: it pivots over the slit end L with the friction at its cap, strikes
+    # the far end R (a point contact) below its centre, hops and rolls over R onto the floor beyond
+    add("slit_roll_over", "F4", "disc launched at 15 cm/s onto an open slit 0.5 cm wide: slides over the slit end L, "
+        "strikes the far end R (a point contact) and rolls over it",
+        [[2.8, R + 1e-5, R, 15.0, 0.0, 0.0]], 0.1,
+        [("floor_left", (-10.0, 0.0), (3.0, 0.0)), ("floor_right", (3.5, 0.0), (40.0, 0.0))],
+        points=[("L", (3.0, 0.0)), ("R", (3.5, 0.0))], gravity=g)
+    # tan 45 deg > 3 mu: the contact point slides down the incline throughout, the friction at mu F_n.
+    # Launched at 20 cm/s so that the first touch's spring increment k_s v dt is above the cap at
+    # once (from rest the slip at the touch is 0.1 cm/s and the uncapped tangential dashpot of the
+    # shared law acts for several steps: 3e-3 of the friction impulse)
+    th = math.radians(45.0)
+    t_, n_ = (math.cos(th), -math.sin(th)), (math.sin(th), math.cos(th))
+    add("incline_slide_45deg", "F5", "disc launched at 20 cm/s down a 45 degree incline: slides at its Coulomb cap "
+        "throughout (tan 45 > 3 mu)",
+        [[2 * t_[0] + (R + 1e-5) * n_[0], 2 * t_[1] + (R + 1e-5) * n_[1], R, 20 * t_[0], 20 * t_[1], 0.0]], 0.1,
+        [("incline", (0.0, 0.0), (20 * t_[0], 20 * t_[1]))], gravity=g)
     add("rest_on_floor", "F3", "disc dropped from touching onto the floor, at rest: floor force = rho pi r^2 g",
         [[0.0, R, R, 0.0, 0.0, 0.0]], 0.03, [("floor", (-5.0, 0.0), (5.0, 0.0))], gravity=g)
     return out

@@ -124,6 +124,39 @@ def test_floor_references_are_the_hand_formulas(cases):
     assert cal.reference(rest.resolved, rest.discs, rest.dt)["floor_force"] == pytest.approx(RHO * math.pi * G, rel=1e-14)
 
 
+def test_incline_reference_is_the_sliding_disc_and_refuses_a_disc_that_would_roll(cases):
+    """Down a 45 degree incline (tan 45 > 3 mu) the contact point slides throughout: the friction
+    mu m g cos 45 opposes it, dv/dt = g (sin - mu cos), r domega/dt = 2 mu g cos."""
+    c = cases["incline_slide_45deg"]
+    geo = cal.geometry(c.resolved, c.discs)
+    assert geo["kind"] == "incline"
+    ref = cal.reference(c.resolved, c.discs, c.dt)
+    s, mu, T = math.sqrt(0.5), 0.176, c.duration
+    assert ref["v_end"] == pytest.approx(20.0 + G * (s - mu * s) * T, rel=1e-12)
+    assert ref["omega_end_0"] == pytest.approx(-2 * mu * G * s * T / 1.0, rel=1e-12)
+    assert cal.tolerances(ref, c.dt)["v_end"] == pytest.approx(c.dt * G * (s - mu * s), rel=1e-12)
+    # on a 10 degree incline the slip stops within T: the disc rolls, not this closed form
+    th = math.radians(10.0)
+    with pytest.raises(ValueError, match="slip stops"):
+        cal.incline(np.array([0.0, 1.0, 1.0, 20.0, 0.0, 0.0]), np.array([math.sin(th), math.cos(th)]),
+                    np.array([math.cos(th), -math.sin(th)]), np.array([0.0, -G]), mu, T)
+
+
+def test_an_open_slit_has_no_reference_and_a_joined_floor_keeps_its_own(cases):
+    """A point that ends one wall only (an open slit end) makes the scene cross-code only; points
+    where two walls meet (slit_end_launch) never act and leave the floor launch's closed form."""
+    c = cases["slit_roll_over"]
+    assert cal.geometry(c.resolved, c.discs)["kind"] == "slit"
+    ref = cal.reference(c.resolved, c.discs, c.dt)
+    assert ref["cross_code_only"] and cal.tolerances(ref, c.dt) == {}
+    assert cal.code_tolerances(ref)["v_end"] == pytest.approx(cal.CODE_REL * 15.0)
+    end = np.array([[4.0, 1.0, 1.0, 8.6, 0.0, -8.6]])
+    assert cal.measure(c.resolved, c.discs, end, c.duration) == pytest.approx(
+        {"v_end": 8.6, "vn_end": 0.0, "omega_end_0": -8.6, "s_end": 1.2})
+    joined = cases["slit_end_launch"]
+    assert cal.geometry(joined.resolved, joined.discs)["kind"] == "floor_launch"
+
+
 # ------------------------------------------------------------------------------- measure()
 
 def _free(d, dt_):
@@ -178,7 +211,7 @@ def test_measure_inverts_end_states_built_by_hand(cases):
 # ------------------------------------------------------------------------------- runs
 
 NATIVE_SCENES = ["head_on_disc_wall_steel", "restitution_zeta_090", "oblique_wall_20deg", "floor_launch",
-                 "slit_end_launch", "rest_on_floor"]
+                 "slit_end_launch", "rest_on_floor", "incline_slide_45deg", "sliding_disc_disc_undamped"]
 
 
 @pytest.mark.parametrize("name", NATIVE_SCENES)
@@ -194,6 +227,7 @@ def test_native_within_the_reference(cases, tmp_path, name):
 
 @pytest.mark.parametrize("name,key,scale,quantity", [("floor_launch", "mu", 1.1, "t_roll"),
                                                      ("head_on_disc_disc", "kn", 1.1, "t_c"),
+                                                     ("incline_slide_45deg", "mu", 0.9, "v_end"),
                                                      ("restitution_zeta_060", "eta_n", 1.1, "e")])
 def test_a_wrong_constant_given_to_a_code_fails_the_check(cases, tmp_path, name, key, scale, quantity):
     c = cases[name]
