@@ -13,7 +13,7 @@ import meshio
 import numpy as np
 import pytest
 
-from compare import janssen, liggghts_backend, native_backend, study, yade_backend
+from compare import janssen, liggghts_backend, native_backend, plan, study, verdict, yade_backend
 from compare.common import SHARED_VARIANT, Case, CaseError, Result, failed, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -168,12 +168,12 @@ def test_a_failed_reference_run_never_counts_as_agreement():
     good = Result(code="native", case="floor", profiles={"bottom_left": {"s_lo": [0], "s_hi": [2], "normal": [1.0], "shear": [0.0]}})
     bad = failed("liggghts", "floor", "lost discs: 350 at the start, 349 at the end")
     metrics, detail = study.static_compare(case, {"native": good, "liggghts": bad})
-    assert metrics and not any(m["pass"] for m in metrics)
+    assert metrics and all(m["verdict"] == "inconclusive" for m in metrics)      # never agree, never disagree
     assert all("lost discs" in m["note"] for m in metrics)
     runs = {"native": [(good, {"discs_out": 3, "flow_rate": 50.0, "jammed": False, "peak_ratio_side": 2.0,
                                "peak_ratio_bottom": 3.0})], "yade": [(failed("yade", "x", "timed out after 900 s"), {})]}
-    m, _ = study.discharge_compare("d", runs)
-    assert m and not any(x["pass"] for x in m) and "timed out" in m[0]["note"]
+    m, _ = study.discharge_compare("d", runs, plan.Options())
+    assert m and all(x["verdict"] == "inconclusive" for x in verdict.finalize(m)) and "timed out" in m[0]["note"]
 
 
 def test_profile_comparison_tells_an_edge_contact_from_a_real_difference():
@@ -325,15 +325,18 @@ def test_time_averaged_wall_profiles_during_flow_are_judged_statistically():
         return [(r, study.discharge_measures(r, case))
                 for r in (_flow_member(case, 1e4, seed0 + k, extra) for k in range(4))]
     same = {"native": ensemble(0.0, 10), "liggghts": ensemble(0.0, 20)}
-    metrics, summary = study.discharge_compare("d", same)
-    flow = [x for x in metrics if "flow" in x["metric"] and "rate" not in x["metric"]]
-    assert len(flow) == 5 and all(x["pass"] for x in flow), [(x["metric"], x["values"]) for x in flow]
+    metrics, summary = study.discharge_compare("d", same, plan.Options())
+    flow = [x for x in verdict.finalize(metrics) if "flow" in x["metric"] and "rate" not in x["metric"]]
+    assert len(flow) == 5 and all(x["verdict"] == "agree" for x in flow), [(x["metric"], x["ci"]) for x in flow]
     assert summary["native"]["flow_profile"]["left"]["members"] == 4
-    # side walls 30 % stronger in one code: the totals and the cumulative side profile fail, the bottom passes
+    # side walls 30 % stronger in one code: the totals and the cumulative side profile disagree, the bottom agrees
     off = {"native": ensemble(0.0, 10), "liggghts": ensemble(0.3, 20)}
-    metrics, _ = study.discharge_compare("d", off)
-    res = {x["metric"].split(" (")[0]: x["pass"] for x in metrics}
-    assert not res["discharge flow_side_normal"] and not res["discharge flow_side_shear"]
-    assert res["discharge flow_bottom_normal"]
-    assert not res["discharge time-averaged side-wall normal profile during flow, cumulative"]
-    assert res["discharge time-averaged bottom-wall normal profile during flow, cumulative"]
+    metrics, _ = study.discharge_compare("d", off, plan.Options())
+    res = {x["metric"].split(" (")[0]: x["verdict"] for x in verdict.finalize(metrics)}
+    assert res["discharge flow_side_normal"] == res["discharge flow_side_shear"] == "disagree"
+    assert res["discharge flow_bottom_normal"] == "agree"
+    assert res["discharge time-averaged side-wall normal profile during flow, cumulative"] == "disagree"
+    assert res["discharge time-averaged bottom-wall normal profile during flow, cumulative"] == "agree"
+    # --metrics keeps only the kinds named
+    kept, _ = study.discharge_compare("d", same, plan.Options(metrics=("wall_load",)))
+    assert [x["margin_kind"] for x in kept] == ["wall_load"] * 3

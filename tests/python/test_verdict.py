@@ -144,16 +144,19 @@ def test_a_mutant_changes_one_constant_of_one_code():
     assert g["gravity"][1] == pytest.approx(-980 * 1.01)
 
 
-def test_caught_lists_only_metrics_the_baseline_passed():
-    base = {"metrics": [{"scene": "s", "metric": "a", "pass": True, "values": {}}, {"scene": "s", "metric": "b", "pass": False, "values": {}},
-                        {"scene": "s", "metric": "translation constants read back (yade)", "pass": True, "values": {}}]}
-    mut = {"metrics": [{"scene": "s", "metric": "a", "pass": True, "values": {}}, {"scene": "s", "metric": "b", "pass": False, "values": {}},
-                       {"scene": "s", "metric": "translation constants read back (yade)", "pass": False, "values": {}}]}
+def test_caught_lists_only_metrics_that_disagree_under_the_mutant_alone():
+    def m(name, v):
+        return {"scene": "s", "metric": name, "verdict": v, "values": {}}
+    tc = "translation constants read back (yade)"
+    base = {"metrics": [m("a", "agree"), m("b", "disagree"), m("c", "agree"), m(tc, "agree")]}
+    mut = {"metrics": [m("a", "agree"), m("b", "disagree"), m("c", "inconclusive"), m(tc, "disagree")]}
     c = mutants.caught(base, mut)
-    assert c["caught"] and not c["caught_physically"] and [r["metric"] for r in c["metrics"]] == [
-        "translation constants read back (yade)"]
-    mut["metrics"][0]["pass"] = False
+    assert c["caught"] and not c["caught_physically"] and [r["metric"] for r in c["metrics"]] == [tc]
+    mut["metrics"][0]["verdict"] = "disagree"          # a physical metric disagrees: caught physically
     assert mutants.caught(base, mut)["caught_physically"]
+    mut["metrics"][0]["verdict"] = "inconclusive"      # inconclusive is never a catch
+    mut["metrics"][3]["verdict"] = "agree"
+    assert not mutants.caught(base, mut)["caught"]
 
 
 # ------------------------------------------------------------------ discharge measures
