@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from . import collision_judge
-from . import janssen, preflight, stats, study, verdict
+from . import janssen, native_backend, preflight, stats, study, verdict
 from .common import Case, Result, scene_material_index
 from .plan import Entry, Plan, PlanError, codes_of, make_plan, member_case, refusals, start_discs
 
@@ -179,25 +179,65 @@ def collision(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
 
 
 def frozen_packing(plan: Plan, out: Path) -> np.ndarray:
-    """The native engine fills the scene with the shared law for --settle s; velocities zeroed."""
-    from . import native_backend
+    """The native engine fills the scene with the shared law for --settle s; velocities zeroed.
+    How near rest the fill ended (its walls' load along gravity against its weight) is kept beside
+    it, in rest.json, for the rest gate."""
     path = out / "frozen.npy"
-    if path.exists():
+    if path.exists() and (out / "rest.json").exists():
         return np.load(path)
-    d = start_discs(plan.shared)
-    case = Case(name="fill", resolved=plan.shared, discs=d, dt=plan.dt, duration=plan.settle,
-                materials=scene_material_index(plan.shared))
+    case = fill_case(plan, plan.settle)
     res = native_backend.run(case, out / "fill", 1800)
     if not res.ok:
         raise RuntimeError(f"frozen packing of {plan.name}: native fill failed: {res.reason}")
     end = np.array(res.discs_end, float)
     end[:, 3:] = 0.0
     out.mkdir(parents=True, exist_ok=True)
+    (out / "rest.json").write_text(json.dumps({"settle": plan.settle, "rel": rest_of(plan, res, case)}))
     np.save(path, end)
     return end
 
 
+def fill_case(plan: Plan, settle: float) -> Case:
+    return Case(name="fill", resolved=plan.shared, discs=start_discs(plan.shared), dt=plan.dt, duration=settle,
+                materials=scene_material_index(plan.shared))
+
+
+def rest_of(plan: Plan, res: Result, case: Case) -> float:
+    """|walls' load along gravity / weight - 1| of a native fill (0 without gravity: nothing to carry)."""
+    if not res.ok:
+        return math.inf
+    if not np.linalg.norm(plan.shared["gravity"]) > 0:
+        return 0.0
+    return float(weight_metrics(plan.name, {"native": res}, case, plan.shared)[0]["values"]["rel_diff"])
+
+
+REST_TOL = 1e-3   # the native fill rests when the walls carry its weight to this (relative) before the codes run
+REST_TRIES = (2, 4)  # longer fills tried (x --settle) to name the settle that reaches rest
+
+
+def rest_gate(plan: Plan, out: Path) -> list:
+    """The frozen packing must rest before every code starts from it: a fill that does not is
+    reported inconclusive, with the --settle that reaches rest (found by longer native fills), and
+    no reference code runs (what would differ then is the packing's motion, not the codes)."""
+    frozen_packing(plan, out)
+    rel = json.loads((out / "rest.json").read_text())["rel"]
+    if rel <= REST_TOL:
+        return []
+
+    def rests(k):
+        case = fill_case(plan, plan.settle * k)
+        return rest_of(plan, native_backend.run(case, out / "rest" / f"fill_x{k}", 1800), case) <= REST_TOL
+    hint = next((f"--settle {plan.settle * k:g} reaches it" for k in REST_TRIES if rests(k)),
+                f"--settle {plan.settle * REST_TRIES[-1]:g} does not reach it either")
+    return [verdict.unjudged("native fill at rest before the codes start from it", plan.name,
+                             f"the native fill did not reach rest in --settle {plan.settle:g} s (the walls carry "
+                             f"the weight to {rel:.2g}, rest is {REST_TOL:g}); {hint}")]
+
+
 def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
+    unrested = rest_gate(plan, out)
+    if unrested:
+        return unrested, {"case": plan.name, "results": {}, "n_discs": len(plan.shared["discs"])}
     pack = frozen_packing(plan, out)
     case = Case(name=plan.name, resolved=plan.shared, discs=pack, dt=plan.dt, duration=plan.duration,
                 materials=scene_material_index(plan.shared))     # the fill keeps the scene's order
