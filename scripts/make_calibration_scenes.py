@@ -170,7 +170,7 @@ def scenes():
         [[2 * t_[0] + (R + 1e-5) * n_[0], 2 * t_[1] + (R + 1e-5) * n_[1], R, 20 * t_[0], 20 * t_[1], 0.0]], 0.1,
         [("incline", (0.0, 0.0), (20 * t_[0], 20 * t_[1]))], gravity=g)
     add("rest_on_floor", "F3", "disc dropped from touching onto the floor, at rest: floor force = rho pi r^2 g",
-        [[0.0, R, R, 0.0, 0.0, 0.0]], 0.03, [("floor", (-5.0, 0.0), (5.0, 0.0))], gravity=g)
+        [[0.0, R, R, 0.0, 0.0, 0.0]], 0.03, [("floor", (-10.0, 0.0), (10.0, 0.0))], gravity=g)
     return out
 
 
