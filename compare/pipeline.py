@@ -26,7 +26,7 @@ import numpy as np
 from . import collision_judge
 from . import janssen, stats, study
 from .common import Case, Result, scene_material_index
-from .plan import Entry, Plan, PlanError, codes_of, make_plan, member_case, refusals, start_discs
+from .plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -134,14 +134,21 @@ def collision(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
     return collision_judge.judge(plan.name, case, res)
 
 
+def fill_time(plan: Plan) -> float:
+    """[s] the frozen packing's fill: static, --settle; discharge, the scene's end.time (its fall
+    and rest: a discharge's --settle is each member's short settling after the jitter)."""
+    return float(plan.shared["end"]["time"]) if plan.kind == "discharge" else plan.settle
+
+
 def frozen_packing(plan: Plan, out: Path) -> np.ndarray:
-    """The native engine fills the scene with the shared law for --settle s; velocities zeroed."""
+    """The native engine fills the scene with the shared law for fill_time(plan) s, the gate of a
+    discharge closed; velocities zeroed."""
     from . import native_backend
     path = out / "frozen.npy"
     if path.exists():
         return np.load(path)
     d = start_discs(plan.shared)
-    case = Case(name="fill", resolved=plan.shared, discs=d, dt=plan.dt, duration=plan.settle,
+    case = Case(name="fill", resolved=plan.shared, discs=d, dt=plan.dt, duration=fill_time(plan),
                 materials=scene_material_index(plan.shared))
     res = native_backend.run(case, out / "fill", 1800)
     if not res.ok:
@@ -168,12 +175,13 @@ def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, di
     return metrics, detail
 
 
-def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=None) -> list:
+def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=None, start=None) -> list:
     """[(code -> Result, Case)] for members 0 .. plan.members - 1, in member order; up to
     ``plan.options.jobs`` members at once (each member in its own folder out/mK: the runs share
-    nothing, so the order they finish in changes no result)."""
+    nothing, so the order they finish in changes no result). ``start``: the discs every member
+    jitters (default: the scene's start)."""
     def one(k):
-        case = member_case(plan, k)
+        case = member_case(plan, k) if start is None else member_case(plan, k, jittered(start, k, plan.options.perturb))
         if series_interval is not None:
             case.series_interval = series_interval
         return run_all(codes, case, plan, out / f"m{k}", mutation), case
@@ -185,10 +193,10 @@ def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=Non
         return list(ex.map(one, range(plan.members)))
 
 
-def ensemble_runs(plan: Plan, codes, out: Path, mutation=None) -> dict:
-    """code -> [(Result, Case)] over the members."""
+def ensemble_runs(plan: Plan, codes, out: Path, mutation=None, start=None) -> dict:
+    """code -> [(Result, Case)] over the members (``start``: as member_runs)."""
     per = {c: [] for c in codes}
-    for res, case in member_runs(plan, codes, out, mutation):
+    for res, case in member_runs(plan, codes, out, mutation, start=start):
         for c in codes:
             per[c].append((res[c], case))
     return per
@@ -376,8 +384,15 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png, "fits": summary}
 
 
+def discharge_start(plan: Plan, out: Path) -> np.ndarray | None:
+    """The discs a discharge's members jitter: --start frozen, the native engine's rested packing
+    (one fill for every member of every code, so member k starts alike in every code and settles
+    only --settle s); --start scene, None (the scene's start, each code filling it itself)."""
+    return frozen_packing(plan, out) if plan.options.start == "frozen" else None
+
+
 def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
-    per = ensemble_runs(plan, codes, out, mutation)
+    per = ensemble_runs(plan, codes, out, mutation, start=discharge_start(plan, out))
     per_code = {c: [(r, study.discharge_measures(r, case) if r.ok else {}) for r, case in runs]
                 for c, runs in per.items()}
     metrics, summary = study.discharge_compare(plan.name, per_code)
@@ -447,7 +462,7 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
     t0 = time.monotonic()
     for p in plans:
         where = out / p.kind / p.name
-        log(f"{p.name}: {p.kind}{' (' + p.options.start + ')' if p.kind == 'static' else ''}, "
+        log(f"{p.name}: {p.kind}{' (' + p.options.start + ')' if p.kind in ('static', 'discharge') else ''}, "
             f"{p.members} member(s), dt {p.dt:g} s, {p.duration:g} s"
             + (f" [mutant {mutation.name}]" if mutation else ""))
         t1 = time.monotonic()
