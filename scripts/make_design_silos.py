@@ -32,29 +32,14 @@ PITCH = 2.3                    # cm between grid sites: every pair of discs star
 JITTER = 0.04                  # cm, uniform in x and y: no disc starts exactly above another
 
 
-def fill(n: int, width: float, seed: int) -> np.ndarray:
-    """n discs (x, y, r) on a jittered grid above the floor, rows filled left to right."""
-    rng = np.random.default_rng(seed)
-    per_row = int((width - 2 * R_HI - 2 * JITTER) // PITCH) + 1
-    x0 = (width - (per_row - 1) * PITCH) / 2
-    k = np.arange(n)
-    x = x0 + (k % per_row) * PITCH + rng.uniform(-JITTER, JITTER, n)
-    y = R_HI + 0.1 + (k // per_row) * PITCH + rng.uniform(-JITTER, JITTER, n)
-    r = rng.uniform(R_LO, R_HI, n)
-    return np.column_stack([x, y, r])
-
-
-def scene_text(name: str, d: dict, csv_name: str, top: float) -> str:
-    w, s = d["width"], d["slit"]
-    lo, hi = (w - s) / 2, (w + s) / 2
-    return f"""# Written by scripts/make_design_silos.py: a flat-bottom silo designed for the discharge
-# agreement study. {d['n']} polydisperse discs (r {R_LO}-{R_HI} cm, a loose jittered grid in
+TEMPLATE = """# Written by scripts/make_design_silos.py: a flat-bottom silo designed for the discharge
+# agreement study. {n} polydisperse discs (r {R_LO}-{R_HI} cm, a loose jittered grid in
 # {csv_name}) fall and rest in a {w:g} cm wide silo, then discharge through a {s:g} cm slit
-# (6 mean diameters: steady flow, no jam) for {d['flow']:g} s. Compared from the native engine's
+# (6 mean diameters: steady flow, no jam) for {flow:g} s. Compared from the native engine's
 # rested packing: build/dem compare reference_inputs/agreement/user/{name}.toml --out DIR
 [scene]
 name = "{name}"
-description = "flat-bottom silo, {d['n']} polydisperse discs, {w:g} cm wide, {s:g} cm slit"
+description = "flat-bottom silo, {n} polydisperse discs, {w:g} cm wide, {s:g} cm slit"
 
 [physics]
 gravity = [0.0, -981.0]          # cm/s^2
@@ -77,7 +62,7 @@ density = 2.5                    # g/cm^3
 materials = ["glass", "glass"]
 kn = 5e7                         # g/s^2 per cm
 ks = 1.5e7
-eta_n = 800.0                    # g/s per cm: damping ratio about 0.2 for two r = 1 discs
+eta_n = 800.0                    # g/s per cm: damping ratio 0.03 (dem run prints zeta_n)
 eta_s = 400.0
 mu = 0.4
 
@@ -140,19 +125,37 @@ file = "{csv_name}"
 material = "glass"
 
 [end]
-time = {d['fill_time']:g}                       # s: the grid's fall and rest (the frozen packing's fill)
+time = {fill_time:g}                       # s: the grid's fall and rest (the frozen packing's fill)
 stop_at_rest = false
 
 [output]
 profile_bin = 4.0                # cm
 
 [discharge]
-time = {d['flow']:g}                       # s after opening: a fraction of the fill leaves, the flow is steady
+time = {flow:g}                       # s after opening: a fraction of the fill leaves, the flow is steady
 gate = "gate"
 outlet_depth = 4.0               # cm below the slit: removed
 jam_time = 0.3
 series_interval = 0.005
 """
+
+
+def fill(n: int, width: float, seed: int) -> np.ndarray:
+    """n discs (x, y, r) on a jittered grid above the floor, rows filled left to right."""
+    rng = np.random.default_rng(seed)
+    per_row = int((width - 2 * R_HI - 2 * JITTER) // PITCH) + 1
+    x0 = (width - (per_row - 1) * PITCH) / 2
+    k = np.arange(n)
+    x = x0 + (k % per_row) * PITCH + rng.uniform(-JITTER, JITTER, n)
+    y = R_HI + 0.1 + (k // per_row) * PITCH + rng.uniform(-JITTER, JITTER, n)
+    r = rng.uniform(R_LO, R_HI, n)
+    return np.column_stack([x, y, r])
+
+
+def scene_text(name: str, d: dict, csv_name: str, top: float) -> str:
+    w, s = d["width"], d["slit"]
+    return TEMPLATE.format(name=name, n=d["n"], flow=d["flow"], fill_time=d["fill_time"], w=w, s=s,
+                           lo=(w - s) / 2, hi=(w + s) / 2, top=top, csv_name=csv_name, R_LO=R_LO, R_HI=R_HI)
 
 
 def files() -> dict:

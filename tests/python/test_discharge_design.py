@@ -22,7 +22,7 @@ def _small_silo(tmp_path) -> Path:
     spec = importlib.util.spec_from_file_location("make_design_silos", ROOT / "scripts" / "make_design_silos.py")
     gen = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(gen)
-    d = dict(n=40, width=12.0, slit=4.0, flow=0.2, fill_time=0.6)
+    d = dict(n=40, width=12.0, slit=4.0, flow=0.2, fill_time=1.5)
     xyr = gen.fill(d["n"], d["width"], seed=1)
     (tmp_path / "small_fill.csv").write_text("x,y,r\n" + "".join(f"{x:.4f},{y:.4f},{r:.4f}\n" for x, y, r in xyr))
     scene = tmp_path / "small.toml"
@@ -65,17 +65,18 @@ def test_frozen_discharge_members_start_alike_in_every_code_from_the_rested_pack
 
 
 def test_the_frozen_packing_is_at_rest(tmp_path):
-    """A run of the packing, unjittered, in the native engine: the discs stay where they are."""
+    """The packing, unjittered, run for a member's settle in the native engine: the discs stay
+    where they are, to within the jitter of a member."""
     from compare import native_backend
     scene = _small_silo(tmp_path)
     plan = _plan(scene)
     pack = pipeline.frozen_packing(plan, tmp_path / "out")
-    case = Case(name="rest", resolved=plan.shared, discs=pack, dt=plan.dt, duration=0.05,
+    case = Case(name="rest", resolved=plan.shared, discs=pack, dt=plan.dt, duration=plan.settle,
                 materials=plan_mod.scene_material_index(plan.shared))
     res = native_backend.run(case, tmp_path / "rest", 120)
     assert res.ok, res.reason
     moved = np.abs(np.array(res.discs_end, float)[:, :2] - pack[:, :2]).max()
-    assert moved < 1e-3, moved                                     # below the jitter of a member
+    assert moved < plan.options.perturb, moved
 
 
 def _removals(rate, t0, t1, transient, seed=0):
@@ -90,7 +91,7 @@ def _removals(rate, t0, t1, transient, seed=0):
 
 
 def test_steady_flow_rate_recovers_a_known_rate_and_leaves_the_transient_out():
-    t = _removals(200.0, 0.1, 1.0, transient=30)
+    t = _removals(200.0, 0.1, 1.0, transient=60)
     got = study.steady_flow_rate(t, 0.1, 1.0)
     assert got == pytest.approx(200.0, rel=0.01)
     # the transient counts when the window starts before it: the slope over all removals is off
@@ -111,3 +112,11 @@ def test_discharge_measures_take_the_flow_rate_over_the_flow_window():
     assert m["discs_out"] == len(t)
     assert m["flow_rate"] == pytest.approx(study.steady_flow_rate(t, *study.flow_window(case)), rel=1e-12)
     assert m["flow_rate"] == pytest.approx(150.0, rel=0.02)
+
+
+def test_the_committed_design_silos_are_the_generator_s():
+    import subprocess
+    import sys
+    p = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_design_silos.py"), "--check"],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
