@@ -25,6 +25,9 @@ MARGINS = {
     "discs_out": Margin(0.10, 0.05, True, "discs out at the end of the flow"),
     # Time-averaged wall loads (during flow; static members' wall totals at rest).
     "wall_load": Margin(0.10, 0.05, True, "time-averaged wall load (a wall group's total)"),
+    # Side-wall friction totals (during flow; static members at rest): friction at rest is
+    # statically indeterminate, so its member-to-member spread is several times a normal load's.
+    "wall_friction": Margin(0.10, 0.05, True, "side-wall friction total (a wall's or the group's)"),
     # Each point of a cumulative time-averaged wall profile, relative to the wall's total.
     "wall_profile": Margin(0.10, 0.05, True, "cumulative wall profile, each point / the wall total"),
     # Windowed peaks: the largest 0.05 s average, a maximum over a noisy series.

@@ -28,7 +28,7 @@ import numpy as np
 from . import collision_judge
 from . import janssen, native_backend, preflight, stats, study, verdict
 from .common import Case, Result, scene_material_index
-from .plan import Entry, Plan, PlanError, codes_of, make_plan, member_case, refusals, start_discs
+from .plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -178,14 +178,20 @@ def collision(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
     return collision_judge.judge(plan.name, case, res)
 
 
+def fill_time(plan: Plan) -> float:
+    """[s] the frozen packing's fill: static, --settle; discharge, the scene's end.time (its fall
+    and rest: a discharge's --settle is each member's short settling after the jitter)."""
+    return float(plan.shared["end"]["time"]) if plan.kind == "discharge" else plan.settle
+
+
 def frozen_packing(plan: Plan, out: Path) -> np.ndarray:
-    """The native engine fills the scene with the shared law for --settle s; velocities zeroed.
-    How near rest the fill ended (its walls' load along gravity against its weight) is kept beside
-    it, in rest.json, for the rest gate."""
+    """The native engine fills the scene with the shared law for fill_time(plan) s, the gate of a
+    discharge closed; velocities zeroed. How near rest the fill ended (its walls' load along
+    gravity against its weight) is kept beside it, in rest.json, for the rest gate."""
     path = out / "frozen.npy"
     if path.exists() and (out / "rest.json").exists():
         return np.load(path)
-    case = fill_case(plan, plan.settle)
+    case = fill_case(plan, fill_time(plan))
     res = native_backend.run(case, out / "fill", 1800)
     if not res.ok:
         raise RuntimeError(f"frozen packing of {plan.name}: native fill failed: {res.reason}")
@@ -252,12 +258,13 @@ def static_frozen(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, di
     return metrics, detail
 
 
-def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=None) -> list:
+def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=None, start=None) -> list:
     """[(code -> Result, Case)] for members 0 .. plan.members - 1, in member order; up to
     ``plan.options.jobs`` members at once (each member in its own folder out/mK: the runs share
-    nothing, so the order they finish in changes no result)."""
+    nothing, so the order they finish in changes no result). ``start``: the discs every member
+    jitters (default: the scene's start)."""
     def one(k):
-        case = member_case(plan, k)
+        case = member_case(plan, k) if start is None else member_case(plan, k, jittered(start, k, plan.options.perturb))
         if series_interval is not None:
             case.series_interval = series_interval
         return run_all(codes, case, plan, out / f"m{k}", mutation), case
@@ -269,10 +276,10 @@ def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=Non
         return list(ex.map(one, range(plan.members)))
 
 
-def ensemble_runs(plan: Plan, codes, out: Path, mutation=None) -> dict:
-    """code -> [(Result, Case)] over the members."""
+def ensemble_runs(plan: Plan, codes, out: Path, mutation=None, start=None) -> dict:
+    """code -> [(Result, Case)] over the members (``start``: as member_runs)."""
     per = {c: [] for c in codes}
-    for res, case in member_runs(plan, codes, out, mutation):
+    for res, case in member_runs(plan, codes, out, mutation, start=start):
         for c in codes:
             per[c].append((res[c], case))
     return per
@@ -300,12 +307,13 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
                 metrics.append(verdict.unjudged(name, plan.name, "failed members: " + "; ".join(
                     (summary[c]["failed"] + summary["native"]["failed"])[:2]), "statistical"))
                 continue
-            if plan.options.metrics and "wall_load" not in plan.options.metrics:
+            kind = "wall_friction" if k == "shear" else "wall_load"
+            if plan.options.metrics and kind not in plan.options.metrics:
                 continue
             st = stats.difference([t[w][k] if t else None for t in tots["native"]],
                                   [t[w][k] if t else None for t in tots[c]], relative=True, paired=True)
             a, b = summary["native"][f"{w}.{k}"], summary[c][f"{w}.{k}"]
-            metrics.append(verdict.statistical(name, plan.name, st, "wall_load", plan.options,
+            metrics.append(verdict.statistical(name, plan.name, st, kind, plan.options,
                                                {"native": list(a[:2]), c: list(b[:2])}))
     if np.linalg.norm(plan.shared["gravity"]) > 0:       # every member at rest carries its weight
         for c in codes:
@@ -464,8 +472,15 @@ def janssen_metrics(plan: Plan, a: dict, b: dict, code: str) -> list:
 FIT_DF = 1e6   # a fit's parameter interval is normal (curve_fit's covariance, many bins)
 
 
+def discharge_start(plan: Plan, out: Path) -> np.ndarray | None:
+    """The discs a discharge's members jitter: --start frozen, the native engine's rested packing
+    (one fill for every member of every code, so member k starts alike in every code and settles
+    only --settle s); --start scene, None (the scene's start, each code filling it itself)."""
+    return frozen_packing(plan, out) if plan.options.start == "frozen" else None
+
+
 def discharge(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
-    per = ensemble_runs(plan, codes, out, mutation)
+    per = ensemble_runs(plan, codes, out, mutation, start=discharge_start(plan, out))
     per_code = {c: [(r, study.discharge_measures(r, case) if r.ok else {}) for r, case in runs]
                 for c, runs in per.items()}
     metrics, summary = study.discharge_compare(plan.name, per_code, plan.options)
@@ -538,7 +553,7 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
     t0 = time.monotonic()
     for p in plans:
         where = out / p.kind / p.name
-        log(f"{p.name}: {p.kind}{' (' + p.options.start + ')' if p.kind == 'static' else ''}, "
+        log(f"{p.name}: {p.kind}{' (' + p.options.start + ')' if p.kind in ('static', 'discharge') else ''}, "
             f"{p.members} member(s), dt {p.dt:g} s, {p.duration:g} s"
             + (f" [mutant {mutation.name}]" if mutation else ""))
         t1 = time.monotonic()

@@ -30,10 +30,11 @@ DEFAULT_DT = 5e-5
 TOL_TOTAL = 0.03        # wall normal totals
 TOL_SHEAR_TOTAL = 0.10  # side-wall friction totals
 TOL_CUMULATIVE = 0.05   # cumulative profile: max difference / wall total
-# Time-averaged wall forces during flow: the mean of every wall-force sample from FLOW_START
-# after the opening (the discs over the slit have fallen and the first arches broken: the flow
-# rate is steady from about the 5th removal, ~0.07 s in 11/12) to the end of the run, the same
-# window in every code. Totals per wall group are judged like the other discharge means (Welch);
+# The flow window: from FLOW_START after the opening (the discs over the slit have fallen and the
+# first arches broken: the flow rate is steady from about the 5th removal, ~0.07 s in 11/12) to
+# the end of the run, the same window in every code. The flow rate is the slope of the removed
+# count over it (steady_flow_rate); the time-averaged wall forces during flow are the mean of
+# every wall-force sample in it. Totals per wall group are judged like the other discharge means;
 # the cumulative profile of each wall (from its 'from' end) point by point, the level split over
 # the points.
 FLOW_START = 0.1        # [s] since opening
@@ -214,14 +215,25 @@ def discharge_case(scene: Path, dt: float, settle: float, duration: float, membe
                 mode="discharge", settle=settle, seed=member)
 
 
+FLOW_MIN_REMOVALS = 10   # removals in the flow window for a flow rate (fewer: a jam, judged as such)
+
+
+def steady_flow_rate(removals, t0: float, t1: float) -> float:
+    """[discs/s] the least-squares slope of the removed count against time over the steady window
+    t0 <= t <= t1 (removal times since the opening): the rate of the steady flow, the opening's
+    transient (the fall of the first discs to the outlet depth, the arch's first breaks) before t0
+    left out. NaN with fewer than FLOW_MIN_REMOVALS removals in the window."""
+    t = np.sort(np.asarray(removals, float))
+    sel = (t >= t0 - 1e-12) & (t <= t1 + 1e-12)
+    if sel.sum() < FLOW_MIN_REMOVALS:
+        return float("nan")
+    return float(np.polyfit(t[sel], np.nonzero(sel)[0] + 1.0, 1)[0])
+
+
 def discharge_measures(res: Result, case: Case) -> dict:
-    """Flow rate (discs/s, slope of the count after the 5th removal), discs out, jam, peak ratios."""
+    """Flow rate (discs/s over the flow window, steady_flow_rate), discs out, jam, peak ratios."""
     t = np.sort(np.array(res.removals, float))
-    out = {"discs_out": int(len(t)), "flow_rate": float("nan"), "jammed": False}
-    if len(t) >= 10:
-        tt = t[4:]
-        n = np.arange(5, len(t) + 1, dtype=float)
-        out["flow_rate"] = float(np.polyfit(tt, n, 1)[0])
+    out = {"discs_out": int(len(t)), "flow_rate": steady_flow_rate(t, *flow_window(case)), "jammed": False}
     last = t[-1] if len(t) else 0.0
     out["jammed"] = bool(case.duration - last > float(case.resolved["discharge"]["jam_time"])
                          and res.n_final > 0)
@@ -370,7 +382,7 @@ def profile_stat(ref: dict, other: dict, group: str, n_a: int, n_b: int) -> dict
 
 DISCHARGE_MEANS = ("discs_out", "flow_rate") + FLOW_TOTALS + ("peak_window_side", "peak_window_bottom")
 MARGIN_KIND = {"discs_out": "discs_out", "flow_rate": "flow_rate", "flow_side_normal": "wall_load",
-               "flow_side_shear": "wall_load", "flow_bottom_normal": "wall_load", "peak_window_side": "peak",
+               "flow_side_shear": "wall_friction", "flow_bottom_normal": "wall_load", "peak_window_side": "peak",
                "peak_window_bottom": "peak"}
 
 
