@@ -207,7 +207,7 @@ def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dic
             continue
         rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=plans,
                            looks=baseline.get("looks", {}).get("planned", 1))
-        c = mutants.caught(baseline, rep)
+        c = mutants.caught(baseline, rep, mu.proves)
         rows.append({"mutant": mu.name, "code": mu.code, "applicable": True, **c})
         log(f"mutant {mu.label}: {rep['verdict']}"
             + (f", caught by {', '.join(sorted({r['metric'] for r in c['metrics']}))}" if c["caught"] else ": NOT CAUGHT"))

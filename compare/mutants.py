@@ -34,10 +34,19 @@ SPECS = [
     ("wall_right_shift_0.01r", "geometry", "wall_right", 0.01, "all"),
     ("slit_ends_0.2r", "geometry", "points", 0.2, "points"),
 ]
-# Run only when named (--mutant NAME): the Janssen column's power check (docs/compare.md).
+# Run only when named (--mutant NAME): the statistical metrics' power checks (docs/compare.md,
+# "Mutants"): the Janssen column's wall friction; on the designed discharge, a slit wider by two
+# radii (the flow rate and the discs out, about +30 % by Beverloo's law in 2D) and denser discs
+# (every wall load +25 %, the flow unchanged).
 EXTRA_SPECS = [
     ("mu_disc_wall_x0.8", "mu", "disc-wall", 0.8, "all"),
+    ("slit_ends_1r", "geometry", "points", 1.0, "points"),
+    ("density_x1.25", "density", "", 1.25, "all"),
 ]
+# The statistical metric kinds a power-check mutant must make disagree, where the run has such
+# metrics: caught by the translation check alone, it proves nothing about the statistics.
+PROVES = {"mu_disc_wall_x0.8": ("janssen",), "slit_ends_1r": ("flow_rate", "discs_out"),
+          "density_x1.25": ("wall_load",)}
 
 
 @dataclasses.dataclass
@@ -48,6 +57,7 @@ class Mutation:
     pairs: str
     factor: float
     scope: str
+    proves: tuple = ()          # statistical kinds it must make disagree (PROVES)
 
     def applies(self, code: str, case) -> bool:
         """For this code, in a case its scope covers, and changing something there (gravity x 1.01
@@ -126,7 +136,7 @@ def mutations(codes, names=None) -> list[Mutation]:
         for c in codes:
             if c == "native":
                 continue
-            m = Mutation(f"{c}_{name}", c, what, pairs, factor, scope)
+            m = Mutation(f"{c}_{name}", c, what, pairs, factor, scope, PROVES.get(name, ()))
             if names is None and (name, what, pairs, factor, scope) in SPECS:
                 out.append(m)
             elif names is not None and (name in names or m.name in names):
@@ -140,23 +150,29 @@ def mutations(codes, names=None) -> list[Mutation]:
     return out
 
 
-def caught(baseline: dict, mutant_report: dict) -> dict:
+def caught(baseline: dict, mutant_report: dict, proves: tuple = ()) -> dict:
     """The metrics that say disagree under the mutant where the baseline did not, with how far off
     they are; and the mutant's measured effect on every statistical metric (its estimate and
-    interval against the margin), whatever its verdict."""
+    interval against the margin), whatever its verdict. A power-check mutant (``proves``) is
+    caught only when a statistical metric of each of those kinds that the run has disagrees."""
     base = {(m["scene"], m["metric"]): m for m in baseline["metrics"]}
     rows, effects = [], []
     for m in mutant_report["metrics"]:
         b = base.get((m["scene"], m["metric"]))
         if m["verdict"] == "disagree" and (b is None or b["verdict"] != "disagree"):
-            rows.append({"scene": m["scene"], "metric": m["metric"], "by": margin(m), "note": m.get("note", "")})
+            rows.append({"scene": m["scene"], "metric": m["metric"], "by": margin(m), "note": m.get("note", ""),
+                         "margin_kind": m.get("margin_kind")})
         if m.get("kind") == "statistical" and "stat" in m:
             effects.append({"scene": m["scene"], "metric": m["metric"], "verdict": m["verdict"],
                             "estimate": m["stat"].get("estimate"), "ci": m.get("ci"), "margin": m["margin"],
                             "relative": m.get("relative", True)})
-    physical = [r for r in rows if not r["metric"].startswith("translation ")]
-    return {"caught": bool(rows), "caught_physically": bool(physical), "metrics": rows, "effects": effects,
-            "verdict": mutant_report.get("verdict")}
+    physical = [r for r in rows if not r["metric"].startswith(("translation constants", "translation geometry"))]
+    present = {m.get("margin_kind") for m in mutant_report["metrics"] if m.get("kind") == "statistical"}
+    needed = [k for k in proves if k in present]
+    proved = [k for k in needed if any(r["margin_kind"] == k for r in rows)]
+    ok = bool(rows) and len(proved) == len(needed)
+    return {"caught": ok, "caught_physically": bool(physical), "metrics": rows, "effects": effects,
+            "verdict": mutant_report.get("verdict"), "proves": needed, "proved": proved}
 
 
 def margin(m: dict) -> float:

@@ -342,7 +342,10 @@ def write(report: dict, out: Path) -> None:
                 continue
             eff = "; ".join(f"{e['metric']}: {_interval(dict(e, kind='statistical'))} {e['verdict']}"
                             for e in r.get("effects", [])[:8])
-            L.append(f"| {r['mutant']} | {r['code']} | {r.get('verdict', '')} | {'yes' if r['caught'] else '**NO**'} | "
+            need = r.get("proves") or []
+            got = (" (must disagree by " + ", ".join(need) + "; did by " + (", ".join(r.get("proved") or []) or "none")
+                   + ")") if need else ""
+            L.append(f"| {r['mutant']} | {r['code']} | {r.get('verdict', '')} | {'yes' if r['caught'] else '**NO**'}{got} | "
                      f"{'yes' if r['caught_physically'] else 'no'} | {by} | {eff} |")
     if report.get("attribution"):
         L += ["", "## Attribution: which law option closes a failing metric", "",

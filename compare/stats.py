@@ -223,8 +223,10 @@ def difference(a, b, relative: bool = True, paired: bool = False) -> dict:
     """The statistic of code b against the reference a from their member values (None or NaN for
     a member without one): estimate, standard error, df. relative: mean(b)/mean(a) - 1; else
     mean(b) - mean(a). paired (members k of both codes start from the same state): the paired
-    estimate is used where its interval is narrower than the unpaired one; the correlation of
-    the pairs is reported either way."""
+    estimate, valid whatever the pairs' correlation (the unpaired one is not when the shared
+    start correlates the members, and choosing the narrower of the two after seeing the data
+    raises the false-agree rate: 0.065 against 0.045 at 4 uncorrelated members); the pairs'
+    correlation is reported."""
     a, b = _values(a), _values(b)
     a_ok, b_ok = a[np.isfinite(a)], b[np.isfinite(b)]
     out = {"type": "t", "relative": relative, "n": [int(len(a_ok)), int(len(b_ok))],
@@ -241,10 +243,8 @@ def difference(a, b, relative: bool = True, paired: bool = False) -> dict:
         pa, pb = a[both], b[both]
         if pa.std() > 0 and pb.std() > 0:
             out["correlation"] = float(np.corrcoef(pa, pb)[0, 1])
-        e2, s2, d2 = _paired(pa, pb, relative)
-        q = 1 - FAMILY_ALPHA
-        if s2 * tq(q, d2) < se * tq(q, df):
-            est, se, df, out["design"] = e2, s2, d2, "paired"
+        est, se, df = _paired(pa, pb, relative)
+        out["design"] = "paired"
     return dict(out, estimate=est, se=se, df=df)
 
 

@@ -46,6 +46,7 @@ def finalize(metrics: list, looks: int = 1, alpha: float = stats.FAMILY_ALPHA) -
                                   if m["verdict"] == INCONCLUSIVE else None)
         m["levels"] = {"agree": levels.agree, "disagree": levels.disagree}
     for m in metrics:
+        m.setdefault("kind", "deterministic")
         m.setdefault("verdict", AGREE if m["pass"] else DISAGREE)
         m["pass"] = m["verdict"] == AGREE
     return metrics

@@ -159,6 +159,26 @@ def test_caught_lists_only_metrics_that_disagree_under_the_mutant_alone():
     assert not mutants.caught(base, mut)["caught"]
 
 
+def test_a_power_check_mutant_must_disagree_by_its_statistical_kinds():
+    """density_x1.25 caught by the translation check alone proves nothing of the wall loads."""
+    def m(name, v, kind=None):
+        return {"scene": "s", "metric": name, "verdict": v, "values": {},
+                **({"kind": "statistical", "margin_kind": kind, "stat": {"estimate": 0.25}, "margin": 0.1,
+                    "ci": [0.2, 0.3]} if kind else {"kind": "deterministic"})}
+    tc = "translation constants read back (liggghts)"
+    base = {"metrics": [m(tc, "agree"), m("load", "agree", "wall_load"), m("rate", "agree", "flow_rate")]}
+    only_read_back = {"metrics": [m(tc, "disagree"), m("load", "inconclusive", "wall_load"),
+                                  m("rate", "agree", "flow_rate")]}
+    c = mutants.caught(base, only_read_back, ("wall_load",))
+    assert not c["caught"] and c["proves"] == ["wall_load"] and c["proved"] == []
+    by_load = {"metrics": [m(tc, "disagree"), m("load", "disagree", "wall_load"), m("rate", "agree", "flow_rate")]}
+    c = mutants.caught(base, by_load, ("wall_load",))
+    assert c["caught"] and c["proved"] == ["wall_load"] and c["effects"][0]["estimate"] == 0.25
+    # a kind the run does not have is not required (the Janssen check on a list without the column)
+    assert mutants.caught(base, by_load, ("wall_load", "janssen"))["caught"]
+    assert [x.proves for x in mutants.mutations(("native", "liggghts"), ["density_x1.25"])] == [("wall_load",)]
+
+
 # ------------------------------------------------------------------ discharge measures
 
 def test_windowed_peak_is_the_largest_moving_average_over_the_opening_value():
