@@ -173,9 +173,9 @@ def plot_forest(metrics: list, png: Path, scene: str) -> bool:
     if not rows:
         return False
     fig, ax = plt.subplots(figsize=(8.5, 0.9 + 0.36 * len(rows)))
-    scale = lambda m: 100.0 if m.get("relative", True) else 1.0  # noqa: E731 - % for relative margins
+    sc = 100.0     # relative differences in % of native's mean; a fraction's in percentage points
     for k, m in enumerate(rows):
-        y, sc, col = len(rows) - 1 - k, scale(m), VERDICT_COLORS[m["verdict"]]
+        y, col = len(rows) - 1 - k, VERDICT_COLORS[m["verdict"]]
         ax.fill_betweenx([y - 0.4, y + 0.4], -m["margin"] * sc, m["margin"] * sc, color="0.9", lw=0)
         ci, cid = m.get("ci") or [np.nan] * 2, m.get("ci_disagree") or [np.nan] * 2
         if all(np.isfinite(ci)):
@@ -188,7 +188,7 @@ def plot_forest(metrics: list, png: Path, scene: str) -> bool:
     ax.axvline(0, color="k", lw=0.6)
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels([_short(m) for m in reversed(rows)], fontsize=7)
-    ax.set_xlabel("difference from native: % of native's mean (jam fraction: absolute x 100)")
+    ax.set_xlabel("difference from native [% of its mean; jam fraction: % points]")
     ax.set_title(f"{scene}: each metric's 90 % interval (thick) and disagree interval (thin)\n"
                  "against its margin (grey); green agree, red disagree, grey inconclusive", fontsize=9)
     ax.grid(alpha=0.3, axis="x")

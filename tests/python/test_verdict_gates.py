@@ -73,3 +73,17 @@ def test_verdicts_combine_and_map_to_exit_codes():
     assert verdict.combine(["agree", "inconclusive", "disagree"]) == "disagree"
     assert verdict.combine(["agree"]) == "agree" and verdict.combine([]) == "inconclusive"
     assert verdict.EXIT == {"agree": 0, "disagree": 1, "inconclusive": 3}
+
+
+def test_the_forest_plot_draws_every_statistical_metric_of_a_scene(tmp_path):
+    from compare import report, stats
+    a, b = [100.0, 101.0, 99.0, 100.5], [101.0, 102.0, 100.0, 101.0]
+    ms = [verdict.statistical("flow_rate (liggghts vs native)", "s", stats.difference(a, b, paired=True), "flow_rate",
+                              plan.Options()),
+          verdict.statistical("jam fraction (liggghts vs native)", "s", stats.proportions(0, 4, 0, 4), "jam_fraction",
+                              plan.Options()),
+          {"metric": "collision", "scene": "s", "values": {}, "tolerance": 1, "pass": True, "note": ""}]
+    verdict.finalize(ms)
+    assert [m["verdict"] for m in ms] == ["agree", "inconclusive", "agree"]
+    assert report.plot_forest(ms, tmp_path / "v.png", "s") and (tmp_path / "v.png").stat().st_size > 10_000
+    assert not report.plot_forest(ms[2:], tmp_path / "w.png", "s") and not (tmp_path / "w.png").exists()
