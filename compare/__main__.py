@@ -20,11 +20,13 @@ EPILOG = """kinds (--kind, default from the scene): collision (one or two discs 
 against analytic results and across codes), static (--start frozen: every code rests from the
 native engine's rested packing, judged against tolerances matched to the codes' agreement;
 --start scene: jittered members from the scene's own start, judged statistically), janssen (a
-tall column's ensemble-averaged side-wall profile fitted with Janssen's law), discharge (jittered
-members settle, the gate opens; means by Welch tests, jams by Fisher's exact test, each with the
-smallest difference it detects), shear (paper 2's shear box, bonded clusters or free discs:
-jittered members compressed to rest and sheared; sigma0, the peak tau/sigma, its mean in strain
-bands and the dilation by Welch tests; native and YADE, LIGGGHTS and LAMMPS refuse it). LAMMPS runs
+tall column's ensemble-averaged side-wall profile fitted with Janssen's law), discharge (--start
+frozen, the default: every code's member k from the native engine's rested packing jittered with
+seed k; --start scene: each code fills the jittered start itself; the gate opens; means, profiles
+and the jam fraction against their margins), shear (paper 2's shear box, bonded clusters or free
+discs: jittered members compressed to rest and sheared; sigma0, the peak tau/sigma, its mean in
+strain bands and the dilation against the shear margin; native and YADE, LIGGGHTS and LAMMPS
+refuse it). LAMMPS runs
 when named (--codes lammps): collisions, static scenes and discharges; it refuses a hopper (no
 inclined finite walls) and caps the total tangential force where the others cap the spring alone.
 
