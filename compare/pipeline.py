@@ -9,7 +9,7 @@ reference_inputs/agreement/) both call ``run``. For each entry (compare/plan.py)
    every scene;
 3. runs the members in every code (compare/study.py's runners and readers) and judges them:
    deterministic kinds against tolerances matched to the codes' measured agreement, ensembles
-   by tests whose level and detectable difference are stated (compare/stats.py).
+   by equivalence against declared margins: agree, disagree or inconclusive (compare/verdict.py).
 
 A *mutation* (compare/mutants.py) hands one reference code a deliberately wrong scene (one
 constant changed) while the expected constants and every other code stay as they are; results
@@ -495,7 +495,8 @@ KIND_RUNNERS = {"collision": collision, "janssen": janssen_column, "discharge": 
 def shear_box(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
     """Paper 2's shear box (compare/shear.py): jittered members compressed to rest and sheared in
     every code; sigma0, the windowed peak of tau/sigma, its mean in strain bands (the curve) and
-    the dilation compared as ensemble means (Welch), every member at rest before the shear."""
+    the dilation compared as ensemble means against the shear margin, every member at rest before
+    the shear."""
     from . import shear
     per = ensemble_runs(plan, codes, out, mutation)
     metrics, detail = shear.judge(plan.name, {c: [r for r, _ in runs] for c, runs in per.items()},

@@ -234,16 +234,17 @@ METHOD = [
     "within their measured agreement.",
     "- Static from a frozen packing: every code rests from the native engine's rested packing (velocities "
     "zeroed, no history); wall totals and cumulative profiles within tolerances set at no more than 10x the "
-    "codes' measured spread. Static from the scene's start: jittered members per code, means by Welch tests.",
-    "- Ensembles (discharge, static members, Janssen): members differ by a seeded jitter of every position. "
-    "Each mean is judged by a two-sided Welch test; the jam fraction by Fisher's exact test with Wilson "
-    "intervals; peaks as the largest 0.05 s average of a wall group's total (bootstrap interval of the median "
-    "shown). The family level 5 % is split over a scene's tests (Bonferroni); each metric states the "
-    "smallest difference it detects with 80 % power. No blanket floor.",
-    "- Shear box (paper 2): jittered members compressed under the plate to rest and sheared in every code; "
-    "sigma0, the windowed peak of tau/sigma, its mean in strain bands and the dilation by Welch tests "
-    "(Bonferroni), each with the smallest difference it detects; every member at rest before the shear.",
-    "- A run that crashed, timed out, blew up, lost discs or wrote no output fails every metric that needs it.",
+    "codes' measured spread. Static from the scene's start: jittered members per code, wall totals against "
+    "their margin.",
+    "- Ensembles (discharge, static members, Janssen, shear box): members differ by a seeded jitter of every "
+    "position; member k of every code starts alike. Each statistical metric agrees when the 90 % interval "
+    "of its difference from native (relative to native's mean; paired by member) lies inside its margin, "
+    "disagrees when the interval lies entirely outside (the level split over the report's statistical "
+    "metrics), and is inconclusive otherwise, with the members that would decide it. Profiles point by "
+    "point; the jam fraction by Newcombe's interval; peaks as the largest 0.05 s average of a wall group's "
+    "total; Janssen's K, lambda and mu_w,eff from the ensemble fits.",
+    "- A run that crashed, timed out, blew up, lost discs or wrote no output leaves every metric that needs it "
+    "inconclusive, never disagree; a dt above the engine's bound is refused before any run.",
 ]
 
 

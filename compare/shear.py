@@ -15,10 +15,10 @@ What each backend takes from here: the box (plate height and reach for the case'
 The judge (``judge``): per member, the initial normal stress sigma0 (at the start of the shear),
 the windowed peak of tau/sigma (largest centred moving average over WINDOW of strain), the mean
 tau/sigma in each strain band of BANDS (the curve against shear displacement) and the dilation
-(the plate's rise from the start of the shear to its end); each compared as ensemble means by
-two-sided Welch tests at the family level split over the scene's tests (Bonferroni), each with
-the smallest difference it detects with 80 % power; and, per code, whether every member came to
-rest before the shear (a member sheared from motion is not the paper's test).
+(the plate's rise from the start of the shear to its end); each an equivalence metric of the
+ensemble means against the shear margin (compare/stats.py, compare/margins.py); and, per code,
+whether every member came to rest before the shear (a member sheared from motion is not the
+paper's test).
 """
 from __future__ import annotations
 
