@@ -9,6 +9,8 @@ input refused before any run.
 """
 import argparse
 import json
+import re
+import shutil
 import sys
 from pathlib import Path
 
@@ -143,7 +145,13 @@ def main(argv=None) -> int:
                 else:
                     entries.append(plan.Entry(s.resolve(), base, str(s)))
         if a.cmd == "scene" and a.set:
-            entries = with_set(entries, a.set, a.out / "scenes_set")
+            fresh = not a.out.exists()
+            try:
+                entries = with_set(entries, a.set, a.out / "scenes_set")
+            except plan.PlanError:
+                if fresh:
+                    shutil.rmtree(a.out, ignore_errors=True)
+                raise
         plans = pipeline.plans_of(entries, codes)
     except plan.PlanError as e:
         print(f"dem compare: {e}", file=sys.stderr)
@@ -194,9 +202,17 @@ def with_set(entries, assignments, folder: Path):
             scene_toml.write(path, scene_toml.with_assignments(doc, assignments))
             common.resolve(path)
         except (KeyError, ValueError, common.CaseError) as err:
-            raise plan.PlanError(f"{e.label or e.scene}: --set: {err}") from None
+            shutil.rmtree(folder, ignore_errors=True)       # nothing half-written is left behind
+            raise plan.PlanError(f"{e.label or e.scene}: --set: {_users_words(str(err), path)}") from None
         out.append(plan.Entry(path.resolve(), e.options, e.label))
     return out
+
+
+def _users_words(msg: str, generated: Path) -> str:
+    """The engine's message about the changed copy, said of the user's scene: without the copy's
+    path and its line number (the user's file has neither)."""
+    msg = msg.replace(f"dem: {generated}: ", "").replace(f"{generated}: ", "")
+    return re.sub(r" \(line \d+\)", "", msg)
 
 
 def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dict:

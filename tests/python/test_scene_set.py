@@ -111,6 +111,14 @@ def test_compare_set_refuses_like_the_engine(tmp_path, dem_binary, assignment, e
     assert proc.returncode == 2, proc.stdout + proc.stderr
     for fragment in expect:
         assert fragment in proc.stderr, (fragment, proc.stderr)
+    # nothing is left behind, and the message speaks of the user's scene, not the changed copy
+    assert not (tmp_path / "c").exists()
+    assert "scenes_set" not in proc.stderr and "(line " not in proc.stderr, proc.stderr
+    # an --out that existed keeps what it held, without the changed copies
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "keep.txt").write_text("x")
+    proc = dem_compare(dem_binary, WALL_SCENE, "--codes", "native", "--out", tmp_path / "d", "--set", assignment)
+    assert proc.returncode == 2 and sorted(p.name for p in (tmp_path / "d").iterdir()) == ["keep.txt"]
 
 
 def test_compare_set_changes_the_scene_it_translates(tmp_path, dem_binary):
