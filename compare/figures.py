@@ -808,6 +808,9 @@ def main(argv=None):
                    help="--renderer pil: processes that share the pictures out (default 2 on two "
                         "cores or more)")
     args = parser.parse_args(argv)
+    suffix = os.path.splitext(getattr(args, "out", None) or ".png")[1].lower()
+    if suffix not in FORMATS:      # refused before any data is read, like any bad argument (exit 2)
+        parser.error(f"--out {args.out}: unknown suffix {suffix or '(none)'!r}; known: {', '.join(FORMATS)}")
 
     if args.command == "network":
         out = plot_network(args.run_dir, args.out, title=args.title)

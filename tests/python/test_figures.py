@@ -965,3 +965,13 @@ def test_png_bytes_decode_to_the_same_pixels(tmp_path, channels):
     # a strided view (an RGBA buffer's first three channels) is written as its values
     path.write_bytes(figures.png_bytes(np.dstack([pixels[..., :3], pixels[..., :1]])[..., :3], 150))
     np.testing.assert_array_equal(np.asarray(Image.open(path)), pixels[..., :3])
+
+
+def test_an_unknown_figure_suffix_is_refused_with_the_known_ones(tmp_path):
+    """No traceback: exit 2 naming the suffix and the known ones, nothing written."""
+    import subprocess
+    import sys
+    p = subprocess.run([sys.executable, "-m", "compare.figures", "network", str(tmp_path / "no_run"), "--out",
+                        str(tmp_path / "x.xyz")], capture_output=True, text=True, cwd=Path(__file__).resolve().parents[2])
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert "'.xyz'" in p.stderr and ".png, .pdf, .svg" in p.stderr and not list(tmp_path.iterdir())
