@@ -969,8 +969,6 @@ def test_png_bytes_decode_to_the_same_pixels(tmp_path, channels):
 
 def test_an_unknown_figure_suffix_is_refused_with_the_known_ones(tmp_path):
     """No traceback: exit 2 naming the suffix and the known ones, nothing written."""
-    import subprocess
-    import sys
     p = subprocess.run([sys.executable, "-m", "compare.figures", "network", str(tmp_path / "no_run"), "--out",
                         str(tmp_path / "x.xyz")], capture_output=True, text=True, cwd=Path(__file__).resolve().parents[2])
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
