@@ -68,6 +68,19 @@ def test_ensemble_fails_when_every_member_failed(tmp_path, run_dem):
     assert json.loads((tmp_path / "unstable" / "ensemble.json").read_text())["unstable"] == 2
 
 
+def test_one_member_that_could_not_run_fails_the_ensemble_even_quiet(tmp_path, run_dem):
+    """The help promises exit 4 when a member could not run: one blocked member of two gives 4
+    and a message on stderr with --quiet; the other member's statistics are still written."""
+    out = tmp_path / "e"
+    out.mkdir()
+    (out / "member_00").write_text("a file where the member's folder goes")
+    proc = run_dem("ensemble", short_scene(tmp_path), "--out", out, "--members", 2, "--quiet",
+                   "--set", "discharge.time=0.05")
+    assert proc.returncode == 4 and "1 of 2 members could not run" in proc.stderr, proc.stderr
+    e = json.loads((out / "ensemble.json").read_text())
+    assert e["failed"] == 1 and e["discs_out_at_1s"]["n"] == 1
+
+
 def test_members_run_alone_and_merged_equal_the_ensemble(tmp_path, run_dem):
     """--member K runs member K alone (a job of a job array); merge gathers the members into the
     same ensemble.json, bit for bit, as the ensemble run in one process."""

@@ -222,6 +222,13 @@ int write_ensemble(const json& identity, int members_wanted, const std::vector<M
                  unstable, failed - unstable, out_dir.c_str());
     return unstable == opt.members ? 3 : 4;
   }
+  // A member that could not run (a folder or file it could not make) is the study's failure too,
+  // said on stderr whatever --quiet: its statistics lack a member the user asked for.
+  if (failed > unstable) {
+    std::fprintf(stderr, "dem ensemble: %d of %d members could not run; the statistics are of the other %d; see "
+                 "%s/ensemble.json\n", failed - unstable, opt.members, valid, out_dir.c_str());
+    return 4;
+  }
   return 0;
 }
 
