@@ -44,8 +44,8 @@ from pathlib import Path
 import numpy as np
 
 from . import engine_flow
-from .common import (Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall, outlet_y,
-                     scene_material_index, tangent)
+from .common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall,
+                     outlet_y, resolve, scene_material_index, tangent)
 from . import atomic_file
 from .atomic_file import write_text as write_text_atomic
 from .plan import Entry, Options, PlanError, make_plan, start_discs
@@ -66,6 +66,17 @@ REST_NOTE = ("not checked: the reference codes do not evaluate the engine's rest
 def _fail_exit(code: str, message: str, status: int) -> int:
     sys.stderr.write(f"dem run --engine {code}: {message}\n")
     return status
+
+
+def law_note(code: str, own: dict) -> str:
+    """What the run's law is, said where the user reads: the reference codes run the comparison
+    layer's shared law (common.SHARED_VARIANT), and each option in which the scene's [contact]
+    differs from it is named with both values."""
+    diff = [f"{k} = {own.get(k)!r} -> {v!r}" for k, v in SHARED_VARIANT.items() if own.get(k) != v]
+    if not diff:
+        return f"law: {code} runs the scene's own contact law (it is the shared law of the comparison layer)"
+    return (f"law: {code} cannot run the scene's [contact]; it runs the shared law of the comparison layer "
+            f"instead (docs/compare.md, \"What runs\"), which differs in: " + "; ".join(diff))
 
 
 def make_case(scene: Path, settle: float) -> Case:
@@ -625,7 +636,9 @@ def _main(argv=None) -> int:
         return _fail_exit(code, f"{a.scene}: no such scene file", EXIT_BAD)
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            case = make_case(with_set(scene, a.set, Path(tmp)), a.settle)
+            changed = with_set(scene, a.set, Path(tmp))
+            case = make_case(changed, a.settle)
+            note = law_note(code, resolve(changed)["contact"])
     except (PlanError, CaseError) as e:
         return _fail_exit(code, str(e), EXIT_BAD)
     except FileNotFoundError as e:      # no engine binary to resolve the scene with
@@ -649,6 +662,9 @@ def _main(argv=None) -> int:
         return _fail_exit(code, f"{code} is not installed", EXIT_FAILED)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
+    if not a.quiet:
+        print(note, flush=True)
+    write_text_atomic(out / "run.log", f"dem run {scene} --engine {code} --np {a.np}\n{note}\n")
     res = be.run(run_case, out / code, timeout=a.timeout, threads=a.np)
     if not res.ok:
         status = classify(res.reason)

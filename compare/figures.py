@@ -808,7 +808,7 @@ def main(argv=None):
                    help="--renderer pil: processes that share the pictures out (default 2 on two "
                         "cores or more)")
     args = parser.parse_args(argv)
-    suffix = os.path.splitext(getattr(args, "out", None) or ".png")[1].lower()
+    suffix = os.path.splitext(args.out)[1].lower() if getattr(args, "out", None) else ".png"
     if suffix not in FORMATS:      # refused before any data is read, like any bad argument (exit 2)
         parser.error(f"--out {args.out}: unknown suffix {suffix or '(none)'!r}; known: {', '.join(FORMATS)}")
 

@@ -261,3 +261,19 @@ def test_a_discharge_in_liggghts_writes_the_removal_log_and_the_wall_series(tmp_
     # at the opening the gate has just gone: the remaining walls carry at most the discs' weight
     load = totals["normal"][first & np.isin(totals["name"], ["bottom_left", "bottom_right"])].sum()
     assert 0 < load <= 14 * 2.65 * np.pi * 980.0 * (1 + 1e-6)
+
+
+@pytest.mark.reference_codes
+def test_the_law_a_reference_code_runs_is_said_on_screen_and_in_run_log(rested, dem_binary):
+    """The scene's own law (here the paper's incremental spring, set by --set) is not what LIGGGHTS
+    runs: the screen and run.log name each option that differs, with both values; a scene already
+    on the shared law is said to run its own law."""
+    out = rested / "law"
+    p = dem(dem_binary, "run", rested / "rested.toml", "--engine", "liggghts", "--out", out,
+            "--set", "contact.normal_spring=incremental")
+    assert p.returncode == 0, p.stderr
+    line = next(x for x in p.stdout.splitlines() if x.startswith("law:"))
+    assert "normal_spring = 'incremental' -> 'overlap'" in line and "no_tension" not in line
+    assert line in (out / "run.log").read_text()
+    p = dem(dem_binary, "run", rested / "rested.toml", "--engine", "liggghts", "--out", rested / "law_same")
+    assert "runs the scene's own contact law" in p.stdout and (rested / "law_same" / "run.log").exists()
