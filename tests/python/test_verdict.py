@@ -122,7 +122,7 @@ def test_dem_compare_documents_itself(dem_binary):
     p = subprocess.run([str(dem_binary), "compare", "--help"], capture_output=True, text=True, timeout=60)
     assert p.returncode == 0
     for word in ("--members", "--quick", "--full", "--mutants", "--native-law", "collision", "janssen",
-                 "Fisher", "exit codes"):
+                 "--margin", "--until-decided", "inconclusive", "exit codes"):
         assert word in p.stdout
 
 
