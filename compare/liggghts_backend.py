@@ -1,7 +1,7 @@
 """LIGGGHTS 3.8.0 as a compared code: translator (data file, STL wall strips written with
 meshio, input script), runner (serial or ``mpirun -np N``) and reader.
 
-What the translation does (see ../shared/docs/reference-codes.md for the measured facts):
+What the translation does (docs/compare.md gives the measured facts):
 - true 2D: ``dimension 2``, ``boundary f f p``, z in [-2, 2], ``fix enforce2d``;
 - materials: one atom type per disc material of the case (1..nd, in the order of the resolved
   materials) and one per wall material (nd+1..: the ``type`` of each wall's mesh fix); the

@@ -1,4 +1,4 @@
-"""The paper's statements about its static silo (section 5(1); ../shared/docs/model.md, "Results
+"""The paper's statements about its static silo (section 5(1) of Kiyama & Fujimura; docs/compare.md, "Results
 to reproduce"), each checked against a study's own runs.
 
 Every check returns a row: the statement, what the paper says, what these runs show (numbers),

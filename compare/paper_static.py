@@ -140,7 +140,7 @@ def write_report(out_root, records, dem):
     for f in sorted(out_root.glob("fig7_*.png")):
         lines.append(f"![{f.stem}]({f.name})")
     lines += ["", "## The paper's statements against these runs", "",
-              "Each statement of section 5(1) (../shared/docs/model.md) measured on the runs at rest "
+              "Each statement of section 5(1) (Kiyama & Fujimura 1983) measured on the runs at rest "
               "(`compare/paper_claims.py` says how).", ""]
     for scheme, dt in (PAPER, REFERENCE):
         rested = [by[(scheme, dt, s)] for s in ARRANGEMENTS
