@@ -1,7 +1,7 @@
 """YADE 2023.02a as a compared code: translator (yade_case.json + the script
 compare/yade_template.py), runner (``yade -n -jN -x yade_script.py``) and reader.
 
-What the translation does (measured facts: ../shared/docs/reference-codes.md):
+What the translation does (measured facts: docs/compare.md):
 - true 2D: spheres at z = 0 with ``blockedDOFs = 'zXY'``, mass rho pi r^2 (per 1 cm of thickness)
   and inertia m r^2 / 2 set by hand after creation;
 - law: ``ViscElMat`` + ``Ip2_ViscElMat_ViscElMat_ViscElPhys`` + ``Law2_ScGeom_ViscElPhys_Basic``:
