@@ -1,5 +1,5 @@
-"""The paper's statements about its static silo (section 5(1) of Kiyama & Fujimura; docs/compare.md, "Results
-to reproduce"), each checked against a study's own runs.
+"""The paper's statements about its static silo (section 5(1) of Kiyama & Fujimura 1983), each
+checked against a study's own runs.
 
 Every check returns a row: the statement, what the paper says, what these runs show (numbers),
 and whether they agree. Only runs that came to rest count; the others are named in the row.
