@@ -1,4 +1,4 @@
-"""Figures of dem run directories, after Kiyama & Fujimura (1982).
+"""Figures of dem run directories, after Kiyama & Fujimura (1983).
 
 The file formats read here are those of docs/outputs.md:
 
@@ -240,7 +240,7 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
     ncols = min(ncols, len(runs))
     nrows = -(-len(runs) // ncols)
     panel = 4.2                                              # inches per panel width
-    title = (textwrap.fill(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1982, Fig. 6), "
+    title = (textwrap.fill(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1983, Fig. 6), "
                            f"{common_caption([r['summary'] for r in runs])}", int(panel * ncols * 11))
              + f"\ndisc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; X, Y in cm")
     top, bottom, hspace = 0.45 + 0.2 * (title.count("\n") + 1), 0.3, 0.45

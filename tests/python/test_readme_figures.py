@@ -45,3 +45,14 @@ def test_a_changed_figure_is_found(tmp_path, capsys):
     readme.write_text("\n".join(["intro", *block, "more"]).replace("2 of 2 arrangements", "1 of 2 arrangements"))
     assert readme_figures.main([str(out), "--check", str(readme)]) == 1
     assert "differ at line 2" in capsys.readouterr().err
+
+
+def test_the_paper_is_cited_with_one_year():
+    """README, docs, figures, reports and the engine's help cite Kiyama & Fujimura with the year of
+    CITATION.cff."""
+    import re
+    year = re.search(r"year: (\d{4})", (REPO / "CITATION.cff").read_text()).group(1)
+    files = [REPO / "README.md", *(REPO / "docs").glob("*.md"), *(REPO / "compare").rglob("*.py"),
+             *(REPO / "engine" / "src").rglob("*.cpp")]
+    cited = {(f.name, y) for f in files for y in re.findall(r"Kiyama (?:&|and) Fujimura[^0-9\n]{0,20}(\d{4})", f.read_text())}
+    assert cited and all(y == year for _, y in cited), sorted(c for c in cited if c[1] != year)
