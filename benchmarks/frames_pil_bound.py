@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 from PIL import Image, ImageDraw, ImageFont  # noqa: E402
 t1 = time.process_time()
 
-from compare.run_dir import CONTACT_COLUMNS, SNAPSHOT_DISC_COLUMNS, RunDir, read_csv  # noqa: E402
+from compare.io.run_dir import CONTACT_COLUMNS, SNAPSHOT_DISC_COLUMNS, RunDir, read_csv  # noqa: E402
 
 
 def main(argv=None):

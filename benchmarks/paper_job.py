@@ -13,8 +13,8 @@ this checkout and build/dem. Parts:
   five pictures drawn with PIL, compare/quick_figures.py);
 - ``single_pictures``: `dem run ... --quiet --pictures` (the run and the same PIL pictures in one
   command: the picture process starts with the run);
-- ``static``:       `python3 -m compare.paper_static --out DIR --dem DEM`;
-- ``discharge``:    `python3 -m compare.paper_discharge --out DIR --dem DEM --members M`.
+- ``static``:       `python3 -m compare.papers.paper_static --out DIR --dem DEM`;
+- ``discharge``:    `python3 -m compare.papers.paper_discharge --out DIR --dem DEM --members M`.
 
 Repeat r runs every variant's part before repeat r + 1 (interleaved: a change of the machine's
 load falls on all variants alike). Each run's wall time, CPU time (user + sys of the command and
@@ -80,9 +80,9 @@ def part_commands(part, repo, dem, out, members):
     if part == "single_pictures":
         return [[dem, "run", scene, "--out", out, "--quiet", "--pictures"]]
     if part == "static":
-        return [[PY, "-m", "compare.paper_static", "--out", out, "--dem", dem]]
+        return [[PY, "-m", "compare.papers.paper_static", "--out", out, "--dem", dem]]
     if part == "discharge":
-        return [[PY, "-m", "compare.paper_discharge", "--out", out, "--dem", dem, "--members", str(members)]]
+        return [[PY, "-m", "compare.papers.paper_discharge", "--out", out, "--dem", dem, "--members", str(members)]]
     raise SystemExit(f"paper_job: unknown part {part!r}")
 
 

@@ -21,7 +21,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy
 from PIL import Image, ImageDraw, ImageFont
 t1 = time.process_time()
-from compare import figure_data, quick_figures as q
+from compare.figures import figure_data, quick_figures as q
 t2 = time.process_time()
 run, out = sys.argv[1], sys.argv[2]
 reading = [0.0]

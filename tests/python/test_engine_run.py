@@ -18,8 +18,8 @@ import meshio
 import numpy as np
 import pytest
 
-from compare.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
-from compare.run_dir import RunDir
+from compare.verdict.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
+from compare.io.run_dir import RunDir
 
 ROOT = Path(__file__).resolve().parents[2]
 

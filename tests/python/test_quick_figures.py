@@ -1,4 +1,4 @@
-"""Tests of compare.quick_figures and compare.raster_plot: a run's five pictures drawn with PIL,
+"""Tests of compare.figures.quick_figures and compare.raster_plot: a run's five pictures drawn with PIL,
 without matplotlib, on an engine run of the paper's 17/18 discharge."""
 import math
 import os
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from compare import quick_figures, raster_plot as rp
-from compare.figure_data import DEAD_RADII, displacement_radii
+from compare.figures import quick_figures, raster_plot as rp
+from compare.figures.figure_data import DEAD_RADII, displacement_radii
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
@@ -49,11 +49,11 @@ def copy_run(run, where):
 
 
 def test_five_pictures_written_decoded_and_sized(run, tmp_path):
-    """`python3 -m compare.quick_figures run DIR` writes the five files of `compare.figures run`,
+    """`python3 -m compare.figures.quick_figures run DIR` writes the five files of `compare.figures run`,
     PNGs that PIL decodes, of compare.figures' sizes, and not blank: each has 4 % of its pixels or
     more other than white and shows several colours."""
     out = copy_run(run, tmp_path / "run")
-    p = draw("-m", "compare.quick_figures", "run", str(out))
+    p = draw("-m", "compare.figures.quick_figures", "run", str(out))
     assert p.returncode == 0, p.stderr
     assert p.stdout.split() == [str(out / name) for name in PICTURES]
     for name in PICTURES:
@@ -113,7 +113,7 @@ def test_a_run_without_contact_lists_gets_four_pictures(run, tmp_path):
 
 
 def test_pil_requested():
-    from compare.figures import pil_requested
+    from compare.figures.runs import pil_requested
     assert pil_requested(["run", "D", "--renderer", "pil"])
     assert pil_requested(["run", "--renderer=pil", "D"])
     assert not pil_requested(["run", "D", "--renderer", "matplotlib"])
@@ -237,7 +237,7 @@ def test_dem_run_pictures_draws_nothing_for_an_unstable_run_and_says_when_they_f
 
 
 def test_a_missing_run_directory_is_named(tmp_path):
-    p = draw("-m", "compare.quick_figures", "run", str(tmp_path / "nowhere"))
+    p = draw("-m", "compare.figures.quick_figures", "run", str(tmp_path / "nowhere"))
     assert p.returncode != 0
     assert f"{tmp_path / 'nowhere'}: not a directory" in p.stderr
     assert "Traceback" not in p.stderr
@@ -260,8 +260,8 @@ def test_a_broken_run_names_the_file_and_writes_nothing(run, tmp_path, broken):
     else:
         lines = (out / name).read_text().splitlines()
         (out / name).write_text("\n".join(",".join(line.split(",")[:-1]) for line in lines) + "\n")
-    for entry in (["-m", "compare.quick_figures", "run", str(out), "--jobs", "1"],
-                  ["-m", "compare.quick_figures", "run", str(out), "--jobs", "2"],
+    for entry in (["-m", "compare.figures.quick_figures", "run", str(out), "--jobs", "1"],
+                  ["-m", "compare.figures.quick_figures", "run", str(out), "--jobs", "2"],
                   ["-m", "compare.figures", "run", str(out), "--renderer", "pil"]):
         p = draw(*entry)
         assert p.returncode != 0, entry
@@ -426,7 +426,7 @@ def disc_classes(png, fig, frames, wrong=None):
 
 @pytest.fixture(scope="module")
 def frames_picture(run, tmp_path_factory):
-    from compare.figure_data import discharge_frames
+    from compare.figures.figure_data import discharge_frames
     fig = quick_figures.frames(str(run))
     png = fig.save(str(tmp_path_factory.mktemp("frames") / "frames.png"))
     return png, fig, discharge_frames(str(run))["frames"]

@@ -11,8 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import margins, mutants, native_backend, plan, shear, stats, verdict, yade_backend
-from compare.common import SHARED_VARIANT, Result, resolve
+from compare.cases import margins, mutants, plan, shear, stats
+from compare.codes import native_backend, yade_backend
+from compare.verdict import verdict
+from compare.cases.common import SHARED_VARIANT, Result, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "reference_inputs" / "scenes"
