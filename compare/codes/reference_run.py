@@ -37,6 +37,7 @@ import importlib
 import json
 import math
 import os
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -620,7 +621,7 @@ def _main(argv=None) -> int:
                          "the member's perturbed start)")
     ap.add_argument("--quiet", action="store_true")
     ap.add_argument("--pictures", action="store_true",
-                    help="also draw the run's pictures into OUT with PIL (compare.quick_figures), as dem run --pictures")
+                    help="also draw the run's pictures into OUT (python3 -m compare.figures run OUT), as dem run --pictures")
     try:
         a = ap.parse_args(argv)
     except SystemExit as e:
@@ -698,13 +699,12 @@ def _main(argv=None) -> int:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
               f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
     if a.pictures:
-        from compare.figures import quick_figures
-        try:
-            written = quick_figures.plot_run(str(out), quick_figures.default_jobs())
-        except SystemExit as e:
-            return _fail_exit(code, f"--pictures: the pictures were not drawn: {e.code}", EXIT_FAILED)
-        if not a.quiet:
-            print("\n".join(written))
+        drawn = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(out)] + (["--quiet"] if a.quiet else []),
+                               capture_output=True, text=True)
+        sys.stderr.write(drawn.stderr)
+        if drawn.returncode != 0:
+            return _fail_exit(code, f"--pictures: the pictures were not drawn: {drawn.stderr.strip()}", EXIT_FAILED)
+        sys.stdout.write(drawn.stdout)
     return 0
 
 

@@ -1,5 +1,5 @@
-"""PNG files written without PIL's filter search: png_bytes(pixels, dpi). No matplotlib here, so
-that compare.figures (matplotlib) and compare.figures.quick_figures (PIL) share it."""
+"""PNG files written without PIL's filter search: png_bytes(pixels, dpi), the encoder of the
+pixels that matplotlib's Agg draws for compare/figures/runs.py."""
 
 import struct
 import zlib

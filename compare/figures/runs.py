@@ -30,41 +30,23 @@ Usage, from the repository root::
     /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
     /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
     /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
-    /usr/bin/python3 -m compare.figures run RUN_DIR [--renderer pil [--jobs N]]
+    /usr/bin/python3 -m compare.figures run RUN_DIR [--wait] [--quiet]
 
-``run --renderer pil`` draws the same five files with PIL (compare/quick_figures.py), without
-importing matplotlib, in two processes on two cores or more (``--jobs N``).
+``run --wait``: `dem run --pictures` starts this process with the run, so that Python and
+matplotlib are imported while the engine steps; it reads one line on stdin when the run has
+ended and draws when the line is ``draw`` (anything else, or the end of stdin: the run did not
+end well, nothing is drawn, exit 0). ``--quiet``: the files written are not listed.
 """
 
+import argparse
+import math
 import os
 import sys
+import textwrap
 
+import matplotlib
+import numpy as np
 
-def pil_requested(argv):
-    """Whether a command line asks for the PIL renderer (--renderer pil or --renderer=pil)."""
-    for k, a in enumerate(argv):
-        if a == "--renderer=pil" or (a == "--renderer" and argv[k + 1:k + 2] == ["pil"]):
-            return True
-    return False
-
-
-if __name__ == "__main__" and pil_requested(sys.argv[1:]):
-    # `run RUN_DIR --renderer pil` is drawn by compare.figures.quick_figures (PIL), before matplotlib is
-    # imported: the import alone costs more than drawing the five pictures so. The pictures do
-    # no linear algebra: one OpenBLAS thread, not one a core started at numpy's import (some
-    # 0.08 s CPU).
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from compare.figures import quick_figures as _quick
-    _status = _quick.main(sys.argv[1:])
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(_status)  # as compare.figures.quick_figures leaves: no teardown of the pictures' memory
-
-import argparse  # noqa: E402
-import math  # noqa: E402
-import textwrap  # noqa: E402
-import numpy as np  # noqa: E402
-import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
@@ -88,8 +70,8 @@ from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, ST
                                  static_ratio, wall_series_matrix, discharge_frames, flow_data,
                                  wall_ratio_data, network_title, side_title, frames_title,
                                  ratios_title, flow_title, side_bins_title)
-# PNG writing (compare/png_file.py, no matplotlib), re-exported here.
-from compare.figures.png_file import PNG_COMPRESS_LEVEL, SAVE_DPI, _png_chunk, png_bytes  # noqa: E402,F401
+# PNG writing (compare/figures/png_file.py), re-exported here.
+from compare.figures.png_file import SAVE_DPI, png_bytes  # noqa: E402,F401
 # The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
 from compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
@@ -801,12 +783,9 @@ def main(argv=None):
     p.add_argument("--outdir", required=True, help="folder to write the three PNGs to")
     p = sub.add_parser("run", help="the pictures of one run directory, into it")
     p.add_argument("run_dir")
-    p.add_argument("--renderer", choices=("matplotlib", "pil"), default="matplotlib",
-                   help="matplotlib (default), or PIL (compare.quick_figures: the same five files, "
-                        "matplotlib not imported)")
-    p.add_argument("--jobs", type=int, default=None,
-                   help="--renderer pil: processes that share the pictures out (default 2 on two "
-                        "cores or more)")
+    p.add_argument("--wait", action="store_true",
+                   help="draw only once a line 'draw' is read on stdin (dem run --pictures)")
+    p.add_argument("--quiet", action="store_true", help="do not list the files written")
     args = parser.parse_args(argv)
     suffix = os.path.splitext(args.out)[1].lower() if getattr(args, "out", None) else ".png"
     if suffix not in FORMATS:      # refused before any data is read, like any bad argument (exit 2)
@@ -828,12 +807,16 @@ def main(argv=None):
         out = plot_flow(args.run_dir, args.out)
     elif args.command == "discharge":
         out = "\n".join(plot_discharge(args.run_dir, args.outdir))
-    elif args.renderer == "pil":
-        from compare.figures import quick_figures
-        jobs = quick_figures.default_jobs() if args.jobs is None else args.jobs
-        out = "\n".join(quick_figures.plot_run(args.run_dir, jobs))
     else:
-        out = "\n".join(plot_run(args.run_dir))
+        if args.wait and sys.stdin.readline().strip() != "draw":
+            return 0
+        try:
+            out = "\n".join(plot_run(args.run_dir))
+        except OSError as e:
+            sys.stderr.write(f"compare.figures: {e}\n")
+            return 1
+        if args.quiet:
+            return 0
     print(out)
     return 0
 

@@ -3,7 +3,7 @@
 The content goes to NAME.tmp beside the file and is renamed over it once complete (os.replace:
 atomic on one file system), so neither a reader nor a run killed half-way ever finds half a file;
 on an error the temporary file is removed and the old file, if any, is left as it was. Only the
-standard library: the figure process (quick_figures) imports it without compare.common's imports.
+standard library.
 """
 from __future__ import annotations
 
