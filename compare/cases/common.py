@@ -15,11 +15,14 @@ contact point.
 from __future__ import annotations
 
 import dataclasses
+import glob
 import json
 import math
 import os
 import shutil
+import signal
 import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -368,7 +371,6 @@ def run_translated(be, case: "Case", out_dir: Path, log_name: str, stale: tuple,
     """A LIGGGHTS or LAMMPS run of a case (backend module ``be``: NAME, write_inputs, command,
     read): translate, remove the dumps of an earlier run (glob patterns ``stale``), run under
     ``run_logged`` (``threads`` > 1: MPI ranks) and read back; never raises for a failed run."""
-    import glob
     out_dir = Path(out_dir)
     try:
         script = be.write_inputs(case, out_dir, threads)
@@ -390,8 +392,6 @@ def run_logged(code: str, case: str, cmd: list, out_dir: Path, log: Path, timeou
     rank), killing its whole process group (mpirun and ranks) after ``timeout`` seconds.
     Returns (None, wall seconds) when it ended cleanly, else (the failed Result, wall seconds):
     a timeout, a non-zero exit or an ERROR line (quoted)."""
-    import signal
-    import time
     t0 = time.monotonic()
     env = dict(os.environ, OMP_NUM_THREADS="1")
     with open(log, "w") as f:

@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import curve_fit
+from scipy.spatial import cKDTree
 
 from compare.cases.common import moved_wall
 
@@ -177,7 +179,6 @@ def fit_ci(z, p, sigma, level_z: float = Z95) -> dict:
     from pcov, which is scaled by the reduced chi^2 when that exceeds 1 (scatter the given sigma
     does not explain widens the intervals, never narrows them). r^2 is the unweighted share of
     the profile's variance that the model explains."""
-    from scipy.optimize import curve_fit
     z, p, sigma = (np.asarray(a, float) for a in (z, p, sigma))
     if len(z) < 4:
         raise ValueError(f"Janssen fit needs at least 4 points, got {len(z)}")
@@ -304,7 +305,6 @@ def geometry(resolved: dict, t: float) -> dict:
 
 def max_overlap_ratio(discs: np.ndarray, width: float, floor: float) -> float:
     """Largest overlap (disc-disc or disc-wall) over the smaller radius."""
-    from scipy.spatial import cKDTree
     d = np.asarray(discs, float)
     x, y, r = d[:, 0], d[:, 1], d[:, 2]
     worst = float(np.max(np.concatenate([(r - x) / r, (x + r - width) / r, (floor + r - y) / r])))

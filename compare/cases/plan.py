@@ -41,10 +41,11 @@ import math
 import shlex
 import tempfile
 from pathlib import Path
+from importlib import import_module
 
 import numpy as np
 
-from compare.cases import margins
+from compare.cases import margins, shear
 from compare.cases.common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
 KINDS = ("collision", "static", "janssen", "discharge", "shear")
@@ -240,7 +241,6 @@ def make_plan(entry: Entry) -> Plan:
     if kind == "discharge" and o.start == "frozen" and not o.settle:
         settle = FROZEN_DISCHARGE_SETTLE
     if kind == "shear":
-        from compare.cases import shear
         if not o.dt:
             dt = shear.stable_dt(shared, dt)
         if o.duration:      # a shorter (or longer) shear: the walls turn for --duration s
@@ -319,7 +319,6 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
 def refusals(plan: Plan, codes) -> list[str]:
     """What each reference code refuses to translate in this plan (its own translation, dry-run on
     the first case); empty when every code can express the scene."""
-    from importlib import import_module
     out = []
     case = member_case(plan, 0)
     if plan.kind == "discharge" and not plan.shared.get("discharge", {}).get("gate"):

@@ -50,10 +50,11 @@ from __future__ import annotations
 
 import glob
 import math
-import sys
 import re
 import subprocess
+import sys
 from pathlib import Path
+from shutil import which
 
 import numpy as np
 
@@ -69,7 +70,6 @@ GATE_DROP = 200.0     # [cm] the gate block jumps this far down in the first ste
 
 
 def available() -> bool:
-    from shutil import which
     return which("lmp") is not None
 
 

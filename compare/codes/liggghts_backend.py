@@ -44,10 +44,11 @@ from __future__ import annotations
 
 import glob
 import math
-import sys
 import re
 import subprocess
+import sys
 from pathlib import Path
+from shutil import which
 
 import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
@@ -56,6 +57,7 @@ from compare.cases.common import (mpi_prefix, run_translated, outlet_y, SHARED_V
                      motion_steps, moved_wall,
                      inward_normal, kinetic_energy, pair, tangent)
 from compare.io.atomic_file import write_text as write_text_atomic
+from compare.cases import shear
 
 NAME = "liggghts"
 Z_HALF = 2.0          # [cm] half thickness of the periodic z slab
@@ -63,7 +65,6 @@ BOX_BELOW = 220.0     # [cm] room below the floor for the opened gate and the fa
 
 
 def available() -> bool:
-    from shutil import which
     return which("liggghts") is not None
 
 
@@ -162,7 +163,6 @@ def _mesh_id(name: str) -> str:
 def write_inputs(case: Case, out_dir: Path, threads: int = 1) -> Path:
     """Writes discs.data, one STL per wall (and the outlet), and in.liggghts into out_dir."""
     if case.mode == "shear" or "clusters" in case.resolved:
-        from compare.cases import shear
         raise CaseError(shear.liggghts_refusal(case.resolved))
     _check_variant(case)
     out_dir = Path(out_dir)

@@ -24,15 +24,15 @@ import subprocess
 import time
 from pathlib import Path
 
-import numpy as np
-
 import meshio
+import numpy as np
 
 from compare.cases.common import (Case, CaseError, Result, Snapshot, dem_binary, failed, fold_points,
                      kinetic_energy)
 from compare.io.atomic_file import write_text as write_text_atomic
 from compare.io.run_dir import RunDir, RunDirError, read_pvd
 from compare.io.scene_toml import dumps
+from compare.cases import shear
 
 NAME = "native"
 
@@ -121,7 +121,6 @@ def shear_scene_doc(case: Case, disc_file: str) -> tuple[dict, dict]:
     """A shear case's scene: the shared law, velocity Verlet at the case's dt, the box for the
     case's discs, the compression to rest for at most case.settle, the shear, the clusters as
     bonds (the engine has no other cluster model: ``clusters = "clumps"`` is refused)."""
-    from compare.cases import shear
     r = case.resolved
     if not shear.is_shear(r):
         raise CaseError("mode shear: the scene has no [shear_box] with [shear]")
@@ -220,7 +219,6 @@ def read(case: Case, out_dir: Path) -> Result:
     if status == "unstable":
         return failed(NAME, case.name, f"unstable: {summary.get('reason', '')}", out_dir=str(out_dir))
     if case.mode == "shear":
-        from compare.cases import shear
         if status != "sheared":
             return failed(NAME, case.name, f"shear: status {status!r}: {summary.get('reason', '')}",
                           out_dir=str(out_dir))

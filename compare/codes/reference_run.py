@@ -42,14 +42,16 @@ import sys
 import tempfile
 from pathlib import Path
 
+import meshio
 import numpy as np
 
 from compare.codes import frame_measures as engine_flow
 from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall,
                      outlet_y, resolve, scene_material_index, tangent)
-from compare.io import atomic_file
+from compare.io import atomic_file, scene_toml
 from compare.io.atomic_file import write_text as write_text_atomic
 from compare.cases.plan import Entry, Options, PlanError, make_plan, start_discs
+from compare.cases.mutants import Mutation
 
 CODES = ("liggghts", "lammps", "yade")
 EXIT_BAD, EXIT_UNSTABLE, EXIT_FAILED = 2, 3, 4
@@ -108,7 +110,6 @@ def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
     the engine to validate as it resolves it; the scene itself without assignments."""
     if not assignments:
         return scene
-    from compare.io import scene_toml
     path = folder / scene.name
     try:
         doc = scene_toml.rebase_paths(scene_toml.load(scene), scene.parent, folder)
@@ -130,7 +131,6 @@ def mutated(case: Case, spec: str) -> Case:
     """The case the code runs: ``case`` itself, or with the DEM_ENGINE_MUTANT constant scaled."""
     if not spec:
         return case
-    from compare.cases.mutants import Mutation
     what, _, factor = spec.partition(":")
     try:
         f = float(factor)
@@ -201,7 +201,6 @@ def disc_rows(case: Case, res: Result) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_discs(out: Path, case: Case, rows: np.ndarray, ids: np.ndarray) -> None:
-    import meshio
     names = [m["name"] for m in case.resolved["materials"]]
     mats = case.material_index()[ids]
     lines = ["id,x,y,r,vx,vy,omega,material"]
@@ -329,7 +328,6 @@ def flow_rate(rows, mass: np.ndarray) -> float | None:
 def write_walls_vtu(path: Path, case: Case, t_world: float, wall_names: list[str]) -> None:
     """The walls present at world time t (the opened gate gone, a moving wall where it stands) as
     VTK_LINE cells with cell data ``wall``: the index in summary.json's ``walls``."""
-    import meshio
     gate = case.resolved["discharge"]["gate"]
     pts, cells, index = [], [], []
     for w in case.resolved["walls"]:
@@ -351,7 +349,6 @@ def write_snapshots(out: Path, case: Case, frames: list[Snapshot], wall_names: l
     time (frames lie every sample: the nearest, within half a sample), indexed by
     discharge_discs.pvd (times since opening) and snapshots.pvd (world times, parts 0 discs and 1
     walls). The contact files are absent (no contact list is read back). Returns the times written."""
-    import meshio
     names = [m["name"] for m in case.resolved["materials"]]
     mats = case.material_index()
     want = case.resolved["discharge"].get("snapshots", [])

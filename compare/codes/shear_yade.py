@@ -21,18 +21,22 @@ import argparse
 import copy
 import json
 import os
+import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from compare.io.run_dir import RunDir
+from compare.cases import shear
+from compare.cases.common import SHARED_VARIANT, Case
+from compare.cases.plan import start_discs
+from compare.codes import yade_backend
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def resolve(scene, dem):
-    import subprocess
     proc = subprocess.run([str(dem), "resolve", str(scene)], capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(f"shear_yade: dem resolve {scene}: {proc.stderr.strip()}")
@@ -41,9 +45,6 @@ def resolve(scene, dem):
 
 def make_case(resolved, clusters="bonds", dt=5e-5):
     """The scene's own start as the YADE backend's shear case (the shared contact variant)."""
-    from compare.cases import shear
-    from compare.cases.common import SHARED_VARIANT, Case
-    from compare.cases.plan import start_discs
     if not shear.is_shear(resolved):
         raise SystemExit("shear_yade: the scene has no [shear_box] and [shear]")
     if clusters == "clumps" and "clusters" not in resolved:
@@ -58,7 +59,6 @@ def make_case(resolved, clusters="bonds", dt=5e-5):
 def run(scene, out_dir, clusters="bonds", dt=5e-5, dem=None, timeout=1800):
     """Runs YADE on the scene through the backend; returns summary.json's dict (raises SystemExit
     on failure)."""
-    from compare.codes import yade_backend
     dem = dem or os.environ.get("DEM_BINARY", REPO / "build" / "dem")
     out = Path(out_dir).resolve()
     case = make_case(resolve(scene, dem), clusters, dt)

@@ -94,6 +94,7 @@ from compare.cases.common import outlet_y as common_outlet_y
 from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, motion_steps,
                      moved_wall, pair, profiles_from_contacts)
 from compare.io.atomic_file import write_text as write_text_atomic
+from compare.cases import shear
 
 NAME = "yade"
 TEMPLATE = Path(__file__).resolve().parent / "yade_template.py"
@@ -261,7 +262,6 @@ def _steps(x: float, dt: float, what: str) -> int:
 
 def shear_case_data(case: Case) -> dict:
     """Everything the shear script (compare/shear_yade_template.py) needs (yade_case.json)."""
-    from compare.cases import shear
     _check_variant(case)
     r = case.resolved
     if not shear.is_shear(r):
@@ -593,7 +593,6 @@ def _read(case: Case, out_dir: Path) -> Result:
 
 def _read_shear(case: Case, out_dir: Path, proc: dict) -> Result:
     """A shear run: the script's summary.json and shear_series.csv (compare.shear.read_outputs)."""
-    from compare.cases import shear
     common = {"wall_time_s": float(proc.get("wall_time_s", float("nan")))}
     if proc.get("error"):
         return _fail(case, out_dir, proc["error"], **common)

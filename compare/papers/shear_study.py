@@ -12,7 +12,7 @@ every pair of a cluster bonded, touching = only the apex-base contacts bonded):
                     clusters of alpha = 35 do not come to rest at 1e-4 s);
 - native_yadelaw:   YADE's contact law in the engine (overlap spring, total-force no-tension
                     and Coulomb cap), velocity Verlet at 2.5e-5 s (bonded clusters with their
-                    dashpots need it: compare.papers.shear_stability): the bridge between the codes;
+                    dashpots need it: compare.cases.shear_stability): the bridge between the codes;
 - native_platewalls: the plate's horizontal motion tied to the side walls (a reading of the
                     paper's "moves horizontally with the rotation of both sides");
 - yade:             YADE 2023.02a at 5e-5 s through the YADE backend's shear path
@@ -38,7 +38,7 @@ import numpy as np
 
 from compare.io import scene_toml
 from compare.figures import shear_figures as sf
-from compare.papers import shear_stability
+from compare.cases import shear_stability
 from compare.codes import shear_yade
 
 REPO = Path(__file__).resolve().parents[2]
@@ -354,7 +354,7 @@ def main(argv=None):
     L.append("## Time step and clusters\n")
     L.append("Bound on dt from the spectral radius of one step on each distinct cluster (its discs, bonds and "
              "the contacts to its touching neighbours held fixed, every contact sticking): "
-             "`python3 -m compare.papers.shear_stability`. For scenes without clusters each disc with its neighbours. "
+             "`python3 -m compare.cases.shear_stability`. For scenes without clusters each disc with its neighbours. "
              "Not a safe bound for the assembly (moving neighbours raise frequencies), but it ranks the cases.\n")
     L.append("| alpha | variant | eq. 18 | eq. 19 | velocity Verlet | native at 1e-4: rest |")
     L.append("|---|---|---|---|---|---|")

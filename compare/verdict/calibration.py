@@ -63,14 +63,17 @@ the open slit) is listed as refused and not run.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import math
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from compare.cases.common import ROOT, Case, CaseError, disc_material, pair, resolve
+from compare.cases.common import ROOT, Case, CaseError, disc_material, pair, resolve, Result
+from compare.verdict import study
 
 SCENES = ROOT / "reference_inputs" / "agreement" / "calibration"
 K_DT = 1.0            # code vs reference: K_DT x (dt / t_c x scale + the sliding term), module text
@@ -448,8 +451,6 @@ def within(measured: dict, ref: dict, dt: float, other: dict | None = None) -> d
 
 def _refusal(code: str, c: Case) -> str:
     """Why the code cannot express the scene (its own translation, dry-run), or ''."""
-    import importlib
-    import tempfile
     if code == "native":
         return ""
     with tempfile.TemporaryDirectory() as tmp:
@@ -464,8 +465,6 @@ def run_scene(name: str, codes, out: Path, timeout: float = 300, reuse: bool = F
     """Runs one scene in each code (reuse: read a run's result.json when there is one); the
     reference, each code's measures (or {"failed": reason}), each code's pass per quantity
     against the reference, and each pair of codes' agreement."""
-    from compare.verdict import study
-    from compare.cases.common import Result
     c = case(name)
     ref = reference(c.resolved, c.discs, c.dt)
     row = {"scene": name, "reference": ref, "tolerance": tolerances(ref, c.dt), "codes": {}}

@@ -17,20 +17,23 @@ of unmutated runs are reused from the baseline's folders.
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
 import copy
+import hashlib
 import json
 import math
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from compare.verdict import collision_judge
+from compare.verdict import collision_judge, preflight, study, verdict, geometry_probe, probe, shear_judge
 from compare.cases import janssen, stats
 from compare.codes import native_backend
-from compare.verdict import preflight, study, verdict
-from compare.cases.common import Case, Result, scene_material_index
+from compare.cases.common import Case, Result, scene_material_index, inward_normal, tangent
 from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
+from compare.figures import janssen_figure
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -87,7 +90,6 @@ def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
     """Each reference code's constants read back from the code (compare/probe.py) against
     ``dem resolve`` to 1e-9 relative, and its walls, points, radii and start positions read back
     after its setup (compare/geometry_probe.py) against the case's to 1e-9 of the scene's length."""
-    from compare.verdict import geometry_probe, probe
     codes = codes_of(plan, codes)
     metrics = []
     case = member_case(plan, 0, start_discs(plan.shared))
@@ -133,8 +135,6 @@ def _geometry_metric(geometry_probe, code: str, case: Case, expected: dict, plan
 
 def input_key(write) -> str:
     """sha1 of the names and bytes of every file ``write(folder)`` writes into an empty folder."""
-    import hashlib
-    import tempfile
     h = hashlib.sha1()
     with tempfile.TemporaryDirectory() as t:
         write(Path(t))
@@ -273,7 +273,6 @@ def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=Non
     jobs = max(1, min(plan.options.jobs, plan.members))
     if jobs == 1:
         return [one(k) for k in range(plan.members)]
-    import concurrent.futures as cf
     with cf.ThreadPoolExecutor(max_workers=jobs) as ex:
         return list(ex.map(one, range(plan.members)))
 
@@ -335,7 +334,6 @@ def static_members(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
 def _with_weight(tot: dict, walls: list, case: Case) -> dict:
     """Adds the force the discs exert on all walls together along gravity: at rest, their weight
     (the least noisy static quantity of an ensemble: it sees density and gravity directly)."""
-    from compare.cases.common import inward_normal, tangent
     g = np.array(case.resolved["gravity"], float)
     gn = np.linalg.norm(g)
     down = g / gn if gn > 0 else np.array([0.0, -1.0])
@@ -386,7 +384,6 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     a fit counts with r^2 >= 0.95 and at least 8 points; each code's fit is compared with the
     native one (p_inf, lambda, z0, K, mu_w,eff within the combined intervals); each member's floor
     force + wall friction = weight."""
-    from compare.figures import janssen_figure
     records = {c: [] for c in codes}
     for k, (res, case) in enumerate(member_runs(plan, codes, out, mutation, JANSSEN_SERIES)):
         for c in codes:
@@ -495,19 +492,18 @@ KIND_RUNNERS = {"collision": collision, "janssen": janssen_column, "discharge": 
 
 
 def shear_box(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, dict]:
-    """Paper 2's shear box (compare/shear.py): jittered members compressed to rest and sheared in
+    """Paper 2's shear box (compare/cases/shear.py, compare/verdict/shear_judge.py): jittered members compressed to rest and sheared in
     every code; sigma0, the windowed peak of tau/sigma, its mean in strain bands (the curve) and
     the dilation compared as ensemble means against the shear margin, every member at rest before
     the shear."""
-    from compare.cases import shear
     per = ensemble_runs(plan, codes, out, mutation)
-    metrics, detail = shear.judge(plan.name, {c: [r for r, _ in runs] for c, runs in per.items()},
+    metrics, detail = shear_judge.judge(plan.name, {c: [r for r, _ in runs] for c, runs in per.items()},
                                   float(plan.shared["shear"]["max_strain"]),
                                   float(plan.shared["shear"]["sample_strain"]), plan.options)
     detail["dt"], detail["settle"] = plan.dt, plan.settle
     if mutation is None and detail["curves"]:
         detail["png"] = f"shear_{plan.name}.png"
-        shear.plot(detail, out.parent.parent / detail["png"])
+        shear_judge.plot(detail, out.parent.parent / detail["png"])
     return metrics, detail
 
 

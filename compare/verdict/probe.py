@@ -41,6 +41,7 @@ material, one free disc. How each code is read:
 """
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 import math
@@ -48,6 +49,7 @@ import os
 import re
 import signal
 import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -56,6 +58,7 @@ import numpy as np
 from compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend
 from compare.cases.common import Case, CaseError, disc_material, inward_normal, material_names, pair, resolve
 from compare.io.atomic_file import write_text as write_text_atomic
+from compare.verdict import translate
 
 CODES = ("native", "liggghts", "yade", "lammps")
 FIELDS = ("kn", "ks", "eta_n", "eta_s", "mu")
@@ -795,10 +798,7 @@ def check_case(case: Case, out_root: Path, codes=CODES, timeout: float = 120, re
 def main(argv=None) -> int:
     """python3 -m compare.probe [--out DIR] [--codes ...]: probes the paper's translated cases
     (compare.translate.cases) and prints each code's largest relative difference and wall time."""
-    import argparse
-    import tempfile
 
-    from compare.verdict import translate
     ap = argparse.ArgumentParser(prog="python3 -m compare.probe")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--codes", default=",".join(CODES))

@@ -14,6 +14,8 @@ import numpy as np  # noqa: E402
 from compare.verdict import calibration  # noqa: E402
 from compare.io import atomic_file  # noqa: E402
 from compare.io.atomic_file import write_text as write_text_atomic  # noqa: E402
+from compare.cases.shear import label
+from compare.cases.stats import wilson
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green", "lammps": "tab:red"}
 MARKERS = {"native": "o", "liggghts": "s", "yade": "^", "lammps": "D"}
@@ -384,7 +386,6 @@ def write(report: dict, out: Path) -> None:
     for jd in report.get("janssen", []):
         L += ["", f"## Janssen column {jd['case']}", ""] + jd.get("table", [])
     for sd in report.get("shear", []):
-        from compare.cases.shear import label
         cols = sd["keys"] + ["peak_raw", "strain_at_peak"]
         L += ["", f"## Shear box {sd['case']} (mean ± s.e. (members); dt {sd.get('dt', float('nan')):g} s)", "",
               "| code | at rest before the shear | " + " | ".join(label(k) for k in cols) + " |",
@@ -399,7 +400,6 @@ def write(report: dict, out: Path) -> None:
               "windowed peak side | windowed peak bottom | raw peak side, median [95 %] | side normal during flow | "
               "side friction during flow | bottom normal during flow |",
               "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-        from compare.cases.stats import wilson
         for name, s in report["discharge"].items():
             for c, v in s.items():
                 lo, hi = wilson(v["jammed"], v["ok_members"]) if v["ok_members"] else (float("nan"),) * 2

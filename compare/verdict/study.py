@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import json
 import math
+import tempfile
 import time
 from pathlib import Path
 
@@ -79,7 +80,6 @@ def run_code(code: str, case: Case, out: Path, timeout: float, threads: int = 1,
 def same_inputs(be, case: Case, out: Path, threads: int = 1) -> bool:
     """Whether the backend's translation of ``case`` (every file its write_inputs writes) equals,
     byte for byte, the files of the same names in ``out``."""
-    import tempfile
     with tempfile.TemporaryDirectory() as t:
         try:
             be.write_inputs(case, Path(t), threads)

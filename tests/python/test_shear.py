@@ -93,10 +93,10 @@ def test_shear_outputs(small_runs):
 
 
 def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
-    """The engine's time-step bound of the clusters (C++, Eigen) against compare.papers.shear_stability
+    """The engine's time-step bound of the clusters (C++, Eigen) against compare.cases.shear_stability
     (numpy), two codes written apart from the same model: each distinct cluster with its bonds
     and its neighbours within 0.01 cm held, every contact sticking."""
-    from compare.papers import shear_stability
+    from compare.cases import shear_stability
     for variant, out in small_runs.items():
         stab = json.loads((out / "summary.json").read_text())["stability"]
         if variant != "clusters":
@@ -180,7 +180,7 @@ def test_a_contact_inside_a_cluster_counts_once():
     """Three discs bonded 0-1 and 1-2 (as bonds = "touching" with a tolerance under 0.005 cm
     makes them), 0 and 2 first apart, then 0.005 cm apart below disc 1: the 0-2 block of the
     cluster's stiffness is zero, then that one contact's, -(kn n n^T + ks t t^T)."""
-    from compare.papers import shear_stability
+    from compare.cases import shear_stability
     r, kn, ks = 1.0, 3.0e4, 1.0e4
     x2 = 2 * r * math.cos(math.radians(30))
     resolved = {

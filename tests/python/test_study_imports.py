@@ -8,8 +8,8 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_study_processes_import_no_matplotlib():
-    code = ("import sys; import compare.papers.paper_static, compare.papers.paper_discharge, compare.paper_claims, "
-            "compare.figure_data; print(sorted(m for m in sys.modules if m.split('.')[0] == 'matplotlib'))")
+    code = ("import sys; import compare.papers.paper_static, compare.papers.paper_discharge, compare.papers.paper_claims, "
+            "compare.figures.figure_data; print(sorted(m for m in sys.modules if m.split('.')[0] == 'matplotlib'))")
     out = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
 

@@ -9,7 +9,7 @@ safe bound for the whole assembly (neighbours that move can raise the frequencie
 shows what bonds across a gap do: their lever arms (R0/2 > r) stiffen the coupled rotation
 modes.
 
-    /usr/bin/python3 -m compare.papers.shear_stability SCENE.toml [SCENE.toml ...] [--dem build/dem]
+    /usr/bin/python3 -m compare.cases.shear_stability SCENE.toml [SCENE.toml ...] [--dem build/dem]
 """
 import argparse
 import json
@@ -131,8 +131,23 @@ def dt_bound(K, C, minv, scheme, tol=1e-9):
     return lo
 
 
+def engine_bonds(discs, clusters) -> list[list[int]]:
+    """The engine's bond list (engine/src/clusters.cpp): every pair of a cluster, or the pairs
+    whose gap is at most touch_tolerance (``bonds = "touching"``), sorted."""
+    out = []
+    for members in clusters["members"]:
+        for a in range(len(members)):
+            for b in range(a + 1, len(members)):
+                i, j = sorted((members[a], members[b]))
+                (xi, yi, ri), (xj, yj, rj) = discs[i][:3], discs[j][:3]
+                gap = math.hypot(xj - xi, yj - yi) - ri - rj
+                if clusters["bonds"] == "touching" and gap > clusters["touch_tolerance"]:
+                    continue
+                out.append([i, j])
+    return sorted(out)
+
+
 def bonds_of(resolved):
-    from compare.cases.shear import bonds_of as engine_bonds
     return engine_bonds(resolved["discs"], resolved["clusters"])
 
 
@@ -162,7 +177,7 @@ def resolve(scene, dem):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="compare.papers.shear_stability", description=__doc__,
+    ap = argparse.ArgumentParser(prog="compare.cases.shear_stability", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="+")
     ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(REPO / "build" / "dem")))
