@@ -11,7 +11,6 @@ the pictures of each configuration's median member.
 import argparse
 import concurrent.futures as cf
 import json
-import multiprocessing as mp
 import os
 import subprocess
 import sys
@@ -20,6 +19,7 @@ from pathlib import Path
 from compare.papers import paper_claims
 from compare.io import scene_toml
 from compare.io.atomic_file import write_text as write_text_atomic
+from compare.io.job_pool import JobPool
 from compare.io.run_dir import RunDir
 
 REPO = Path(__file__).resolve().parents[2]
@@ -115,12 +115,12 @@ def draw(pictured_dir, out, tag, kind=None):
             getattr(figures, plot)(pictured_dir, out / f"{name}_{tag}.png")
 
 
-def draw_in(pictures, *args):
-    """draw(*args) in a figure process of the pool `pictures`, waited for: run as a task of the
-    runs' pool, a picture takes one of its --jobs places, so that no more processes run or draw at
-    a time than there are places (processes beyond the cores cost CPU of their own: the discharge
-    study 29.2 -> 28.2 s CPU, 6 interleaved runs each, the same wall time)."""
-    return pictures.submit(draw, *args).result()
+def draw_in(pool, *args):
+    """draw(*args) in a figure process of the pool, waited for: run as a task of the pool, a
+    picture takes one of its --jobs places, so that no more processes run or draw at a time than
+    there are places (processes beyond the cores cost CPU of their own: the discharge study 29.2
+    -> 28.2 s CPU, 6 interleaved runs each, the same wall time)."""
+    return pool.drawn(draw, *args)
 
 
 def run_order(plan):
@@ -153,18 +153,13 @@ def main(argv=None):
         common = ["--scheme", scheme, "--dt", repr(dt), "--force-dt", "--quiet", "--no-vtu"]
         plan.append((tag, arr, scheme, dt, contact, scene, out / tag, common))
     results, drawing = {}, []
-    # Figure processes fork from a server that imported matplotlib once (a fork of this process,
-    # which runs threads, could inherit a held lock); started at once, beside the first runs.
-    ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["compare.figures.runs"])
-    with cf.ThreadPoolExecutor(max_workers=jobs) as runs, \
-            cf.ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pictures:
-        drawing.append(pictures.submit(os.getpid))
+    # Figure processes fork from a server that imported matplotlib once (compare/io/job_pool.py).
+    with JobPool(jobs, figures="compare.figures.runs") as pool:
         waiting = {}           # configuration index -> its runs not yet ended
         for k in run_order(plan):
             tag, arr, scheme, dt, contact, scene, ens, common = plan[k]
             for cmd in member_commands(args.dem, scene, ens, args.members, args.seed, common):
-                waiting.setdefault(k, set()).add(runs.submit(subprocess.run, cmd, capture_output=True, text=True))
+                waiting.setdefault(k, set()).add(pool.run(subprocess.run, cmd, capture_output=True, text=True))
         pending = set().union(*waiting.values())
         # Each configuration is merged and its pictures started as soon as its last run ends, while
         # the runs of the others go on.
@@ -187,7 +182,7 @@ def main(argv=None):
                     pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
                     if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
                         rec["pictured"] = med["member"]
-                        drawing += [runs.submit(draw_in, pictures, pictured.path, out, tag, name)
+                        drawing += [pool.run(draw_in, pool, pictured.path, out, tag, name)
                                     for name, _ in PICTURES]
                 else:
                     rec["error"] = proc.stderr.strip()[-400:]

@@ -10,7 +10,6 @@ Writes OUT/report.md, OUT/study.json and PNGs (network grids, Fig. 7 analogues).
 import argparse
 import concurrent.futures as cf
 import json
-import multiprocessing as mp
 import os
 import subprocess
 import sys
@@ -18,6 +17,7 @@ from pathlib import Path
 
 from compare.papers import paper_claims
 from compare.io.atomic_file import write_text as write_text_atomic
+from compare.io.job_pool import JobPool
 from compare.io.run_dir import RunDir, RunDirError
 
 REPO = Path(__file__).resolve().parents[2]
@@ -184,18 +184,13 @@ def main(argv=None):
     if not Path(args.dem).exists():
         sys.exit(f"{args.dem}: engine not built (bash scripts/build.sh)")
     cases = [(s, sc, dt) for sc in SCHEMES for dt in STEPS for s in ARRANGEMENTS]
-    # The pictured cases first: their figures are drawn in figure processes while the other runs go
-    # on (a fork of this process, which runs threads, could inherit a held lock: a fork server that
-    # imported matplotlib once).
+    # The pictured cases first: their figures are drawn in the pool's figure processes while the
+    # other runs go on (compare/io/job_pool.py).
     pictured = [c for c in cases if (c[1], c[2]) in (PAPER, REFERENCE)]
     cases = pictured + [c for c in cases if c not in pictured]
-    ctx = mp.get_context("forkserver")
-    ctx.set_forkserver_preload(["compare.figures.runs"])
     records, drawing = [], []
-    with cf.ThreadPoolExecutor(max_workers=args.jobs) as ex, \
-            cf.ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=ctx) as pictures:
-        drawing.append(pictures.submit(os.getpid))  # the fork server starts beside the first runs
-        futs = [ex.submit(run_one, args.dem, s, sc, dt, out_root) for s, sc, dt in cases]
+    with JobPool(args.jobs, figures="compare.figures.runs") as pool:
+        futs = [pool.run(run_one, args.dem, s, sc, dt, out_root) for s, sc, dt in cases]
         for k, f in enumerate(cf.as_completed(futs), 1):
             r = f.result()
             records.append(r)
@@ -205,7 +200,7 @@ def main(argv=None):
             if key in (PAPER, REFERENCE):
                 mine = [q for q in records if (q["scheme"], q["dt"]) == key]
                 if len(mine) == len(ARRANGEMENTS):
-                    drawing += [pictures.submit(draw, out_root, key, mine)]
+                    drawing += [pool.draw(draw, out_root, key, mine)]
         for d in drawing:
             d.result()  # a figure that failed stops the study with its error
     records.sort(key=lambda r: (SCHEMES.index(r["scheme"]), r["dt"], r["s"]))

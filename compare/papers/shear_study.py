@@ -25,7 +25,6 @@ every pair of a cluster bonded, touching = only the apex-base contacts bonded):
 docs/compare.md); this study runs each scene once per code and variant for the paper's findings.
 """
 import argparse
-import concurrent.futures as cf
 import json
 import math
 import os
@@ -40,6 +39,7 @@ from compare.io import scene_toml
 from compare.figures import shear_figures as sf
 from compare.cases import shear_stability
 from compare.codes import shear_yade
+from compare.io.job_pool import JobPool
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -140,41 +140,30 @@ def scene_header(alpha, variant):
     return " ".join(line.lstrip("# ").strip() for line in text[2:4])
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(prog="compare.papers.shear_study", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default=str(REPO / "out" / "shear"))
-    ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(REPO / "build" / "dem")))
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--no-yade", action="store_true")
-    ap.add_argument("--reuse", action="store_true", help="keep runs already in --out (rewrite the report)")
-    a = ap.parse_args(argv)
-    global REUSE
-    REUSE = a.reuse
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    t0 = time.time()
-    jobs = []
-    with cf.ThreadPoolExecutor(max_workers=a.jobs) as ex:
-        for kind in ("native", "native_dt5e-5", "native_yadelaw"):
-            for al in ALPHAS:
-                for v in VARIANTS:
-                    jobs.append(ex.submit(run_native, a.dem, kind, al, v, out))
-        for al in ALPHAS:
-            for v in ("free", "clusters"):
-                jobs.append(ex.submit(run_native, a.dem, "native_platewalls", al, v, out))
-        if not a.no_yade:
-            for al in ALPHAS:
-                for mode, v in (("none", "free"), ("bonds", "clusters"), ("bonds_touching", "touching"), ("clumps", "clusters")):
-                    jobs.append(ex.submit(run_yade, a.dem, mode, al, v, out))
-        runs = [j.result() for j in jobs]
-    for r in runs:
-        r["m"] = metrics(r)
-        if "error" in r:
-            print(f"FAILED {r['kind']} a{r['alpha']} {r['variant']}: {r['error']}", file=sys.stderr)
-    get = {(r["kind"], r["alpha"], r["variant"]): r for r in runs}
+def run_all(dem, out, jobs, no_yade):
+    """Every run of the study (native variants, then YADE's), as tasks of one job pool."""
+    with JobPool(jobs) as pool:
+        tasks = [pool.run(run_native, dem, kind, al, v, out)
+                 for kind in ("native", "native_dt5e-5", "native_yadelaw") for al in ALPHAS for v in VARIANTS]
+        tasks += [pool.run(run_native, dem, "native_platewalls", al, v, out) for al in ALPHAS for v in ("free", "clusters")]
+        if not no_yade:
+            tasks += [pool.run(run_yade, dem, mode, al, v, out) for al in ALPHAS
+                      for mode, v in (("none", "free"), ("bonds", "clusters"), ("bonds_touching", "touching"),
+                                      ("clumps", "clusters"))]
+        return [task.result() for task in tasks]
 
-    # --- figures
+
+def at_rest(get, kind, al, v):
+    """The run of the scene, or its dt = 5e-5 s run when it never came to rest at 1e-4 s."""
+    r = get.get((kind, al, v))
+    alt = get.get(("native_dt5e-5", al, v)) if kind == "native" else None
+    if r and r["m"] and not r["m"]["rest"] and alt and alt["m"] and alt["m"]["rest"]:
+        return alt
+    return r
+
+
+def draw_figures(get, out):
+    """The Fig. 7 analogue (tau/sigma against strain) and the contact-force networks (Figs. 5, 6)."""
     figs = {}
     curves = []
     for al in ALPHAS:
@@ -191,19 +180,11 @@ def main(argv=None):
                 curves.append((f"{al}", f"{label} YADE", sf.read_series(str(Path(r["dir"]) / "shear_series.csv"))))
     figs["fig7"] = sf.plot_ratio(curves, str(out / "fig7_ratio_strain.png"),
                                  "tau_xy / sigma_x against shear strain, alpha = 58, 50, 35 deg (paper 2, Fig. 7 analogue)")
-    def at_rest(kind, al, v):
-        """The run of the scene, or its dt = 5e-5 s run when it never came to rest at 1e-4 s."""
-        r = get.get((kind, al, v))
-        alt = get.get(("native_dt5e-5", al, v)) if kind == "native" else None
-        if r and r["m"] and not r["m"]["rest"] and alt and alt["m"] and alt["m"]["rest"]:
-            return alt
-        return r
-
     for kind, tag in (("native", "native"), ("yade", "yade")):
         items = []
         for al in ALPHAS:
-            fr = at_rest(kind, al, "free" if kind == "native" else "none")
-            cl = at_rest(kind, al, "clusters" if kind == "native" else "bonds")
+            fr = at_rest(get, kind, al, "free" if kind == "native" else "none")
+            cl = at_rest(get, kind, al, "clusters" if kind == "native" else "bonds")
             if al == 58 and cl and cl["m"]:
                 items.append((cl["dir"], 0, f"alpha {al}, clusters, compressed (Fig. 5)"))
                 items.append((fr["dir"], 0, f"alpha {al}, no clusters, compressed"))
@@ -213,20 +194,24 @@ def main(argv=None):
                 items.append((fr["dir"], 1, f"alpha {al}, no clusters (Fig. 6b)"))
         if items:
             figs[f"net_{tag}"] = sf.plot_networks(items, str(out / f"fig5_6_networks_{tag}.png"), ncols=2)
+    return figs
 
-    # --- stability bounds of the scenes (cluster model)
+
+def cluster_bounds(dem):
+    """{(alpha, variant): the scene's cluster dt bounds per scheme} (compare/cases/shear_stability.py)."""
     bounds = {}
     for al in ALPHAS:
         for v in VARIANTS:
             try:
-                bounds[(al, v)] = shear_stability.scene_bounds(shear_stability.resolve(scene(al, v), a.dem))
+                bounds[(al, v)] = shear_stability.scene_bounds(shear_stability.resolve(scene(al, v), dem))
             except Exception as e:  # noqa: BLE001 -- reported, never fatal
                 bounds[(al, v)] = {"error": str(e)}
+    return bounds
 
-    # --- report
-    L = []
+
+def setup_section(L, seconds):
     L.append("# Paper 2: clusters and the simple shear test (Sumita, Kiyama & Nishimura)\n")
-    L.append(f"Generated by `scripts/shear_study.sh` (`python3 -m compare.papers.shear_study`) in {time.time() - t0:.0f} s. "
+    L.append(f"Generated by `scripts/shear_study.sh` (`python3 -m compare.papers.shear_study`) in {seconds:.0f} s. "
              "Engine runs: `dem run reference_inputs/scenes/shear_a<alpha>_<variant>.toml`; YADE runs: "
              "the YADE backend's shear path (`compare/yade_backend.py`, the translation `dem compare --kind shear` runs; "
              "YADE 2023.02a), from the scene's own start.\n")
@@ -248,35 +233,39 @@ def main(argv=None):
              "lever arms R0/2); `touching`: only the two apex-base contacts bonded, the paper's "
              "\"inter-element contacts\" read literally (a V whose base discs do not touch for alpha < 60).\n")
 
-    def table(kind, variants, title, note=""):
-        L.append(f"### {title}\n")
-        if note:
-            L.append(note + "\n")
-        L.append("| alpha | variant | peak tau/sigma | at strain | windowed peak | peak to 5 % (windowed) | at 5 % | at 15 % | sigma0 [dyn/cm^2] | rest | plate rise [cm] |")
-        L.append("|---|---|---|---|---|---|---|---|---|---|---|")
-        for al in ALPHAS:
-            for v in variants:
-                r = get.get((kind, al, v))
-                if not r:
-                    continue
-                m = r["m"]
-                if not m:
-                    L.append(f"| {al} | {v} | failed: {r.get('error', '?')[:80]} | | | | | | | | |")
-                    continue
-                rest = "yes" if m["rest"] else "NO"
-                L.append(f"| {al} | {v} | {fmt(m['peak'])} | {fmt(m['at'])} | {fmt(m['windowed'])} | "
-                         f"{fmt(m['peak5'])} ({fmt(m['windowed5'])}) | {fmt(m['ratio_5'])} | {fmt(m['final'])} | {fmt(m['sigma0'], '.4g')} | {rest} | {fmt(m['plate_rise'])} |")
-        L.append("")
 
+
+def table(L, get, kind, variants, title, note=""):
+    L.append(f"### {title}\n")
+    if note:
+        L.append(note + "\n")
+    L.append("| alpha | variant | peak tau/sigma | at strain | windowed peak | peak to 5 % (windowed) | at 5 % | at 15 % | sigma0 [dyn/cm^2] | rest | plate rise [cm] |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    for al in ALPHAS:
+        for v in variants:
+            r = get.get((kind, al, v))
+            if not r:
+                continue
+            m = r["m"]
+            if not m:
+                L.append(f"| {al} | {v} | failed: {r.get('error', '?')[:80]} | | | | | | | | |")
+                continue
+            rest = "yes" if m["rest"] else "NO"
+            L.append(f"| {al} | {v} | {fmt(m['peak'])} | {fmt(m['at'])} | {fmt(m['windowed'])} | "
+                     f"{fmt(m['peak5'])} ({fmt(m['windowed5'])}) | {fmt(m['ratio_5'])} | {fmt(m['final'])} | {fmt(m['sigma0'], '.4g')} | {rest} | {fmt(m['plate_rise'])} |")
+    L.append("")
+
+
+def peak_section(L, get, no_yade):
     L.append("## Peak stress ratio\n")
     L.append("Peak = largest sampled tau/sigma (every 0.001 strain) up to 0.15; windowed = largest centred "
              "moving average over 0.011 strain (robust to single-sample spikes). ![Fig. 7](fig7_ratio_strain.png)\n")
-    table("native", VARIANTS, "Native, paper's law and dt = 1e-4 s (the main result)")
-    table("native_dt5e-5", VARIANTS, "Native, dt = 5e-5 s")
-    table("native_yadelaw", VARIANTS, "Native with YADE's contact law, velocity Verlet, dt = 2.5e-5 s")
-    table("native_platewalls", ("free", "clusters"), "Native, plate moving horizontally with the walls (dt = 1e-4 s)")
-    if not a.no_yade:
-        table("yade", ("none", "bonds", "bonds_touching", "clumps"), "YADE 2023.02a, dt = 5e-5 s",
+    table(L, get, "native", VARIANTS, "Native, paper's law and dt = 1e-4 s (the main result)")
+    table(L, get, "native_dt5e-5", VARIANTS, "Native, dt = 5e-5 s")
+    table(L, get, "native_yadelaw", VARIANTS, "Native with YADE's contact law, velocity Verlet, dt = 2.5e-5 s")
+    table(L, get, "native_platewalls", ("free", "clusters"), "Native, plate moving horizontally with the walls (dt = 1e-4 s)")
+    if not no_yade:
+        table(L, get, "yade", ("none", "bonds", "bonds_touching", "clumps"), "YADE 2023.02a, dt = 5e-5 s",
               "none: free discs; bonds: every pair of a cluster an elastic unbreakable CohFrictPhys bond; "
               "bonds_touching: the apex-base pairs only; clumps: rigid YADE clumps. A clump carries force "
               "inside itself where no interaction records it, so for clumps sigma and tau are the means over "
@@ -297,42 +286,46 @@ def main(argv=None):
         L.append(f"| {al} | " + " | ".join(cells) + " |")
     L.append("")
 
-    # --- trends
+
+
+def trend_lines(get, kind, free, clus, name, key="windowed", span="to 15 %"):
+    out = []
+    ok1 = []
+    for al in ALPHAS:
+        f, c = get.get((kind, al, free)), get.get((kind, al, clus))
+        if f and c and f["m"] and c["m"]:
+            ok1.append((al, c["m"][key] > f["m"][key], f["m"][key], c["m"][key]))
+    if ok1:
+        held = all(x[1] for x in ok1)
+        out.append(f"- {name}, {span}: clusters raise the peak for each alpha: **{'holds' if held else 'does not hold'}** (" +
+                   "; ".join(f"alpha {al}: {fv:.3f} -> {cv:.3f}" for al, _, fv, cv in ok1) + ")")
+    peaks = [(al, get[(kind, al, free)]["m"][key]) for al in ALPHAS
+             if get.get((kind, al, free)) and get[(kind, al, free)]["m"]]
+    if len(peaks) == 3:
+        order = [p for _, p in peaks]  # alphas 58, 50, 35
+        held = order[0] < order[1] < order[2]
+        out.append(f"- {name}, {span}: without clusters a smaller alpha gives a larger peak: **{'holds' if held else 'does not hold'}** "
+                   f"(58: {order[0]:.3f}, 50: {order[1]:.3f}, 35: {order[2]:.3f})")
+    return out
+
+
+def trend_section(L, get, no_yade):
     L.append("## The paper's findings\n")
-
-    def trend_lines(kind, free, clus, name, key="windowed", span="to 15 %"):
-        out = []
-        ok1 = []
-        for al in ALPHAS:
-            f, c = get.get((kind, al, free)), get.get((kind, al, clus))
-            if f and c and f["m"] and c["m"]:
-                ok1.append((al, c["m"][key] > f["m"][key], f["m"][key], c["m"][key]))
-        if ok1:
-            held = all(x[1] for x in ok1)
-            out.append(f"- {name}, {span}: clusters raise the peak for each alpha: **{'holds' if held else 'does not hold'}** (" +
-                       "; ".join(f"alpha {al}: {fv:.3f} -> {cv:.3f}" for al, _, fv, cv in ok1) + ")")
-        peaks = [(al, get[(kind, al, free)]["m"][key]) for al in ALPHAS
-                 if get.get((kind, al, free)) and get[(kind, al, free)]["m"]]
-        if len(peaks) == 3:
-            order = [p for _, p in peaks]  # alphas 58, 50, 35
-            held = order[0] < order[1] < order[2]
-            out.append(f"- {name}, {span}: without clusters a smaller alpha gives a larger peak: **{'holds' if held else 'does not hold'}** "
-                       f"(58: {order[0]:.3f}, 50: {order[1]:.3f}, 35: {order[2]:.3f})")
-        return out
-
     L.append("Windowed peaks over the whole shear (to gamma = 15 %) and up to the paper's Fig. 6 strain (5 %).\n")
     for key, span in (("windowed", "to 15 %"), ("windowed5", "to 5 %")):
-        L += trend_lines("native", "free", "clusters", "native, closed triangles", key, span)
-        L += trend_lines("native", "free", "touching", "native, contacts bonded", key, span)
-        L += trend_lines("native_dt5e-5", "free", "clusters", "native dt 5e-5, closed triangles", key, span)
-        L += trend_lines("native_yadelaw", "free", "clusters", "native with YADE's law, closed triangles", key, span)
-        if not a.no_yade:
-            L += trend_lines("yade", "none", "bonds", "YADE, bonds", key, span)
-            L += trend_lines("yade", "none", "clumps", "YADE, clumps", key, span)
+        L += trend_lines(get, "native", "free", "clusters", "native, closed triangles", key, span)
+        L += trend_lines(get, "native", "free", "touching", "native, contacts bonded", key, span)
+        L += trend_lines(get, "native_dt5e-5", "free", "clusters", "native dt 5e-5, closed triangles", key, span)
+        L += trend_lines(get, "native_yadelaw", "free", "clusters", "native with YADE's law, closed triangles", key, span)
+        if not no_yade:
+            L += trend_lines(get, "yade", "none", "bonds", "YADE, bonds", key, span)
+            L += trend_lines(get, "yade", "none", "clumps", "YADE, clumps", key, span)
     L.append("")
     L.append("NOTES_ON_TRENDS\n")
 
-    # --- checks
+
+
+def checks_section(L, runs):
     L.append("## Cross-checks of the stresses\n")
     L.append("Each plane's sigma and tau (contacts and bonds cut by the plane) against the load of the part above: "
              "its weight and the forces of the side walls and the plate on it. `static` is the largest relative "
@@ -351,6 +344,9 @@ def main(argv=None):
                  f"{fmt(m['check_inertia'], '.1e')} | {fmt(m['sigma0'] / pl)} | {fmt(m['bond_strain'], '.2e')} |")
     L.append("")
 
+
+
+def bounds_section(L, get, bounds):
     L.append("## Time step and clusters\n")
     L.append("Bound on dt from the spectral radius of one step on each distinct cluster (its discs, bonds and "
              "the contacts to its touching neighbours held fixed, every contact sticking): "
@@ -368,19 +364,33 @@ def main(argv=None):
             else:
                 L.append(f"| {al} | {v} | {b['paper_eq18']:.3g} | {b['paper_eq19']:.3g} | {b['velocity_verlet']:.3g} | {rest} |")
     L.append("")
+
+
+def runs_section(L, runs, out, no_yade):
     L.append("NOTES_ON_DIFFERENCES\n")
     L.append("## Contact-force networks\n")
     L.append("Native (one disc diameter = the plate's weight shared by one row, b/2r discs): "
              "![networks](fig5_6_networks_native.png)\n")
-    if not a.no_yade:
+    if not no_yade:
         L.append("YADE, same scale: ![networks](fig5_6_networks_yade.png)\n")
     L.append("## Runs\n")
     for r in runs:
         st = "failed" if not r["m"] else f"{r['m']['status']}, {fmt(r['m'].get('wall_s'), '.1f')} s"
         L.append(f"- {r['kind']} alpha {r['alpha']} {r['variant']}: `{os.path.relpath(r['dir'], out)}` ({st})")
+
+
+def write_report(out, runs, get, bounds, no_yade, seconds):
+    """out/report.md (with the notes of compare/papers/shear_notes.md) and out/results.json."""
+    L = []
+    setup_section(L, seconds)
+    peak_section(L, get, no_yade)
+    trend_section(L, get, no_yade)
+    checks_section(L, runs)
+    bounds_section(L, get, bounds)
+    runs_section(L, runs, out, no_yade)
     text = "\n".join(L) + "\n"
     notes = Path(__file__).resolve().parent / "shear_notes.md"
-    if notes.is_file():  # the interpretation, written from these runs (compare/shear_notes.md)
+    if notes.is_file():  # the interpretation, written from these runs (compare/papers/shear_notes.md)
         parts = notes.read_text().split("<!-- split -->")
         text = text.replace("NOTES_ON_TRENDS\n", parts[0].strip() + "\n")
         text = text.replace("NOTES_ON_DIFFERENCES\n", (parts[1].strip() if len(parts) > 1 else "") + "\n")
@@ -389,9 +399,32 @@ def main(argv=None):
     (out / "report.md").write_text(text)
     summary = {f"{r['kind']}/a{r['alpha']}_{r['variant']}": r["m"] for r in runs}
     (out / "results.json").write_text(json.dumps(summary, indent=1))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="compare.papers.shear_study", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default=str(REPO / "out" / "shear"))
+    ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(REPO / "build" / "dem")))
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--no-yade", action="store_true")
+    ap.add_argument("--reuse", action="store_true", help="keep runs already in --out (rewrite the report)")
+    a = ap.parse_args(argv)
+    global REUSE
+    REUSE = a.reuse
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.time()
+    runs = run_all(a.dem, out, a.jobs, a.no_yade)
+    for r in runs:
+        r["m"] = metrics(r)
+        if "error" in r:
+            print(f"FAILED {r['kind']} a{r['alpha']} {r['variant']}: {r['error']}", file=sys.stderr)
+    get = {(r["kind"], r["alpha"], r["variant"]): r for r in runs}
+    draw_figures(get, out)
+    write_report(out, runs, get, cluster_bounds(a.dem), a.no_yade, time.time() - t0)
     print(f"report: {out / 'report.md'} ({time.time() - t0:.0f} s)")
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -17,7 +17,6 @@ of unmutated runs are reused from the baseline's folders.
 """
 from __future__ import annotations
 
-import concurrent.futures as cf
 import copy
 import hashlib
 import json
@@ -34,6 +33,7 @@ from compare.codes import native_backend
 from compare.cases.common import Case, Result, scene_material_index, inward_normal, tangent
 from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
 from compare.figures import janssen_figure
+from compare.io.job_pool import in_order
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -270,11 +270,7 @@ def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=Non
         if series_interval is not None:
             case.series_interval = series_interval
         return run_all(codes, case, plan, out / f"m{k}", mutation), case
-    jobs = max(1, min(plan.options.jobs, plan.members))
-    if jobs == 1:
-        return [one(k) for k in range(plan.members)]
-    with cf.ThreadPoolExecutor(max_workers=jobs) as ex:
-        return list(ex.map(one, range(plan.members)))
+    return in_order(one, range(plan.members), plan.options.jobs)
 
 
 def ensemble_runs(plan: Plan, codes, out: Path, mutation=None, start=None) -> dict:
