@@ -27,9 +27,9 @@ PAPER_LAW = {"normal_spring": "incremental", "no_tension": "elastic", "friction_
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from compare import scene_toml  # noqa: E402
-from compare.atomic_file import replacing, write_text  # noqa: E402,F401 (the studies' writer)
-from compare.run_dir import RunDir, RunDirError  # noqa: E402
+from compare.io import scene_toml  # noqa: E402
+from compare.io.atomic_file import replacing, write_text  # noqa: E402,F401 (the studies' writer)
+from compare.io.run_dir import RunDir, RunDirError  # noqa: E402
 
 
 def setup_binary(path: str | None) -> Path:

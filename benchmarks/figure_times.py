@@ -17,7 +17,7 @@ import tempfile
 CHILD = r"""
 import sys, time
 t0 = time.process_time()
-from compare import figures as f
+from compare.figures import runs as f
 t1 = time.process_time()
 run, out = sys.argv[1], sys.argv[2]
 parts = [("network", lambda: f.plot_network(run, f"{out}/network.png")),

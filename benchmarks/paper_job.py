@@ -1,7 +1,7 @@
 """The paper's job, timed: its parts for one or more checkouts, interleaved, with medians.
 
     /usr/bin/python3 benchmarks/paper_job.py --out out/paper_job [--repeats 3] \
-        [--variant NAME REPO DEM ...] [--parts single,single_plots,single_pil,single_pictures,static,discharge] \
+        [--variant NAME REPO DEM ...] [--parts single,single_plots,single_pictures,static,discharge] \
         [--members 8]
 
 Each variant is a checkout (REPO: its compare/ and scenes) and an engine binary (DEM); default:
@@ -9,12 +9,10 @@ this checkout and build/dem. Parts:
 
 - ``single``:       `dem run reference_inputs/scenes/discharge_17_18.toml --out DIR --quiet`;
 - ``single_plots``: that run, then `python3 -m compare.figures run DIR` (its five pictures);
-- ``single_pil``:   that run, then `python3 -m compare.figures run DIR --renderer pil` (the same
-  five pictures drawn with PIL, compare/quick_figures.py);
-- ``single_pictures``: `dem run ... --quiet --pictures` (the run and the same PIL pictures in one
+- ``single_pictures``: `dem run ... --quiet --pictures` (the run and the same pictures in one
   command: the picture process starts with the run);
-- ``static``:       `python3 -m compare.paper_static --out DIR --dem DEM`;
-- ``discharge``:    `python3 -m compare.paper_discharge --out DIR --dem DEM --members M`.
+- ``static``:       `python3 -m compare.papers.paper_static --out DIR --dem DEM`;
+- ``discharge``:    `python3 -m compare.papers.paper_discharge --out DIR --dem DEM --members M`.
 
 Repeat r runs every variant's part before repeat r + 1 (interleaved: a change of the machine's
 load falls on all variants alike). Each run's wall time, CPU time (user + sys of the command and
@@ -74,15 +72,12 @@ def part_commands(part, repo, dem, out, members):
         return [[dem, "run", scene, "--out", out, "--quiet"]]
     if part == "single_plots":
         return [[dem, "run", scene, "--out", out, "--quiet"], [PY, "-m", "compare.figures", "run", out]]
-    if part == "single_pil":
-        return [[dem, "run", scene, "--out", out, "--quiet"],
-                [PY, "-m", "compare.figures", "run", out, "--renderer", "pil"]]
     if part == "single_pictures":
         return [[dem, "run", scene, "--out", out, "--quiet", "--pictures"]]
     if part == "static":
-        return [[PY, "-m", "compare.paper_static", "--out", out, "--dem", dem]]
+        return [[PY, "-m", "compare.papers.paper_static", "--out", out, "--dem", dem]]
     if part == "discharge":
-        return [[PY, "-m", "compare.paper_discharge", "--out", out, "--dem", dem, "--members", str(members)]]
+        return [[PY, "-m", "compare.papers.paper_discharge", "--out", out, "--dem", dem, "--members", str(members)]]
     raise SystemExit(f"paper_job: unknown part {part!r}")
 
 

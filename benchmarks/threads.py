@@ -99,7 +99,7 @@ def main() -> int:
         settle, dis = settle * args.scale, dis * args.scale
         settled = speed.settled_scene(speed.SCENES / speed.SIZES[size][0], args.dem, out)
         phases = speed.scene_with_phases(settled, settle, dis, speed.DT_SHARED, out / f"bench_{size}.toml")
-        from compare import native_backend
+        from compare.codes import native_backend
         ns = argparse.Namespace(scene=str(phases), settle=settle, discharge=dis)
         scenes[size] = native_backend.write_inputs(speed._case(ns), out / f"case_{size}")
     records = []

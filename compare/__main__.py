@@ -14,7 +14,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from . import mutants, pipeline, plan, report, sequential, verdict
+from compare.cases import mutants, plan, common
+from compare.verdict import pipeline, report, sequential, verdict, translate, attribution
+from compare.io import scene_toml
 
 CODES = ("native",) + plan.REFERENCE_CODES
 
@@ -108,7 +110,6 @@ def _common(p) -> None:
 def main(argv=None) -> int:
     a = _parser().parse_args(argv)
     if a.cmd == "translate":
-        from . import translate
         return translate.main(a.check, a.out)
     codes = tuple(c.strip() for c in a.codes.split(",") if c.strip())
     bad = [c for c in codes if c not in CODES]
@@ -166,7 +167,6 @@ def main(argv=None) -> int:
         rep = pipeline.run(entries, a.out, codes, log=log, plans=plans)
     rep["profile"] = base.profile
     if any(p.options.native_law == "scene" for p in plans):
-        from . import attribution
         rep["attribution"] = attribution.attribute(plans, rep, a.out, log)
     if a.mutants:
         rep["mutants"] = run_mutants(plans, rep, a.out, codes, log, a.mutant)
@@ -193,7 +193,6 @@ def with_set(entries, assignments, folder: Path):
     """The entries with their scenes changed by ``--set`` (compare.scene_toml), each written into
     folder/KK/ under its own name and validated by the engine (``dem resolve``); PlanError names
     the key or the field the engine refuses."""
-    from . import common, scene_toml
     out = []
     for k, e in enumerate(entries):
         path = folder / f"{k:02d}" / e.scene.name

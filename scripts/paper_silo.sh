@@ -7,5 +7,5 @@ cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 bash scripts/build.sh
 OUT="${1:-out/paper_silo}"
-/usr/bin/python3 -m compare.paper_static --out "$OUT"
-/usr/bin/python3 -m compare.paper_discharge --out "$OUT/discharge"
+/usr/bin/python3 -m compare.papers.paper_static --out "$OUT"
+/usr/bin/python3 -m compare.papers.paper_discharge --out "$OUT/discharge"

@@ -1,7 +1,7 @@
 """compare.atomic_file: a file is written whole or left as it was."""
 import pytest
 
-from compare import atomic_file
+from compare.io import atomic_file
 
 
 def test_written_whole_in_a_new_folder(tmp_path):

@@ -12,11 +12,11 @@ import sys
 import numpy as np
 import pytest
 
-from compare.common import SHARED_VARIANT
+from compare.cases.common import SHARED_VARIANT
 
-from compare import calibration as cal
-from compare import native_backend
-from compare.common import Case, pair
+from compare.verdict import calibration as cal
+from compare.codes import native_backend
+from compare.cases.common import Case, pair
 
 ROOT = cal.ROOT
 sys.path.insert(0, str(ROOT / "scripts"))

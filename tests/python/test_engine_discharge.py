@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.run_dir import RunDir, read_pvd
+from compare.io.run_dir import RunDir, read_pvd
 from test_engine_run import DISCHARGE, LATTICE, dem, needs_liggghts, needs_lmp, needs_yade, scene
 
 ROOT = Path(__file__).resolve().parents[2]

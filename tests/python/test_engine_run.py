@@ -18,8 +18,8 @@ import meshio
 import numpy as np
 import pytest
 
-from compare.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
-from compare.run_dir import RunDir
+from compare.verdict.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
+from compare.io.run_dir import RunDir
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -192,7 +192,7 @@ def test_a_malformed_mutant_exits_2_naming_it(rested, dem_binary):
 
 @needs_liggghts
 def test_the_figure_tool_draws_a_reference_run_without_its_contact_network(rested, dem_binary):
-    """`--pictures` draws the reference run's pictures with PIL (no network: the code gives no
+    """`--pictures` draws the reference run's pictures (no network: the code gives no
     contact list), and compare.figures (matplotlib) draws them again."""
     out = rested / "figures"
     p = dem(dem_binary, "run", rested / "rested.toml", "--engine", "liggghts", "--out", out, "--pictures")

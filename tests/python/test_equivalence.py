@@ -10,7 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from compare import sequential, stats
+from compare.verdict import sequential
+from compare.cases import stats
 
 ALPHA = stats.FAMILY_ALPHA
 TRIALS = 2000

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import matplotlib.image
 
-from compare import figures
+from compare.figures import runs as figures
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
@@ -952,7 +952,7 @@ def test_png_bytes_decode_to_the_same_pixels(tmp_path, channels):
     a strip of rows (png_file.STRIP_ROWS) lost or repeated fails this: the picture is two strips
     and a part of one high."""
     from PIL import Image
-    from compare import png_file
+    from compare.figures import png_file
     rng = np.random.default_rng(7)
     pixels = rng.integers(0, 256, size=(2 * png_file.STRIP_ROWS + 9, 53, channels), dtype=np.uint8)
     pixels[5:20, 10:40] = 200                          # a flat patch beside the noise

@@ -18,10 +18,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import geometry_probe as G
-from compare import lammps_backend, liggghts_backend, pipeline, probe as P, yade_backend
-from compare.common import SHARED_VARIANT, Case, dem_binary, resolve
-from compare.mutants import Mutation
+from compare.verdict import geometry_probe as G
+from compare.codes import lammps_backend, liggghts_backend, yade_backend
+from compare.verdict import pipeline, probe as P
+from compare.cases.common import SHARED_VARIANT, Case, dem_binary, resolve
+from compare.cases.mutants import Mutation
 
 ROOT = Path(__file__).resolve().parents[2]
 RUN_SECONDS = 20.0      # a zero-step run of a tiny case in each code

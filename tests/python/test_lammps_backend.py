@@ -19,8 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import calibration, lammps_backend as lb, mutants, probe
-from compare.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
+from compare.verdict import calibration, probe
+from compare.codes import lammps_backend as lb
+from compare.cases import mutants
+from compare.cases.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 CAL = ROOT / "reference_inputs" / "agreement" / "calibration"

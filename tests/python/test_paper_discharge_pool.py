@@ -8,8 +8,8 @@ import subprocess
 import numpy as np
 from PIL import Image
 
-from compare import paper_discharge
-from compare.run_dir import RunDir
+from compare.papers import paper_discharge
+from compare.io.run_dir import RunDir
 
 
 def test_pooled_members_give_the_ensemble_of_one_process(tmp_path, dem_binary, monkeypatch):

@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import figures, paper_claims, paper_discharge, paper_static
+from compare.figures import runs as figures
+from compare.papers import paper_claims, paper_discharge, paper_static
 
 REPO = Path(__file__).resolve().parents[2]
 

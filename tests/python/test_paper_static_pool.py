@@ -1,7 +1,8 @@
 """The static study draws its pictured cases' figures in figure processes while other runs go on:
 the PNGs are those compare.figures draws in this process from the same runs, byte for byte, and
 the report shows them."""
-from compare import figures, paper_static
+from compare.figures import runs as figures
+from compare.papers import paper_static
 
 
 def test_figures_of_the_pool_are_those_drawn_here(tmp_path, dem_binary, monkeypatch):

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import liggghts_backend, native_backend, probe as P, yade_backend
-from compare.common import SHARED_VARIANT, Case, dem_binary, resolve
+from compare.codes import liggghts_backend, native_backend, yade_backend
+from compare.verdict import probe as P
+from compare.cases.common import SHARED_VARIANT, Case, dem_binary, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 DD = {"kn": 9.0e7, "ks": 3.0e7, "eta_n": 3.0e4, "eta_s": 1.0e4, "mu": 0.5}

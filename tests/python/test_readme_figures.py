@@ -5,7 +5,7 @@ equal to what they give."""
 import importlib.util
 from pathlib import Path
 
-from compare import paper_discharge, paper_static
+from compare.papers import paper_discharge, paper_static
 
 REPO = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("readme_figures", REPO / "scripts" / "readme_figures.py")

@@ -91,7 +91,7 @@ def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
     import subprocess
     assert "phi" not in read_csv(run_dir / "discs.csv")[0]
     assert "phi" not in meshio.read(run_dir / "discs.vtu").point_data
-    from compare import scene_toml
+    from compare.io import scene_toml
     scene = scene_toml.edit(SCENE, None, tmp_path / "angle.toml", add={"output.rotation_angle": True})
     out = tmp_path / "run"
     proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
@@ -123,7 +123,7 @@ def test_no_temporary_files_left(run_dir):
 
 
 def test_figures_from_a_real_run(run_dir, tmp_path):
-    from compare import figures
+    from compare.figures import runs as figures
     net = tmp_path / "network.png"
     prof = tmp_path / "profiles.png"
     figures.plot_network(run_dir, net)
@@ -164,7 +164,7 @@ def test_no_vtu_writes_the_csv_files_alone(tmp_path, dem_binary):
     snapshots listed with the .pvd's times in discharge_snapshots.csv. A run that still wrote a VTU
     file, or whose index had other times or names, fails this."""
     import subprocess
-    from compare.run_dir import RunDir
+    from compare.io.run_dir import RunDir
     scene = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
     runs = {}
     for name, extra in (("vtu", []), ("none", ["--no-vtu"])):

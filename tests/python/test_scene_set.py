@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from compare import scene_toml
+from compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
@@ -126,7 +126,8 @@ def test_compare_set_changes_the_scene_it_translates(tmp_path, dem_binary):
     assert doc["walls"][0]["material"] == "sand" and doc["integrator"]["dt"] == 5e-7
     assert scene_toml.parse_assignment("integrator.scheme=velocity_verlet") == ("integrator.scheme", "velocity_verlet")
     assert scene_toml.parse_assignment("walls.0.to=[1, 2]") == ("walls[0].to", [1, 2])
-    from compare import __main__ as cli, plan
+    from compare import __main__ as cli
+    from compare.cases import plan
     entries = cli.with_set([plan.Entry(WALL_SCENE, plan.Options())], ["integrator.dt=5e-7"], tmp_path / "s")
     written = entries[0].scene
     assert written.name == WALL_SCENE.name and scene_toml.load(written)["integrator"]["dt"] == 5e-7

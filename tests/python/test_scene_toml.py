@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import scene_toml as st
+from compare.io import scene_toml as st
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"

@@ -11,8 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import margins, mutants, native_backend, plan, shear, stats, verdict, yade_backend
-from compare.common import SHARED_VARIANT, Result, resolve
+from compare.cases import margins, mutants, plan, shear, stats
+from compare.codes import native_backend, yade_backend
+from compare.verdict import shear_judge, verdict
+from compare.cases.common import SHARED_VARIANT, Result, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "reference_inputs" / "scenes"
@@ -36,7 +38,7 @@ def test_a_shear_box_scene_is_planned_as_the_shear_kind():
     assert p.shared["contact"] == SHARED_VARIANT and p.shared["integrator"]["scheme"] == "velocity_verlet"
     assert p.resolved["contact"]["normal_spring"] == "incremental"      # the scene's own law kept apart
     # the shared scheme (velocity Verlet) with the bonded clusters: 1e-4 halved to 2.5e-5 s
-    # (bound 4.59e-5 s, compare/shear_stability.py)
+    # (bound 4.59e-5 s, compare/cases/shear_stability.py)
     assert p.dt == 2.5e-5
     assert p.settle == 4.0 and p.duration == pytest.approx(math.atan(0.15) / 0.05, rel=1e-15)
     case = plan.member_case(p, 1)
@@ -182,7 +184,7 @@ def test_the_judge_agrees_on_one_distribution_and_disagrees_on_a_shifted_one():
     opts = plan.Options()
     same = {"native": [_result("native", seed=k) for k in range(6)],
             "yade": [_result("yade", seed=100 + k) for k in range(6)]}
-    metrics, detail = shear.judge("x", same, 0.15, 0.001, opts)
+    metrics, detail = shear_judge.judge("x", same, 0.15, 0.001, opts)
     metrics = _judged(metrics)
     names = [m["metric"] for m in metrics]
     assert len([n for n in names if n.startswith("shear ") and "(yade vs native)" in n]) == 2 + 4 + 1
@@ -193,13 +195,13 @@ def test_the_judge_agrees_on_one_distribution_and_disagrees_on_a_shifted_one():
     # the peak's 10 % shift lies on the margin: never agree; 30 % disagrees
     for scale, want in ((1.1, ("inconclusive", "disagree")), (1.3, ("disagree",))):
         shifted = dict(same, yade=[_result("yade", ratio_scale=scale, seed=100 + k) for k in range(6)])
-        metrics, _ = shear.judge("x", shifted, 0.15, 0.001, opts)
+        metrics, _ = shear_judge.judge("x", shifted, 0.15, 0.001, opts)
         assert next(m for m in _judged(metrics) if "peak" in m["metric"])["verdict"] in want, scale
     unrested = dict(same, yade=[_result("yade", seed=100 + k, rest=k > 0) for k in range(6)])
-    metrics, _ = shear.judge("x", unrested, 0.15, 0.001, opts)
+    metrics, _ = shear_judge.judge("x", unrested, 0.15, 0.001, opts)
     assert not next(m for m in _judged(metrics) if "at rest before the shear (yade)" in m["metric"])["pass"]
     failed = dict(same, yade=same["yade"][:5] + [Result(code="yade", case="x", status="failed", reason="boom")])
-    metrics, _ = shear.judge("x", failed, 0.15, 0.001, opts)
+    metrics, _ = shear_judge.judge("x", failed, 0.15, 0.001, opts)
     judged = [m for m in _judged(metrics) if "vs native" in m["metric"]]
     assert judged and all(m["verdict"] == "inconclusive" and "boom" in m["note"] for m in judged)
     assert len(detail["curves"]["native"]["ratio"]["mean"]) == len(detail["strain"]) == 151

@@ -3,7 +3,8 @@ no copy of the one script template; `compare translate --out DIR` writes folders
 they are (the template beside each case)."""
 from pathlib import Path
 
-from compare import translate, yade_backend
+from compare.codes import yade_backend
+from compare.verdict import translate
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare import scene_toml, yade_backend as yb
-from compare.run_dir import RunDir
-from compare.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
+from compare.io import scene_toml
+from compare.codes import yade_backend as yb
+from compare.io.run_dir import RunDir
+from compare.cases.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
 
 pytestmark = pytest.mark.skipif(not yb.available(), reason="yade is not on PATH (Debian: apt-get install yade)")
 

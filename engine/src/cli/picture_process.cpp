@@ -33,7 +33,7 @@ bool PictureProcess::start(const std::string& out, bool quiet, std::string& erro
   std::vector<char*> envp;
   for (std::string& e : env) envp.push_back(e.data());
   envp.push_back(nullptr);
-  std::vector<const char*> args = {DEM_PYTHON_EXE, "-m", "compare.quick_figures", "run", out.c_str(), "--wait"};
+  std::vector<const char*> args = {DEM_PYTHON_EXE, "-m", "compare.figures", "run", out.c_str(), "--wait"};
   if (quiet) args.push_back("--quiet");
   args.push_back(nullptr);
 

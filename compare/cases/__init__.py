@@ -1,0 +1,1 @@
+"""What a comparison runs: cases, plans, kinds, mutants, margins and statistics."""

@@ -1,0 +1,1 @@
+"""Figures of dem run directories and of the comparison (matplotlib)."""

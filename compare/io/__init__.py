@@ -1,0 +1,1 @@
+"""Run folders, scene files and files written whole: the comparison layer's reading and writing."""

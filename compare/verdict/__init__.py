@@ -1,0 +1,1 @@
+"""The verdict: the pipeline, the read-back probes, the judges, the report."""
