@@ -593,3 +593,11 @@ def flow_title(summary, info):
                          f"{_fmt(info.get('n_initial'), 'd')} discs out "
                          f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
                          f"{_fmt(info.get('jams'), 'd')} jams", 12 * 11)
+
+
+UNITS = {"cgs": {"length": "cm", "mass": "g"}, "si": {"length": "m", "mass": "kg"}}
+
+
+def units_of(summary: dict) -> dict:
+    """The words of a run's unit system (summary.json options.units: cgs or si), for its labels."""
+    return UNITS.get((summary.get("options") or {}).get("units", "cgs"), UNITS["cgs"])
