@@ -20,7 +20,8 @@ SceneRun::SceneRun(const SceneSpec& spec, World& w, const std::string& out) : ru
     shear = std::make_unique<ShearPhase>(spec, out);
     phases_.push_back(shear.get());
   }
-  runner.last_good.set_file(out.empty() ? "" : out + "/last_good.bin");  // beside the outputs, not in memory (last_good.hpp)
+  // Beside the outputs for large worlds, in memory for small ones (last_good.hpp).
+  runner.last_good.set_file(out.empty() || w.discs.size() < kLastGoodInFileFrom ? "" : out + "/last_good.bin");
   runner.record.configure(spec, out, w.dt);
   if (discharge) discharge->record = &runner.record;
   if (shear) shear->record = &runner.record;
