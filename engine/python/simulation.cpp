@@ -11,6 +11,7 @@
 #include <memory>
 #include <tuple>
 
+#include "io/files.hpp"
 #include "io/out_dir.hpp"
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
@@ -353,7 +354,8 @@ forces, radii, ids, contacts(), walls() and points() are copies.)")
            "The forces of the discs on each wall: dict of name, group, fx, fy, normal, shear, contacts; copies.")
       .def("points", [](const S& s) { return s.loads(true); }, "The forces on each point (slit ends): name, group, fx, fy, contacts.")
       .def("kinetic_energy", [](const S& s) { return s.world_.kinetic_energy(); })
-      .def_property_readonly("time", [](const S& s) { return s.world_.time; })
+      .def_property_readonly("time", [](const S& s) { return on_step_grid(s.world_.time, s.world_.dt); },
+                             "simulated time [s], as summary.json gives it (on the step grid)")
       .def_property_readonly("steps", [](const S& s) { return s.world_.steps; })
       .def_property_readonly("dt", [](const S& s) { return s.world_.dt; })
       .def_property_readonly("n_discs", [](const S& s) { return s.world_.discs.size(); })

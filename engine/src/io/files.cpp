@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <charconv>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -34,6 +36,21 @@ Digits17 digits17(double v) {
 std::string fmt17(double v) {
   const Digits17 d = digits17(v);
   return std::string(d.text, d.size);
+}
+
+double on_step_grid(double t, double dt) {
+  if (!(dt > 0) || !std::isfinite(t)) return t;
+  const double n = std::nearbyint(t / dt);
+  if (!(std::abs(t - n * dt) <= 1e-2 * dt)) return t;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.15g", n * dt);
+  return std::strtod(buf, nullptr);
+}
+
+std::string time_text(double t) {
+  char buf[32];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, t);
+  return std::string(buf, static_cast<std::size_t>(r.ptr - buf));
 }
 
 nlohmann::ordered_json finite_or_null(double v) {

@@ -29,6 +29,12 @@ inline std::ostream& operator<<(std::ostream& o, const Digits17& d) {
   return o.write(d.text, static_cast<std::streamsize>(d.size));
 }
 std::string fmt17(double v);
+// A time as the user would write it: t moved onto the step grid, n dt rounded to 15 significant
+// digits (an accumulated t reads 0.0099999999999999672 where 200 steps of 5e-5 s are 0.01); a t
+// off the grid (a state file saved with another dt) is returned as it is.
+double on_step_grid(double t, double dt);
+// The shortest text that reads back as t (0.571, not %.17g's 0.57099999999999995).
+std::string time_text(double t);
 // A JSON number, or null when not finite.
 nlohmann::ordered_json finite_or_null(double v);
 

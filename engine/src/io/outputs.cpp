@@ -373,14 +373,14 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
                    {"disc_order", to_string(w.disc_order)}};
   js["n_discs"] = d.size();
   js["steps"] = w.steps;
-  js["time"] = w.time;
+  js["time"] = on_step_grid(w.time, w.dt);
   js["wall_time_s"] = res.wall_seconds;
   js["particle_steps"] = w.particle_steps;
   js["particle_steps_per_s"] = res.wall_seconds > 0 ? w.particle_steps / res.wall_seconds : 0.0;
   js["neighbor_rebuilds"] = w.neighbors.rebuilds;
   js["neighbor_patches"] = w.neighbors.patches;
   js["disc_resorts"] = w.resorts;  // the discs put in cell order (integrator.disc_order)
-  js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(res.rest_time) : json(nullptr)},
+  js["rest"] = {{"reached", res.rest_reached}, {"time", res.rest_reached ? json(on_step_grid(res.rest_time, w.dt)) : json(nullptr)},
                 {"criterion", "mean over discs of |du| and of |dv| per step < rest_factor * g * dt^2 (paper note 3)"},
                 {"rest_factor", spec.rest_factor}, {"threshold", res.rest_threshold},
                 {"mean_abs_du", res.mean_abs_du}, {"mean_abs_dv", res.mean_abs_dv}};

@@ -5,7 +5,7 @@
 namespace dem {
 
 void PvdIndex::add(double t, long step, const std::string& discs, const std::string& walls, const std::string& contacts) {
-  const std::string at = "    <DataSet timestep=\"" + fmt17(t) + "\" part=\"";
+  const std::string at = "    <DataSet timestep=\"" + time_text(t) + "\" part=\"";
   entries_ += at + "0\" file=\"" + discs + "\"/>\n";
   entries_ += at + "1\" file=\"" + walls + "\"/>\n";
   entries_ += at + "2\" file=\"" + contacts + "\"/>\n";

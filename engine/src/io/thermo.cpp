@@ -40,7 +40,7 @@ void Thermo::sample(const World& w, const char* phase) {
     shear[g] += (fx * (wl.bx - wl.ax) + fy * (wl.by - wl.ay)) / len;
   }
   std::ostringstream o;
-  o << digits17(w.time) << ',' << w.steps << ',' << phase << ',' << w.discs.size() << ',' << digits17(w.kinetic_energy())
+  o << time_text(on_step_grid(w.time, w.dt)) << ',' << w.steps << ',' << phase << ',' << w.discs.size() << ',' << digits17(w.kinetic_energy())
     << ',' << contacts << ',' << wall_contacts << ',' << digits17(w.max_overlap);
   for (std::size_t g = 0; g < groups_.size(); ++g) o << ',' << digits17(normal[g]) << ',' << digits17(shear[g]);
   o << '\n';

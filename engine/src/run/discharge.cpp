@@ -493,6 +493,7 @@ Status DischargePhase::after_step(World& w) {
 // A sample: wall forces, flow, surface, arch.
 void DischargePhase::sample(World& w, double t) {
   const DischargeSpec& ds = spec_.discharge;
+  const std::string tt = time_text(on_step_grid(t, w.dt));  // the rows' time, as the user would write it
   std::vector<WallLoad> walls;
   std::vector<PointLoad> points;
   measure_loads(w, spec_.profile_bin, walls, points);
@@ -501,14 +502,14 @@ void DischargePhase::sample(World& w, double t) {
   for (std::size_t k = 0; k < walls.size(); ++k) {
     const WallLoad& L = walls[k];
     const Wall& wl = w.geometry.walls[k];
-    st.totals << fmt(t) << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
+    st.totals << tt << ',' << L.name << ',' << fmt(L.normal) << ',' << fmt(L.shear) << ',' << fmt(L.fx) << ','
               << fmt(L.fy) << '\n';
     st.total_peaks[k].add(L.normal, win_);
     for (std::size_t b = 0; b < L.bin_normal.size(); ++b) {
       const double mid = std::min(L.length, (b + 0.5) * L.bin);
       const double xm = wl.ax + (wl.bx - wl.ax) * mid / L.length, ym = wl.ay + (wl.by - wl.ay) * mid / L.length;
       st.bin_peaks[k][b].add(L.bin_normal[b], win_);
-      series << fmt(t) << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym) << ','
+      series << tt << ',' << L.name << ',' << b << ',' << fmt(mid) << ',' << fmt(xm) << ',' << fmt(ym) << ','
              << fmt(f_.top - ym) << ',' << fmt(L.bin_normal[b]) << ',' << fmt(L.bin_shear[b]) << '\n';
     }
   }
@@ -516,7 +517,7 @@ void DischargePhase::sample(World& w, double t) {
   st.series_out.write(rows.data(), static_cast<std::streamsize>(rows.size()));
   st.series_bytes += rows.size();
   for (const PointLoad& P : points)
-    st.totals << fmt(t) << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
+    st.totals << tt << ',' << P.name << ',' << fmt(std::hypot(P.fx, P.fy)) << ",0," << fmt(P.fx) << ','
               << fmt(P.fy) << '\n';
   int inside = 0, below = 0, moved = 0;
   OpeningPositions::Reader open_at(st.at_open);  // in id order (by_id): block by block
@@ -537,7 +538,7 @@ void DischargePhase::sample(World& w, double t) {
   const std::vector<int> arch = find_arch(w, f_.slit_left, f_.slit_right, f_.floor);
   double crown = NAN;
   for (int i : arch) crown = std::isnan(crown) ? w.discs.y[i] : std::max(crown, w.discs.y[i]);
-  st.flow << fmt(t) << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
+  st.flow << tt << ',' << inside << ',' << below << ',' << removed << ',' << fmt(st.removed_mass) << ','
           << fmt(st.moved_fraction) << ',' << fmt(sf[0]) << ',' << fmt(sf[1]) << ',' << fmt(sf[2]) << ','
           << arch.size() << ',';
   if (!std::isnan(crown)) st.flow << fmt(crown);  // no arch: an empty cell
@@ -555,10 +556,10 @@ void DischargePhase::snapshots(World& w, double t) {
     write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open);
     write_contact_files(snapdir, std::string("contacts_") + stem, w, spec_.vtu_binary(w.discs.size()), spec_.vtu_files());
     if (spec_.vtu_files()) {
-      st.pvd_d << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
-      st.pvd_c << "    <DataSet timestep=\"" << fmt(t) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
+      st.pvd_d << "    <DataSet timestep=\"" << time_text(on_step_grid(t, w.dt)) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
+      st.pvd_c << "    <DataSet timestep=\"" << time_text(on_step_grid(t, w.dt)) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
     } else {  // no VTU files to index: the rows of discharge_snapshots.csv
-      st.pvd_d << fmt(t) << ",snapshots/discs_" << stem << ".csv,snapshots/contacts_" << stem << ".csv\n";
+      st.pvd_d << time_text(on_step_grid(t, w.dt)) << ",snapshots/discs_" << stem << ".csv,snapshots/contacts_" << stem << ".csv\n";
     }
     if (record && record->active())
       record->note_snapshot(w, std::string("snapshots/discs_") + stem + ".vtu", record->write_walls(w, stem),
@@ -596,7 +597,7 @@ void DischargePhase::finish(World& w, Status status) {
     std::ostringstream o;
     o << "t,id,mass,vx,vy,how\n";
     for (const Removal& r : st.removals)
-      o << fmt(r.t) << ',' << r.id << ',' << fmt(r.mass) << ',' << fmt(r.vx) << ',' << fmt(r.vy) << ','
+      o << time_text(on_step_grid(r.t, w.dt)) << ',' << r.id << ',' << fmt(r.mass) << ',' << fmt(r.vx) << ',' << fmt(r.vy) << ','
         << (r.keystone ? "keystone" : "outlet") << '\n';
     write_file_atomic(out_ + "/removals.csv", o.str());
   }
@@ -654,8 +655,8 @@ void DischargePhase::finish(World& w, Status status) {
   outcome_ = {status, w.time - st.t_open, removals.size(), out_1s, q / m_disc, pattern, best_bottom[0], best_side[0]};
   metrics_ = {
       {"status", to_string(status)},
-      {"t_open", st.t_open},
-      {"duration", w.time - st.t_open},
+      {"t_open", on_step_grid(st.t_open, w.dt)},
+      {"duration", on_step_grid(w.time - st.t_open, w.dt)},
       {"n_initial", st.n_initial},
       {"removed", removals.size()},
       {"removed_by_hand", std::count_if(removals.begin(), removals.end(), [](const Removal& r) { return r.keystone; })},
@@ -666,7 +667,7 @@ void DischargePhase::finish(World& w, Status status) {
                              (spec_.units == Units::si ? "kg/s per m" : "g/s per cm") +
                              "] from the 5th removal on (least squares)"},
       {"jammed", status == Status::jammed},
-      {"jam_at", st.jam_at >= 0 ? json(st.jam_at) : json(nullptr)},
+      {"jam_at", st.jam_at >= 0 ? json(on_step_grid(st.jam_at, w.dt)) : json(nullptr)},
       {"jams", st.jams},
       {"peak_ratio_bottom", best_bottom[0]},
       {"peak_ratio_bottom_windowed", best_bottom[1]},
@@ -675,8 +676,9 @@ void DischargePhase::finish(World& w, Status status) {
       {"ratio_note", "max over the bins (static >= 1/4 of the wall's largest) of peak / static normal force; "
                      "windowed: moving average over peak_window"},
       {"pattern", pattern},
-      {"surface_sink_time", {{"left_wall", num_or_null(sink_time[0])}, {"centre", num_or_null(sink_time[1])},
-                             {"right_wall", num_or_null(sink_time[2])}}},
+      {"surface_sink_time", {{"left_wall", num_or_null(on_step_grid(sink_time[0], w.dt))},
+                             {"centre", num_or_null(on_step_grid(sink_time[1], w.dt))},
+                             {"right_wall", num_or_null(on_step_grid(sink_time[2], w.dt))}}},
       {"pattern_note", "funnel: the top surface first sinks (by one mean radius) at a wall column; piping: first at "
                        "the centre column"},
       {"moved_fraction_end", st.moved_fraction},

@@ -53,7 +53,7 @@ std::string Recorder::write_walls(const World& w, const std::string& stem) const
 
 void Recorder::note_snapshot(const World& w, const std::string& discs, const std::string& walls,
                              const std::string& contacts) {
-  if (active()) snapshots.add(w.time, w.steps, discs, walls, contacts);
+  if (active()) snapshots.add(on_step_grid(w.time, w.dt), w.steps, discs, walls, contacts);
 }
 
 void Recorder::snapshot(const World& w) {
@@ -65,7 +65,7 @@ void Recorder::snapshot(const World& w) {
   write_disc_files(dir, s + "_discs", *spec_, w.discs, nullptr);
   write_contact_files(dir, s + "_contacts", w, binary, spec_->vtu_files());
   if (spec_->vtu_files()) write_walls_vtu(dir + "/" + s + "_walls.vtu", w.geometry, binary);
-  snapshots.add(w.time, w.steps, "snapshots/" + s + "_discs.vtu", "snapshots/" + s + "_walls.vtu",
+  snapshots.add(on_step_grid(w.time, w.dt), w.steps, "snapshots/" + s + "_discs.vtu", "snapshots/" + s + "_walls.vtu",
                 "snapshots/" + s + "_contacts.vtu");
 }
 
