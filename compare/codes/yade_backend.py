@@ -488,6 +488,27 @@ def read(case: Case, out_dir: Path) -> Result:
         return _fail(case, out_dir, f"unreadable YADE outputs: {e!r}")
 
 
+def _wall_series(case: Case, out_dir: Path, res: dict, walls: list) -> dict:
+    """The wall-force series: SERIES_FILE's per-contact rows grouped by sample time, binned like
+    the profiles (a moving wall's bins where it is at that time)."""
+    pb, centre = case.profile_bin, case.centre
+    by_t: dict[float, list] = {float(t): [] for t in res["series_t"]}
+    with open(out_dir / SERIES_FILE, newline="") as fh:
+        for row in csv.DictReader(fh):
+            t = float(row["t"])
+            by_t.setdefault(t, []).append((row["wall"], float(row["px"]), float(row["py"]),
+                                           float(row["fx"]), float(row["fy"])))
+    ts = sorted(by_t)
+    series = {"t": ts, "walls": {w["name"]: {"normal": [], "shear": []} for w in walls}}
+    for t in ts:
+        t_run = t + (case.settle if case.mode == "discharge" else 0.0)
+        prof = profiles_from_contacts([moved_wall(w, t_run) for w in walls], pb, centre, by_t[t])
+        for name, p in prof.items():
+            series["walls"][name]["normal"].append(p["normal"])
+            series["walls"][name]["shear"].append(p["shear"])
+    return series
+
+
 def _read(case: Case, out_dir: Path) -> Result:
     proc = {}
     if (out_dir / PROCESS_FILE).exists():
@@ -545,25 +566,11 @@ def _read(case: Case, out_dir: Path) -> Result:
     # a moving wall's bins run along it where it is (the contact points are on the moved facet)
     profiles = profiles_from_contacts([moved_wall(w, case.end_time) for w in walls], pb, centre, final)
 
-    # Series: per-contact rows grouped by sample time, binned like the profiles.
-    by_t: dict[float, list] = {float(t): [] for t in res["series_t"]}
-    with open(out_dir / SERIES_FILE, newline="") as fh:
-        for row in csv.DictReader(fh):
-            t = float(row["t"])
-            by_t.setdefault(t, []).append((row["wall"], float(row["px"]), float(row["py"]),
-                                           float(row["fx"]), float(row["fy"])))
-    ts = sorted(by_t)
-    series = {"t": ts, "walls": {w["name"]: {"normal": [], "shear": []} for w in walls}}
-    for t in ts:
-        t_run = t + (case.settle if case.mode == "discharge" else 0.0)
-        prof = profiles_from_contacts([moved_wall(w, t_run) for w in walls], pb, centre, by_t[t])
-        for name, p in prof.items():
-            series["walls"][name]["normal"].append(p["normal"])
-            series["walls"][name]["shear"].append(p["shear"])
-    for name, s in series["walls"].items():
-        for key in ("normal", "shear"):
-            if s[key] and not np.all(np.isfinite(np.array(s[key], float))):
-                return _fail(case, out_dir, f"NaN or inf in the wall-force series of {name}", **common)
+    series = _wall_series(case, out_dir, res, walls)
+    bad = [name for name, s in series["walls"].items() for key in ("normal", "shear")
+           if s[key] and not np.all(np.isfinite(np.array(s[key], float)))]
+    if bad:
+        return _fail(case, out_dir, f"NaN or inf in the wall-force series of {bad[0]}", **common)
 
     ps = res.get("particle_steps") or 0
     loop = float(res.get("loop_time_s", float("nan")))

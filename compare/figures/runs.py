@@ -607,26 +607,8 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     return _save(fig, out_png)
 
 
-def plot_flow(run_dir, out_png):
-    """Flow during discharge in four panels against time since opening.
-
-    (a) cumulative removed mass (removals.csv; keystones removed by hand marked) with the
-    fitted flow line (slope summary flow_rate_mass, intercept fitted as in flow_fit_line) and,
-    when all removed discs weigh the same, a removed-disc count axis; (b) discs in the silo and
-    below the floor, and the moved fraction; (c) the three surface heights with the sink times
-    (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
-    """
-    d = flow_data(run_dir)
-    summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
-
-    title = flow_title(summary, info)
-    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
-    # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
-    # each.
-    _fixed_layout(fig, left=0.75, right=0.75, bottom=0.5, top=0.42 + 0.2 * (title.count("\n") + 1),
-                  wspace=1.45, hspace=0.45)
-    (ax_out, ax_n), (ax_s, ax_a) = axes
-
+def _removed_panel(ax_out, removals, info, t_end):
+    """plot_flow's (a): cumulative removed mass, keystones, the fitted flow line, the first jam."""
     cumulative = np.cumsum(removals["mass"])
     ax_out.step(np.concatenate([[0.0], removals["t"], [t_end]]),
                 np.concatenate([[0.0], cumulative, cumulative[-1:] if len(cumulative) else [0]]),
@@ -654,6 +636,49 @@ def plot_flow(run_dir, out_png):
     ax_out.set_ylabel("removed mass [g per cm]")
     ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left", y=1.0)
     ax_out.legend(fontsize=8, loc="upper left")
+
+
+def _arch_panel(ax_a, flow):
+    """plot_flow's (d): the arch's crown height and its discs against time."""
+    ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
+              label="crown height (left)")
+    ax_a.set_ylabel("arch crown Y [cm]")
+    ax_a.set_ylim(bottom=0)
+    twin = ax_a.twinx()
+    twin.plot(flow["t"], flow["arch_discs"], color="0.5", linewidth=0.8,
+              drawstyle="steps-post", label="discs in the arch (right)")
+    twin.set_ylabel("discs in the arch")
+    twin.set_ylim(bottom=0)
+    h1, l1 = ax_a.get_legend_handles_labels()
+    h2, l2 = twin.get_legend_handles_labels()
+    ax_a.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
+    ax_a.set_xlabel("time since opening [s]")
+    no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
+    ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
+                   fontsize=10, loc="left", y=1.0)
+
+
+def plot_flow(run_dir, out_png):
+    """Flow during discharge in four panels against time since opening.
+
+    (a) cumulative removed mass (removals.csv; keystones removed by hand marked) with the
+    fitted flow line (slope summary flow_rate_mass, intercept fitted as in flow_fit_line) and,
+    when all removed discs weigh the same, a removed-disc count axis; (b) discs in the silo and
+    below the floor, and the moved fraction; (c) the three surface heights with the sink times
+    (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
+    """
+    d = flow_data(run_dir)
+    summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
+
+    title = flow_title(summary, info)
+    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
+    # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
+    # each.
+    _fixed_layout(fig, left=0.75, right=0.75, bottom=0.5, top=0.42 + 0.2 * (title.count("\n") + 1),
+                  wspace=1.45, hspace=0.45)
+    (ax_out, ax_n), (ax_s, ax_a) = axes
+
+    _removed_panel(ax_out, removals, info, t_end)
 
     present = flow["discs_in_silo"] + flow["discs_below"]
     ax_n.plot(flow["t"], flow["discs_in_silo"], color="tab:blue", label="discs in the silo")
@@ -687,22 +712,7 @@ def plot_flow(run_dir, out_png):
     ax_s.set_title(f"(c) top surface in the wall and centre columns: "
                    f"{info.get('pattern', '?')}", fontsize=10, loc="left", y=1.0)
 
-    ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
-              label="crown height (left)")
-    ax_a.set_ylabel("arch crown Y [cm]")
-    ax_a.set_ylim(bottom=0)
-    twin = ax_a.twinx()
-    twin.plot(flow["t"], flow["arch_discs"], color="0.5", linewidth=0.8,
-              drawstyle="steps-post", label="discs in the arch (right)")
-    twin.set_ylabel("discs in the arch")
-    twin.set_ylim(bottom=0)
-    h1, l1 = ax_a.get_legend_handles_labels()
-    h2, l2 = twin.get_legend_handles_labels()
-    ax_a.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
-    ax_a.set_xlabel("time since opening [s]")
-    no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
-    ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
-                   fontsize=10, loc="left", y=1.0)
+    _arch_panel(ax_a, flow)
     for ax in axes.flat:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_end)
