@@ -1,8 +1,8 @@
 """``dem run SCENE.toml --engine liggghts|lammps|yade [--np N] --out DIR``: one scene run in a
 reference code, written as the engine's own run folder (docs/outputs.md), so that
-compare.run_dir (strict) and ``python3 -m compare.figures run DIR`` read it unchanged.
+compare.io.run_dir (strict) and ``python3 -m compare.figures run DIR`` read it unchanged.
 
-The scene becomes one comparison case (compare/plan.py): the shared law (common.SHARED_VARIANT),
+The scene becomes one comparison case (compare/cases/plan.py): the shared law (common.SHARED_VARIANT),
 the scene's dt, and
 
 - a static scene: the scene's own start (its lattice or disc file, its velocities, no jitter)
@@ -11,7 +11,7 @@ the scene's dt, and
 - a discharge scene: the same start settles for ``--settle`` s (the comparison's default), the
   gate opens, ``discharge.time`` s of flow, discs below the outlet removed (as ``dem compare
   --kind discharge`` runs each member). The code dumps its discs at every wall-series sample;
-  compare/frame_measures.py measures flow_series.csv, the pattern, the jams and the dead fraction
+  compare/codes/frame_measures.py measures flow_series.csv, the pattern, the jams and the dead fraction
   from those frames, and the snapshots are the frames at ``discharge.snapshots``.
 
 ``--set KEY=VALUE`` changes the scene as ``dem run --set`` does; ``--member-start FILE`` starts
@@ -105,7 +105,7 @@ def make_case(scene: Path, settle: float) -> Case:
 
 
 def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
-    """The scene with the ``--set`` assignments applied (compare.scene_toml, as `dem compare
+    """The scene with the ``--set`` assignments applied (compare.io.scene_toml, as `dem compare
     --set`), written into ``folder`` under the scene's own name (its relative paths rebased), for
     the engine to validate as it resolves it; the scene itself without assignments."""
     if not assignments:
@@ -119,7 +119,7 @@ def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
     return path
 
 
-# A deliberately wrong translation, for the tests that must be able to fail (as compare/mutants.py
+# A deliberately wrong translation, for the tests that must be able to fail (as compare/cases/mutants.py
 # does for the comparison): DEM_ENGINE_MUTANT=WHAT:FACTOR scales one constant of what the code is
 # given (WHAT: density, gravity, or a pair constant kn, ks, eta_n, eta_s, mu of every pair); the
 # outputs are still measured against the scene as it is.
@@ -519,7 +519,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
     s = {
         "engine": f"{code} {res.version}".strip(),
         "engine_name": code, "engine_version": res.version,
-        "translated_by": "compare/engine_run.py (the shared law of the comparison layer)",
+        "translated_by": "compare/codes/reference_run.py (the shared law of the comparison layer)",
         "np": np_, "ranks": np_ if code != "yade" else 1, "threads": np_ if code == "yade" else 1,
         "scene": {"name": r.get("name", scene.stem), "file": str(scene), "description": r.get("description", "")},
         "status": status,
@@ -528,7 +528,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
         "options": {"scheme": SCHEME[code], "dt": case.dt, "dt_forced": False, "threads": 1,
                     **{k: r["contact"][k] for k in ("normal_spring", "no_tension", "friction_cap", "lever_arm")},
                     "gravity": gvec.tolist(), "skin": None, "cell": None, "profile_bin": case.profile_bin,
-                    "law": "the shared law (compare/common.py SHARED_VARIANT), whatever the scene's [contact]"},
+                    "law": "the shared law (compare/cases/common.py SHARED_VARIANT), whatever the scene's [contact]"},
         "n_discs": int(len(rows)), "steps": steps, "time": steps * case.dt,
         "wall_time_s": wall_s, "particle_steps": psteps,
         "particle_steps_per_s": psteps / wall_s if wall_s > 0 else None,

@@ -1,5 +1,5 @@
 """YADE 2023.02a as a compared code: translator (yade_case.json + the script
-compare/yade_template.py), runner (``yade -n -jN -x yade_script.py``) and reader.
+compare/codes/yade_template.py), runner (``yade -n -jN -x yade_script.py``) and reader.
 
 What the translation does (measured facts: docs/compare.md):
 - true 2D: spheres at z = 0 with ``blockedDOFs = 'zXY'``, mass rho pi r^2 (per 1 cm of thickness)
@@ -51,9 +51,9 @@ What the translation does (measured facts: docs/compare.md):
   yade_template.py), yade.log, yade_process.json (exit code, wall time), yade_result.json and
   yade_series.csv (written by the script, full precision).
 
-- shear (``case.mode == "shear"``: paper 2's shear box, compare/shear.py): ``shear_case_data``
+- shear (``case.mode == "shear"``: paper 2's shear box, compare/cases/shear.py): ``shear_case_data``
   gives the same materials, friction and masses (``materials``) to the script
-  compare/shear_yade_template.py (copied as yade_script.py): the floor and side walls are fixed
+  compare/codes/shear_yade_template.py (copied as yade_script.py): the floor and side walls are fixed
   boxes, the side walls turned about their lower inner corners by RotationEngines, the plate a
   dynamic box of the plate's mass free in x and y (no rotation), placed plate_gap above the case's
   highest disc; compression to the engine's rest criterion (mean |du| and |dv| per step below
@@ -64,7 +64,7 @@ What the translation does (measured facts: docs/compare.md):
   distance change since bonding; shear force rotated with the contact frame; lever arms to the
   mid-gap point with avoidGranularRatcheting = False); "clumps", rigid YADE clumps. It writes the
   engine's shear outputs (shear_series.csv, shear_planes.csv, summary.json, snapshots/), read by
-  compare.shear.read_outputs into ``Result.extra["shear"]``.
+  compare.cases.shear.read_outputs into ``Result.extra["shear"]``.
 
 What YADE cannot express exactly (see also the module's ``LIMITATIONS``): the paper's incremental
 normal spring and elastic-force rules (only the shared variant); the engine's integration
@@ -261,7 +261,7 @@ def _steps(x: float, dt: float, what: str) -> int:
 
 
 def shear_case_data(case: Case) -> dict:
-    """Everything the shear script (compare/shear_yade_template.py) needs (yade_case.json)."""
+    """Everything the shear script (compare/codes/shear_yade_template.py) needs (yade_case.json)."""
     _check_variant(case)
     r = case.resolved
     if not shear.is_shear(r):
@@ -599,7 +599,7 @@ def _read(case: Case, out_dir: Path) -> Result:
 
 
 def _read_shear(case: Case, out_dir: Path, proc: dict) -> Result:
-    """A shear run: the script's summary.json and shear_series.csv (compare.shear.read_outputs)."""
+    """A shear run: the script's summary.json and shear_series.csv (compare.cases.shear.read_outputs)."""
     common = {"wall_time_s": float(proc.get("wall_time_s", float("nan")))}
     if proc.get("error"):
         return _fail(case, out_dir, proc["error"], **common)

@@ -54,7 +54,7 @@ from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E4
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 
-# Reading and the pure maths (compare/figure_data.py, no matplotlib), re-exported here.
+# Reading and the pure maths (compare/figures/figure_data.py, no matplotlib), re-exported here.
 from compare.io import atomic_file  # noqa: E402
 from compare.io import run_dir as _run_dir  # noqa: E402,F401
 from compare.figures.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH, SHARED_LAW,  # noqa: E402,F401
@@ -62,7 +62,7 @@ from compare.figures.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SA
                                  network_segments, point_positions, read_csv, read_summary,
                                  reference_radius, run_caption, scene_name, side_profile,
                                  side_wall_contacts)
-# The discharge pictures' data (compare/figure_data.py), re-exported here.
+# The discharge pictures' data (compare/figures/figure_data.py), re-exported here.
 from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRACTION,  # noqa: E402,F401
                                  SURFACE_COLOURS, _discharge_head, _fmt, _rest_text, cell_edges,
                                  discharge_info, displacement_radii, flow_fit_line, gate_name,
@@ -72,7 +72,7 @@ from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, ST
                                  ratios_title, flow_title, side_bins_title)
 # PNG writing (compare/figures/png_file.py), re-exported here.
 from compare.figures.png_file import SAVE_DPI, png_bytes  # noqa: E402,F401
-# The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
+# The columns of the run's files (docs/outputs.md), as compare/io/run_dir.py reads them.
 from compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)

@@ -40,7 +40,7 @@ CONFIGS = [  # (tag, arrangement, scheme, dt, contact overrides)
 
 
 def scene_with(arr, contact, folder):
-    """The paper's discharge scene with the contact-law keys changed (compare.scene_toml: a key
+    """The paper's discharge scene with the contact-law keys changed (compare.io.scene_toml: a key
     the scene does not have is an error, never a silent no-op), written into folder."""
     path = folder / f"discharge_{arr}_{'_'.join(contact.values()) or 'paper'}.toml"
     return scene_toml.edit(SCENES / f"discharge_{arr}.toml", {f"contact.{k}": v for k, v in contact.items()}, path)
@@ -229,7 +229,7 @@ def main(argv=None):
               "statistic (the jam fraction is of the members with a result).", "",
               "## The paper's statements against these ensembles", "",
               f"The paper's scheme (eq. 19, dt = 1e-4 s), {args.members} members each; peak ratios are "
-              "ensemble means (`compare/paper_claims.py` says how each is judged).", ""]
+              "ensemble means (`compare/papers/paper_claims.py` says how each is judged).", ""]
     paper = {r["arrangement"]: r["ensemble"] for r in results
              if r["scheme"] == "paper_eq19" and r["contact"] == "paper" and "ensemble" in r}
     lines += paper_claims.table(paper_claims.discharge(paper)) + ["",

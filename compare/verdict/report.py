@@ -226,10 +226,10 @@ def _ms(v) -> str:
 METHOD = [
     "- Each scene (the engine's TOML, resolved by `dem resolve`) is translated for each code; every code "
     "uses the contact law all three express (e_n = K_n x overlap, the total normal force clamped at 0, the "
-    "Coulomb cap on the total normal force, shear dashpot off while sliding: `compare/common.py`), velocity "
+    "Coulomb cap on the total normal force, shear dashpot off while sliding: `compare/cases/common.py`), velocity "
     "Verlet, the same dt. Whatever a code cannot express is refused before any run.",
     "- Translation check: each reference code's effective constants (k_n, k_t, both dashpots, mu per material "
-    "pair, mass and inertia, gravity, dt) are read back from the code itself (compare/probe.py) and compared "
+    "pair, mass and inertia, gravity, dt) are read back from the code itself (compare/verdict/probe.py) and compared "
     "with `dem resolve` to 1e-9 relative.",
     "- Collisions: each code's rebound against the analytic result (or an independent integration of the "
     "contact equations) within the scheme's first-order error in dt/t_c, and the codes against each other "
@@ -351,7 +351,7 @@ def _attribution_and_collisions(report: dict) -> list:
             L.append(f"| {a['scene']} | **verdict** | {a['verdict']} | |")
     if report.get("calibration"):
         codes = [c for c in ("native", "liggghts", "yade", "lammps") if c in report["codes"]]
-        L += ["", "## Collisions (Chung & Ooi's tests as scenes: compare/calibration.py)", "",
+        L += ["", "## Collisions (Chung & Ooi's tests as scenes: compare/verdict/calibration.py)", "",
               "Each code against the reference (**x**: outside the tolerance), and the reference codes against "
               "the native engine.", "", calibration.table(report["calibration"], codes)]
     return L
@@ -457,5 +457,5 @@ def write(report: dict, out: Path) -> None:
           "- LIGGGHTS walls are triangle meshes: a wall's end acts as a point contact of the mesh that owns it, "
           "where the engine has explicit points.",
           "- YADE combines the two materials of a contact in series; the translation solves the wall material "
-          "for the resolved disc-wall constants (compare/yade_backend.py).", ""]
+          "for the resolved disc-wall constants (compare/codes/yade_backend.py).", ""]
     write_text_atomic(out / "report.md", "\n".join(L) + "\n")

@@ -1,4 +1,4 @@
-"""The shear kind of `dem compare` (compare/shear.py): paper 2's shear box planned from its scene,
+"""The shear kind of `dem compare` (compare/cases/shear.py): paper 2's shear box planned from its scene,
 LIGGGHTS' refusal before any run, the one translation of each code (native scene, YADE case) for
 a jittered member, the bond-set mutant, the judge, and (with YADE) a small box end to end."""
 import dataclasses
@@ -176,7 +176,7 @@ def _result(code, ratio_scale=1.0, rise=0.5, seed=0, rest=True):
 
 
 def _judged(metrics):
-    """The metrics judged as a report judges them (compare/verdict.py)."""
+    """The metrics judged as a report judges them (compare/verdict/verdict.py)."""
     return verdict.finalize(metrics)
 
 
