@@ -39,9 +39,7 @@ import copy
 import dataclasses
 import math
 import shlex
-import tempfile
 from pathlib import Path
-from importlib import import_module
 
 import numpy as np
 
@@ -314,25 +312,6 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
                     mode="shear", settle=plan.settle, seed=member, materials=mats)
     return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
                 seed=member, materials=mats)
-
-
-def refusals(plan: Plan, codes) -> list[str]:
-    """What each reference code refuses to translate in this plan (its own translation, dry-run on
-    the first case); empty when every code can express the scene."""
-    out = []
-    case = member_case(plan, 0)
-    if plan.kind == "discharge" and not plan.shared.get("discharge", {}).get("gate"):
-        out.append(f"{plan.entry.scene}: discharge.gate: the comparison opens a gate wall; the scene has none")
-    for code in codes:
-        if code == "native":
-            continue
-        be = import_module(f"compare.codes.{code}_backend")
-        with tempfile.TemporaryDirectory() as tmp:
-            try:
-                be.write_inputs(case, Path(tmp))
-            except CaseError as e:
-                out.append(f"{plan.entry.scene}: {code} cannot express it: {e}")
-    return out
 
 
 def default_list(profile: str) -> Path:

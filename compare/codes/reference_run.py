@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import importlib
 import json
 import math
 import os
@@ -45,6 +44,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 
+from compare.codes.backends import backend
 from compare.codes import frame_measures
 from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall,
                      outlet_y, resolve, scene_material_index, tangent)
@@ -678,7 +678,7 @@ def _main(argv=None) -> int:
     if run_case is not case:
         sys.stderr.write(f"dem run --engine {code}: {MUTANT_ENV}={os.environ[MUTANT_ENV]}: a deliberately wrong "
                          "translation (testing)\n")
-    be = importlib.import_module(f"compare.codes.{code}_backend")
+    be = backend(code)
     with tempfile.TemporaryDirectory() as tmp:
         try:
             be.write_inputs(run_case, Path(tmp))

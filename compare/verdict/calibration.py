@@ -63,15 +63,14 @@ the open slit) is listed as refused and not run.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from compare.codes import backends
 from compare.cases.common import ROOT, Case, CaseError, disc_material, pair, resolve, Result
 from compare.verdict import study
 
@@ -451,14 +450,7 @@ def within(measured: dict, ref: dict, dt: float, other: dict | None = None) -> d
 
 def _refusal(code: str, c: Case) -> str:
     """Why the code cannot express the scene (its own translation, dry-run), or ''."""
-    if code == "native":
-        return ""
-    with tempfile.TemporaryDirectory() as tmp:
-        try:
-            importlib.import_module(f"compare.codes.{code}_backend").write_inputs(c, Path(tmp))
-        except CaseError as e:
-            return f"{code} cannot express it: {e}"
-    return ""
+    return backends.refusal(code, c)
 
 
 def run_scene(name: str, codes, out: Path, timeout: float = 300, reuse: bool = False) -> dict:

@@ -30,8 +30,9 @@ import numpy as np
 from compare.verdict import collision_judge, preflight, study, verdict, geometry_probe, probe, shear_judge
 from compare.cases import janssen, stats
 from compare.codes import native_backend
+from compare.codes.backends import refusals
 from compare.cases.common import Case, Result, scene_material_index, inward_normal, tangent
-from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
+from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, start_discs
 from compare.figures import janssen_figure
 from compare.io.job_pool import in_order
 

@@ -7,7 +7,6 @@ metric that needs it fail, with the code's reason: a failure is never agreement.
 """
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import tempfile
@@ -16,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from compare.codes import backends
 from compare.cases import stats
 from compare.verdict import verdict
 from compare.cases.common import ROOT, SHARED_VARIANT, Case, Result, failed, resolve
@@ -44,7 +44,7 @@ FLOW_MIN_SAMPLES = 10
 
 
 def backend(code: str):
-    return importlib.import_module(f"compare.codes.{code}_backend")
+    return backends.backend(code)
 
 
 def run_code(code: str, case: Case, out: Path, timeout: float, threads: int = 1,

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from compare.cases import margins, mutants, plan, shear, stats
-from compare.codes import native_backend, yade_backend
+from compare.codes import backends, native_backend, yade_backend
 from compare.verdict import shear_judge, verdict
 from compare.cases.common import SHARED_VARIANT, Result, resolve
 
@@ -75,7 +75,7 @@ def test_liggghts_refuses_the_shear_box_before_any_run(tmp_path, dem_binary):
         assert ("clusters.bonds" in p.stderr and "bond_style harmonic" in p.stderr) == has_bonds
         assert "yade cannot" not in p.stderr and not out.exists()
     p = _plan("shear_a50_clusters")
-    assert plan.refusals(p, ("native", "yade")) == []
+    assert backends.refusals(p, ("native", "yade")) == []
 
 
 def test_a_list_line_names_the_codes_it_runs(tmp_path):
