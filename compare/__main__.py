@@ -1,6 +1,6 @@
 """python3 -m compare scene SCENE.toml|LIST.list ... --out DIR [options]   (what `dem compare` runs)
 python3 -m compare report --out DIR [--full]     the project's study: reference_inputs/agreement/{quick,full}.list
-python3 -m compare translate [--check]
+python3 -m compare translate [--check | --out DIR]
 
 Runs scenes in the native engine and the real reference codes with the shared law and writes
 DIR/report.md, DIR/agreement.json and the PNGs. Every metric agrees, disagrees or is
@@ -71,6 +71,7 @@ def _parser() -> argparse.ArgumentParser:
     _common(r)
     t = sub.add_parser("translate", help="write reference_inputs/liggghts/, yade/ and lammps/ for the paper's scenes")
     t.add_argument("--check", action="store_true", help="exit 1 when the committed inputs differ from the generator's")
+    t.add_argument("--out", type=Path, help="write complete, runnable inputs here instead (YADE's script included)")
     return ap
 
 
@@ -109,7 +110,7 @@ def _common(p) -> None:
 def main(argv=None) -> int:
     a = _parser().parse_args(argv)
     if a.cmd == "translate":
-        return translate.main(a.check)
+        return translate.main(a.check, a.out)
     codes = tuple(c.strip() for c in a.codes.split(",") if c.strip())
     bad = [c for c in codes if c not in CODES]
     if bad or not codes:

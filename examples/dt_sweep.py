@@ -12,7 +12,8 @@ scene = dem.Scene(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parents[1
 if len(sys.argv) > 2:
     scene.set("end.time", float(sys.argv[2]))
 scene.set("integrator.force_dt", True)  # past the bound on purpose: where each scheme blows up
-print(f"{'scheme':16} {'dt [s]':>8} {'status':>9} {'t [s]':>7} {'side walls [dyn/cm]':>20}")
+force = scene.resolved()["units"]["force"]   # the scene's unit system: dyn/cm (cgs) or N/m (si)
+print(f"{'scheme':16} {'dt [s]':>8} {'status':>9} {'t [s]':>7} {'side walls [' + force + ']':>20}")
 for scheme in ("paper_eq19", "velocity_verlet"):
     for dt in (2.5e-5, 5e-5, 1e-4):
         scene.set("integrator.scheme", scheme)

@@ -23,7 +23,8 @@ status = sim.fill()
 print(f"{scene.name}: {status} at t = {sim.time:.4f} s after {sim.steps} steps, {sim.n_discs} discs")
 
 walls, points = sim.walls(), sim.points()
-print(f"{'wall':14} {'group':12} {'normal':>12} {'shear':>12} {'contacts':>8}   [dyn/cm]")
+force = scene.resolved()["units"]["force"]   # the scene's unit system: dyn/cm (cgs) or N/m (si)
+print(f"{'wall':14} {'group':12} {'normal':>12} {'shear':>12} {'contacts':>8}   [{force}]")
 for name, group, normal, shear, n in zip(walls["name"], walls["group"], walls["normal"], walls["shear"],
                                           walls["contacts"]):
     print(f"{name:14} {group:12} {normal:12.6g} {shear:12.6g} {n:8d}")
@@ -32,7 +33,7 @@ for name, fy, n in zip(points["name"], points["fy"], points["contacts"]):
 gx, gy = scene.resolved()["gravity"]
 weight = sim.masses.sum() * -gy
 carried = -(walls["fy"].sum() + points["fy"].sum())  # forces of the discs on them: downward
-print(f"weight of the discs {weight:.6g} dyn/cm; walls and points carry {carried:.6g} ({carried / weight:.6f})")
+print(f"weight of the discs {weight:.6g} {force}; walls and points carry {carried:.6g} ({carried / weight:.6f})")
 if args.out:
     sim.write(args.out)
     print(f"outputs in {args.out}")

@@ -67,6 +67,9 @@ class PlanError(ValueError):
     """A scene or option the comparison refuses (exit 2); the message names the field and why."""
 
 
+PERTURB = {"cgs": 1e-3, "si": 1e-5}   # the default jitter, 1e-3 cm, in the scene's length unit
+
+
 @dataclasses.dataclass
 class Options:
     profile: str = "quick"
@@ -76,7 +79,7 @@ class Options:
     dt: float = 0.0              # [s] 0 = the scene's integrator.dt
     duration: float = 0.0        # [s] 0 = static: the profile's; discharge: discharge.time; collision, janssen: end.time
     settle: float = 0.0          # [s] 0 = the profile's (discharge: before the gate opens; frozen: the fill)
-    perturb: float = 1e-3        # [cm] members' uniform jitter of x and y
+    perturb: float | None = None  # [scene length unit] members' uniform jitter of x and y; None: PERTURB
     native_law: str = "shared"   # "shared" | "scene": the native side runs the scene's own law
     timeout: float = 900.0       # [s] per reference run
     jobs: int = 1                # ensemble members run at once (each member's codes one after another)
@@ -106,7 +109,8 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--settle", type=float, default=0.0,
                     help="[s] discharge: settling before the opening (default: frozen 0.2, scene 1); "
                          "static frozen: the native fill (default 1)")
-    ap.add_argument("--perturb", type=float, default=1e-3, help="[cm] members' jitter of x and y (default 1e-3)")
+    ap.add_argument("--perturb", type=float, default=None,
+                    help="members' jitter of x and y, in the scene's length unit (default 1e-3 cm: 1e-5 in an SI scene)")
     ap.add_argument("--margin", action="append", default=[], metavar="KIND=DELTA",
                     help="the margin of agreement of one metric kind (repeatable): " + ", ".join(margins.MARGINS)
                          + " (default: quick 10 %% / full 5 %% for flow rate, discs out and wall loads; docs/compare.md)")
@@ -131,8 +135,10 @@ def options_from(ns: argparse.Namespace, base: Options) -> Options:
     if bad:
         raise PlanError(f"--metrics: unknown {', '.join(bad)} (known: {', '.join(margins.MARGINS)})")
     o.metrics = kinds or base.metrics
+    if o.perturb is None:
+        o.perturb = base.perturb
     for f, lo in (("members", 0), ("dt", 0.0), ("duration", 0.0), ("settle", 0.0), ("perturb", 0.0)):
-        if getattr(o, f) < lo:
+        if getattr(o, f) is not None and getattr(o, f) < lo:
             raise PlanError(f"--{f}: must be >= {lo}, got {getattr(o, f)!r}")
     if o.members == 1:
         raise PlanError("--members: an ensemble needs at least 2 members per code (a standard error)")
@@ -195,6 +201,13 @@ class Plan:
     @property
     def options(self) -> Options:
         return self.entry.options
+
+    @property
+    def perturb(self) -> float:
+        """The members' jitter in the scene's length unit: --perturb, else 1e-3 cm whatever the units."""
+        if self.options.perturb is not None:
+            return self.options.perturb
+        return PERTURB[self.resolved.get("units", {}).get("system", "cgs")]
 
 
 def _kind(resolved: dict, o: Options) -> str:
@@ -299,7 +312,7 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
     """The case of one member (or the one case of a deterministic kind)."""
     r = resolved if resolved is not None else plan.shared
     if discs is None:
-        discs = jittered(start_discs(r), member, plan.options.perturb)
+        discs = jittered(start_discs(r), member, plan.perturb)
     suffix = f"_m{member}" if plan.members > 1 else ""
     mats = scene_material_index(r)      # the scene's discs in its order (jittered or rested) ...
     if len(mats) != len(discs):         # ... or others: Case.material_index decides (or refuses)

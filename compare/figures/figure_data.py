@@ -559,19 +559,19 @@ def side_title(summaries, unpaired):
             "the paper's Fig. 7 shows P_y per contact")
     if unpaired:
         note += f"\nleft and right rows not level in {', '.join(unpaired)}: sides drawn apart"
-    return textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), "
+    return textwrap.fill("Side walls against depth (cf. Kiyama & Fujimura 1983, Fig. 7), "
                          f"{common_caption(summaries)}", 11 * 11) + "\n" + note
 
 
 def side_bins_title(summaries):
     """The side-wall picture's title per wall_profiles.csv bin."""
-    return f"Side walls against depth (cf. Kiyama & Fujimura 1982, Fig. 7), {common_caption(summaries)}"
+    return f"Side walls against depth (cf. Kiyama & Fujimura 1983, Fig. 7), {common_caption(summaries)}"
 
 
 def frames_title(summary, n_initial, chars):
     """The frames picture's title, wrapped at ``chars`` characters a line."""
     head = (f"{_discharge_head(summary)}: discs and contact forces e_n n + e_s t during "
-            f"discharge (cf. Kiyama & Fujimura 1982, Figs. 8, 9)")
+            f"discharge (cf. Kiyama & Fujimura 1983, Figs. 8, 9)")
     note = (f"t since opening; segment of one disc diameter = 50/\u03c0 \u2248 "
             f"{DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; gate open; dotted: outlet "
             f"(discs removed); dead = share of the {n_initial} discs at opening")
@@ -581,7 +581,7 @@ def frames_title(summary, n_initial, chars):
 def ratios_title(summary, info):
     """The wall-ratio picture's title with summary.json's peak ratios."""
     head = textwrap.fill(f"{_discharge_head(summary)}: wall forces relative to static "
-                         f"(cf. Kiyama & Fujimura 1982, Fig. 10)", 11 * 12)
+                         f"(cf. Kiyama & Fujimura 1983, Fig. 10)", 11 * 12)
     return head + (f"\nsummary peak ratios: bottom {_fmt(info.get('peak_ratio_bottom'))} (windowed "
                    f"{_fmt(info.get('peak_ratio_bottom_windowed'))}), side {_fmt(info.get('peak_ratio_side'))} "
                    f"(windowed {_fmt(info.get('peak_ratio_side_windowed'))})")
@@ -593,3 +593,11 @@ def flow_title(summary, info):
                          f"{_fmt(info.get('n_initial'), 'd')} discs out "
                          f"({_fmt(info.get('removed_by_hand'), 'd')} by hand), "
                          f"{_fmt(info.get('jams'), 'd')} jams", 12 * 11)
+
+
+UNITS = {"cgs": {"length": "cm", "mass": "g"}, "si": {"length": "m", "mass": "kg"}}
+
+
+def units_of(summary: dict) -> dict:
+    """The words of a run's unit system (summary.json options.units: cgs or si), for its labels."""
+    return UNITS.get((summary.get("options") or {}).get("units", "cgs"), UNITS["cgs"])

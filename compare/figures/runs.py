@@ -1,4 +1,4 @@
-"""Figures of dem run directories, after Kiyama & Fujimura (1982).
+"""Figures of dem run directories, after Kiyama & Fujimura (1983).
 
 The file formats read here are those of docs/outputs.md:
 
@@ -78,7 +78,7 @@ from compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
 
 # Line styles and markers of the separate side walls in the profile figure (figure_data's).
-from compare.figures.figure_data import SIDE_MARKERS, SIDE_STYLES  # noqa: E402,F401
+from compare.figures.figure_data import SIDE_MARKERS, SIDE_STYLES, units_of  # noqa: E402,F401
 
 # --------------------------------------------------------------------------- figures
 
@@ -194,8 +194,9 @@ def plot_network(run_dir, out_png, title=None):
     aspect = (y1 - y0) / (x1 - x0)
     fig, ax = plt.subplots(figsize=(7.0, min(max(7.0 * aspect, 3.0), 14.0) + 0.9))
     draw_network(ax, run)
-    ax.set_xlabel("X [cm]")
-    ax.set_ylabel("Y [cm]")
+    length = units_of(summary)["length"]
+    ax.set_xlabel(f"X [{length}]")
+    ax.set_ylabel(f"Y [{length}]")
     title = network_title(summary, discs, title)
     ax.set_title(title, fontsize=10, y=1.0)
     # A fixed layout (inches): the title's lines above, the tick and axis labels.
@@ -222,9 +223,9 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
     ncols = min(ncols, len(runs))
     nrows = -(-len(runs) // ncols)
     panel = 4.2                                              # inches per panel width
-    title = (textwrap.fill(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1982, Fig. 6), "
+    title = (textwrap.fill(f"Contact forces e_n n + e_s t (cf. Kiyama & Fujimura 1983, Fig. 6), "
                            f"{common_caption([r['summary'] for r in runs])}", int(panel * ncols * 11))
-             + f"\ndisc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; X, Y in cm")
+             + f"\ndisc diameter = 50/\u03c0 \u2248 {DIAMETER_IN_DISC_WEIGHTS:.1f} disc weights; X, Y in {units_of(runs[0]['summary'])['length']}")
     top, bottom, hspace = 0.45 + 0.2 * (title.count("\n") + 1), 0.3, 0.45
     fig, axes = plt.subplots(nrows, ncols, squeeze=False,
                              figsize=(panel * ncols, (panel - 0.5) * min(max(span_y / span_x, 0.4), 2.5)
@@ -311,7 +312,7 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
 
     axn.set_xlabel("side-wall normal force per contact [disc weights]")
     axs.set_xlabel("wall friction per contact [disc weights], + = downward")
-    _finish_side_axes(axn, axs)
+    _finish_side_axes(axn, axs, summaries)
     handles, names = axn.get_legend_handles_labels()
     for g, style, marker in sorted(split_drawn):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8,
@@ -326,9 +327,9 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
     return _save(fig, out_png)
 
 
-def _finish_side_axes(axn, axs):
+def _finish_side_axes(axn, axs, summaries):
     """Shared look of the two side-wall panels: depth down, zero line for the friction."""
-    axn.set_ylabel("depth below the top of the silo [cm]")
+    axn.set_ylabel(f"depth below the top of the silo [{units_of(summaries[0])['length'] if summaries else 'cm'}]")
     axs.axvline(0.0, color="black", linewidth=0.8)
     axn.invert_yaxis()
     for ax in (axn, axs):
@@ -372,9 +373,10 @@ def _plot_side_bins(run_dirs, out_png, labels):
                     ax.plot(values[q] / weight, prof["depth"], style, color=colours[k], linewidth=0.8)
 
     width = "/".join(f"{w:g}" for w in sorted(widths))
-    axn.set_xlabel(f"side-wall normal force per {width} cm bin [disc weights]")
-    axs.set_xlabel(f"wall friction (shear) per {width} cm bin [disc weights], + = downward")
-    _finish_side_axes(axn, axs)
+    length = units_of(summaries[0])["length"] if summaries else "cm"
+    axn.set_xlabel(f"side-wall normal force per {width} {length} bin [disc weights]")
+    axs.set_xlabel(f"wall friction (shear) per {width} {length} bin [disc weights], + = downward")
+    _finish_side_axes(axn, axs, summaries)
     handles, names = axn.get_legend_handles_labels()
     for g, style in sorted(split_drawn):
         handles.append(Line2D([], [], color="0.3", linestyle=style, linewidth=0.8))
@@ -403,8 +405,9 @@ def plot_bottom_profile(run_dir, out_png):
         if str(w.get("group", "")).startswith("bottom"):
             ax.plot([w["from"][0], w["to"][0]], [0, 0], color="black", linewidth=4,
                     solid_capstyle="butt")
-    ax.set_xlabel("X [cm]")
-    ax.set_ylabel(f"bottom normal force per {np.median(width):g} cm bin [disc weights]")
+    length = units_of(summary)["length"]
+    ax.set_xlabel(f"X [{length}]")
+    ax.set_ylabel(f"bottom normal force per {np.median(width):g} {length} bin [disc weights]")
     ax.grid(True, axis="y", alpha=0.4)
     total = f"total {normal.sum():.4g} disc weights"
     if isinstance(summary.get("weight"), (int, float)):
@@ -560,9 +563,9 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
             t_end = max(t_end, float(m["t"][-1]))
         if coord == "depth_mid":
             ax.invert_yaxis()
-            ax.set_ylabel("depth [cm]")
+            ax.set_ylabel(f"depth [{units_of(summary)['length']}]")
         else:
-            ax.set_ylabel("X [cm]")
+            ax.set_ylabel(f"X [{units_of(summary)['length']}]")
             slit = info.get("slit")
             if isinstance(slit, list) and len(slit) == 2:
                 ax.axhspan(slit[0], slit[1], color="white", zorder=0)
@@ -607,7 +610,7 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     return _save(fig, out_png)
 
 
-def _removed_panel(ax_out, removals, info, t_end):
+def _removed_panel(ax_out, removals, info, t_end, summary):
     """plot_flow's (a): cumulative removed mass, keystones, the fitted flow line, the first jam."""
     cumulative = np.cumsum(removals["mass"])
     ax_out.step(np.concatenate([[0.0], removals["t"], [t_end]]),
@@ -623,7 +626,7 @@ def _removed_panel(ax_out, removals, info, t_end):
     if fit is not None:
         t0, t1, b = fit
         ax_out.plot([t0, t1], [b + rate * t0, b + rate * t1], "--", color="black",
-                    linewidth=1.0, label=f"fit: {rate:.4g} g/s per cm "
+                    linewidth=1.0, label=f"fit: {rate:.4g} {units_of(summary)['mass']}/s per {units_of(summary)['length']} "
                                          f"({_fmt(info.get('flow_rate_discs'))} discs/s)")
     jam = info.get("jam_at")
     if isinstance(jam, (int, float)):
@@ -633,16 +636,16 @@ def _removed_panel(ax_out, removals, info, t_end):
         unit = float(mass[0])
         sec = ax_out.secondary_yaxis("right", functions=(lambda m: m / unit, lambda n: n * unit))
         sec.set_ylabel("removed discs")
-    ax_out.set_ylabel("removed mass [g per cm]")
+    ax_out.set_ylabel(f"removed mass [{units_of(summary)['mass']} per {units_of(summary)['length']}]")
     ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left", y=1.0)
     ax_out.legend(fontsize=8, loc="upper left")
 
 
-def _arch_panel(ax_a, flow):
+def _arch_panel(ax_a, flow, summary):
     """plot_flow's (d): the arch's crown height and its discs against time."""
     ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
               label="crown height (left)")
-    ax_a.set_ylabel("arch crown Y [cm]")
+    ax_a.set_ylabel(f"arch crown Y [{units_of(summary)['length']}]")
     ax_a.set_ylim(bottom=0)
     twin = ax_a.twinx()
     twin.plot(flow["t"], flow["arch_discs"], color="0.5", linewidth=0.8,
@@ -678,7 +681,7 @@ def plot_flow(run_dir, out_png):
                   wspace=1.45, hspace=0.45)
     (ax_out, ax_n), (ax_s, ax_a) = axes
 
-    _removed_panel(ax_out, removals, info, t_end)
+    _removed_panel(ax_out, removals, info, t_end, summary)
 
     present = flow["discs_in_silo"] + flow["discs_below"]
     ax_n.plot(flow["t"], flow["discs_in_silo"], color="tab:blue", label="discs in the silo")
@@ -706,13 +709,13 @@ def plot_flow(run_dir, out_png):
                   label=label, linestyle={"left": "-", "centre": "-", "right": "--"}[column])
         if isinstance(when, (int, float)):
             ax_s.axvline(when, color=colour, linestyle=":", linewidth=1.2)
-    ax_s.set_ylabel("top surface height Y [cm]")
+    ax_s.set_ylabel(f"top surface height Y [{units_of(summary)['length']}]")
     ax_s.set_xlabel("time since opening [s]")
     ax_s.legend(fontsize=8, loc="lower left")
     ax_s.set_title(f"(c) top surface in the wall and centre columns: "
                    f"{info.get('pattern', '?')}", fontsize=10, loc="left", y=1.0)
 
-    _arch_panel(ax_a, flow)
+    _arch_panel(ax_a, flow, summary)
     for ax in axes.flat:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_end)

@@ -4,8 +4,11 @@ checked against a study's own runs.
 Every check returns a row: the statement, what the paper says, what these runs show (numbers),
 and whether they agree. Only runs that came to rest count; the others are named in the row.
 
-- chains: force chains most horizontal in 11/12, most vertical in 18/19. Measured by the
-  verticality of the disc-disc contact forces, sum |f| ny^2 / sum |f| (0 horizontal, 1 vertical).
+- chains: force chains most horizontal in 11/12, most vertical in 18/19. Measured on what the
+  paper draws, the elastic resultant F = e_n n + e_s t of each disc-disc contact (t = (-ny, nx)):
+  its verticality sum |F| (F_y/|F|)^2 / sum |F| (0 horizontal, 1 vertical). The lattice sets the
+  normals (every contact of an (s-1)/s lattice has the same |ny|); the shear forces turn the
+  resultants, so the measure differs between schemes that rest differently.
 - side_force: the side-wall normal force is largest for 11/12 and falls as s grows.
 - depth: the side-wall normal force per contact row grows with depth in the upper half of the
   fill and drops in its lowest rows (below the largest row force).
@@ -20,11 +23,14 @@ CORNER_SPAN = 0.10      # lowest share of the side-wall contacts' depth span: "n
 
 
 def verticality(contacts) -> float:
-    """Force-weighted mean ny^2 of the disc-disc contacts (0: all horizontal, 1: all vertical)."""
+    """Force-weighted mean (F_y/|F|)^2 of the disc-disc contacts' elastic resultants
+    F = e_n n + e_s t (0: all horizontal, 1: all vertical)."""
     dd = np.asarray(contacts["kind"]).astype(str) == "dd"
-    f = np.abs(np.asarray(contacts["f_n"], float)[dd])
-    ny = np.asarray(contacts["ny"], float)[dd]
-    return float(np.sum(f * ny * ny) / np.sum(f)) if f.sum() > 0 else float("nan")
+    nx, ny = (np.asarray(contacts[k], float)[dd] for k in ("nx", "ny"))
+    e_n, e_s = (np.asarray(contacts[k], float)[dd] for k in ("e_n", "e_s"))
+    fy = e_n * ny + e_s * nx
+    f = np.hypot(e_n * nx - e_s * ny, fy)
+    return float(np.sum(fy * fy / np.where(f > 0, f, 1.0)) / np.sum(f)) if f.sum() > 0 else float("nan")
 
 
 FIRST, LAST = "11/12", "18/19"   # the paper's extreme arrangements
@@ -42,7 +48,7 @@ def chains(runs: dict) -> dict:
     keys = list(v)
     ok = len(keys) >= 2 and min(v, key=v.get) == keys[0] and max(v, key=v.get) == keys[-1]
     return {"statement": "force chains", "paper": f"most horizontal in {FIRST}, most vertical in {LAST}",
-            "shows": "verticality (force-weighted mean of ny^2): " + _ranked(v), "agrees": ok}
+            "shows": "verticality of the contact forces e_n n + e_s t: " + _ranked(v), "agrees": ok}
 
 
 def side_force(records: list) -> dict:
@@ -114,7 +120,8 @@ def table(rows: list) -> list[str]:
     """Markdown lines: statement | paper says | these runs show | agrees?"""
     out = ["| statement | the paper says | these runs show | agrees? |", "|---|---|---|---|"]
     for r in rows:
-        out.append(f"| {r['statement']} | {r['paper']} | {r['shows']} | {'yes' if r['agrees'] else '**no**'} |")
+        judged = r.get("judged") or ("yes" if r["agrees"] else "**no**")
+        out.append(f"| {r['statement']} | {r['paper']} | {r['shows']} | {judged} |")
     return out
 
 
@@ -144,20 +151,25 @@ def discharge(ensembles: dict) -> list[dict]:
                      "agrees": n > 0 and p.get(want, 0) > n / 2})
     e = ensembles.get("17/18")
     if e:
-        raw, win = _mean(e, "peak_ratio_bottom"), _mean(e, "peak_ratio_bottom_windowed")
-        rows.append({"statement": "17/18 bottom wall, early discharge",
-                     "paper": "largest wall force under an arch foot, about 10x its static value",
-                     "shows": f"peak/static {raw:.3g} (sampled every 5 ms), {win:.3g} (50 ms average)"
-                     if raw is not None else "no value",
-                     "agrees": raw is not None and 10 / PEAK_FACTOR <= raw <= 10 * PEAK_FACTOR})
-        raw, win = _mean(e, "peak_ratio_side"), _mean(e, "peak_ratio_side_windowed")
-        rows.append({"statement": "17/18 side walls, early discharge", "paper": "2-5x static",
-                     "shows": f"peak/static {raw:.3g} (5 ms), {win:.3g} (50 ms average)" if raw is not None else "no value",
-                     "agrees": raw is not None and 2 <= raw <= 5})
+        rows.append(_peak_row("17/18 bottom wall, early discharge",
+                              "largest wall force under an arch foot, about 10x its static value",
+                              e, "bottom", 10 / PEAK_FACTOR, 10 * PEAK_FACTOR))
+        rows.append(_peak_row("17/18 side walls, early discharge", "2-5x static", e, "side", 2, 5))
     e = ensembles.get("11/12")
     if e:
-        raw = _mean(e, "peak_ratio_bottom")
-        rows.append({"statement": "11/12 walls near the slit ends", "paper": "small arches, 2-3x static",
-                     "shows": f"bottom peak/static {raw:.3g} (5 ms)" if raw is not None else "no value",
-                     "agrees": raw is not None and 2 <= raw <= 3})
+        rows.append(_peak_row("11/12 walls near the slit ends", "small arches, 2-3x static", e, "bottom", 2, 3))
     return rows
+
+
+def _peak_row(statement: str, paper: str, e: dict, wall: str, lo: float, hi: float) -> dict:
+    """A peak ratio the paper states, judged at both samplings the runs give: the raw peak (the
+    series sampled every 5 ms) and the 50 ms moving average. The paper does not say how its
+    forces were sampled, so a value inside its range at one sampling only is said so."""
+    raw, win = _mean(e, f"peak_ratio_{wall}"), _mean(e, f"peak_ratio_{wall}_windowed")
+    if raw is None or win is None:
+        return {"statement": statement, "paper": paper, "shows": "no value", "agrees": False}
+    inside = {"5 ms": lo <= raw <= hi, "50 ms average": lo <= win <= hi}
+    only = [k for k, ok in inside.items() if ok]
+    return {"statement": statement, "paper": paper,
+            "shows": f"{wall} peak/static {raw:.3g} (sampled every 5 ms), {win:.3g} (50 ms average)",
+            "agrees": len(only) == 2, "judged": None if len(only) != 1 else f"at {only[0]} only"}

@@ -76,6 +76,13 @@ def verdict(r):
     return "rest"
 
 
+def engine_version(dem) -> str:
+    """`dem --version` (name, version, compiler, build type): what a report says of its engine,
+    never the path of the binary (another machine's reader has none)."""
+    proc = subprocess.run([str(dem), "--version"], capture_output=True, text=True, timeout=30)
+    return proc.stdout.strip() or "dem (version unknown)"
+
+
 def write_report(out_root, records, dem):
     by = {(r["scheme"], r["dt"], r["s"]): r for r in records}
     lines = ["# The paper's silo, static filling (Kiyama & Fujimura, section 5(1))", "",
@@ -83,7 +90,7 @@ def write_report(out_root, records, dem):
              "(s-1)/s lattices with the gaps of note 2. Rest: mean |du| and |dv| per step below 1e-4 g dt^2",
              "(note 3). A case is judged `blew up` when the engine stopped it (overlap beyond half a radius or",
              "non-finite values, exit code 3), `no rest` when it still moved at the end time (5 s).",
-             f"Engine: `{dem}`. Forces per 1 cm of thickness, in disc weights (m g = {2.65 * 3.14159265 * 980:.0f} dyn).", "",
+             f"Engine: {engine_version(dem)}. Forces per 1 cm of thickness, in disc weights (m g = {2.65 * 3.14159265 * 980:.0f} dyn).", "",
              "## Side-wall normal force (sum over both walls / 2, disc weights) and outcome", ""]
     head = "| scheme | dt [s] | " + " | ".join(label(s) for s in ARRANGEMENTS) + " |"
     lines += [head, "|" + "---|" * (2 + len(ARRANGEMENTS))]

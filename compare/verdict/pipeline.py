@@ -267,7 +267,7 @@ def member_runs(plan: Plan, codes, out: Path, mutation=None, series_interval=Non
     nothing, so the order they finish in changes no result). ``start``: the discs every member
     jitters (default: the scene's start)."""
     def one(k):
-        case = member_case(plan, k) if start is None else member_case(plan, k, jittered(start, k, plan.options.perturb))
+        case = member_case(plan, k) if start is None else member_case(plan, k, jittered(start, k, plan.perturb))
         if series_interval is not None:
             case.series_interval = series_interval
         return run_all(codes, case, plan, out / f"m{k}", mutation), case

@@ -1,6 +1,11 @@
 """The paper's scenes translated for LIGGGHTS, YADE and LAMMPS, committed under reference_inputs/
 (``python3 -m compare translate``; ``--check`` in CI fails when they are stale).
 
+YADE's folders hold only ``yade_case.json``, the case's data: its script is one template
+(compare/codes/yade_template.py) for every case, so it is not committed ten times. ``python3 -m
+compare translate --out DIR`` writes complete folders, each runnable there with
+``yade -n -x yade_script.py``.
+
 Each scene becomes the case the agreement study runs from the scene's own lattice: static
 (silo_*) or discharge (discharge_*, settle 1 s then open), with the shared contact law and the
 study's dt for that lattice. The study itself writes the same inputs for its frozen packings
@@ -41,10 +46,13 @@ def cases() -> list[Case]:
     return out
 
 
-def write_all(root: Path) -> None:
+def write_all(root: Path, runnable: bool = False) -> None:
+    """runnable: with YADE's script beside each yade_case.json (the committed tree leaves it out)."""
     for case in cases():
         liggghts_backend.write_inputs(case, root / "liggghts" / case.name)
-        yade_backend.write_inputs(case, root / "yade" / case.name)
+        script = yade_backend.write_inputs(case, root / "yade" / case.name)
+        if not runnable:
+            script.unlink()
         lammps_backend.write_inputs(case, root / "lammps" / case.name)
 
 
@@ -57,7 +65,11 @@ def _same(a: Path, b: Path) -> list[str]:
     return diff
 
 
-def main(check: bool) -> int:
+def main(check: bool, out: Path | None = None) -> int:
+    if out is not None:
+        write_all(Path(out), runnable=True)
+        print(f"wrote {out}/liggghts, {out}/yade, {out}/lammps (each folder runnable by its code)")
+        return 0
     if not check:
         for sub in SUBDIRS:
             shutil.rmtree(OUT / sub, ignore_errors=True)

@@ -11,7 +11,9 @@
 #include <memory>
 #include <tuple>
 
+#include "io/out_dir.hpp"
 #include "io/outputs.hpp"
+#include "io/run_log.hpp"
 #include "io/state.hpp"
 #include "physics/world.hpp"
 #include "run/scene_run.hpp"
@@ -59,14 +61,20 @@ class Simulation {
     return to_string(status_);
   }
 
-  // The scene's phases from its start, as `dem run SCENE --out DIR --quiet` runs them, and its
-  // outputs written into out.
+  // The scene's phases from its start, as `dem run SCENE --out DIR --quiet` runs them: its
+  // outputs and run.log (the header, the phases' lines, the status line) written into out.
   std::string run(const std::filesystem::path& out_path, bool progress) {
     const std::string out = out_path.string();
     if (world_.steps != 0 && spec_.start_from.empty())
       throw std::runtime_error("run() runs a scene from its start: make a new Simulation");
+    const int cleared = clear_run_outputs(out);  // a fresh run's folder, as dem run leaves it
     std::filesystem::create_directories(out);
+    RunLog log(progress);
+    log.add(run_header(spec_, world_, stab_));
+    if (set_by_script_) log.say("  discs' start set from Python (set_positions, set_velocities, set_spins)\n");
+    if (cleared > 0) log.say("  removed %d files of an earlier run from %s\n", cleared, out.c_str());
     SceneRun run(spec_, world_, out);
+    run.log = &log;
     {
       py::gil_scoped_release free;
       status_ = run.run(progress, false);
@@ -76,7 +84,50 @@ class Simulation {
     rest_ = run.fill.rest;
     write_outputs(out, spec_, world_, summary, stab_, &extra);
     run.discard_kept();
+    if (status_ == Status::unstable) log.say("  unstable: %s\n", summary.reason.c_str());
+    log.say("  %s at t = %.4f s after %ld steps; fill rest %s; %.3g s wall\n", to_string(status_), world_.time,
+            world_.steps, summary.rest_reached ? "reached" : "not reached", summary.wall_seconds);
+    log.write(out, false);
     return to_string(status_);
+  }
+
+  // Sets one column of the discs' start (ids in order: the user's order) before the first step,
+  // validated as a scene's fill is (finite, within the limits, no overlap, inside the walls), and
+  // builds the world again from it; refused values leave the simulation as it was.
+  void set_start(const char* what, const std::vector<py::array_t<double, py::array::c_style | py::array::forcecast>>& cols,
+                 const std::vector<double DiscInit::*>& fields) {
+    if (world_.steps != 0) throw py::value_error(std::string(what) + ": only before the first step (make a new Simulation)");
+    if (!spec_.start_from.empty())
+      throw py::value_error(std::string(what) + ": the scene starts from the state file " + spec_.start_from);
+    SceneSpec s = spec_;
+    for (std::size_t c = 0; c < fields.size(); ++c) {
+      const auto a = cols[c].unchecked<1>();
+      if (static_cast<std::size_t>(a.shape(0)) != s.discs.size())
+        throw py::value_error(std::string(what) + ": " + std::to_string(a.shape(0)) + " values for " +
+                              std::to_string(s.discs.size()) + " discs");
+      for (std::size_t k = 0; k < s.discs.size(); ++k) s.discs[k].*fields[c] = a(k);
+    }
+    check_disc_values(s);
+    check_initial_discs(s);
+    World w;
+    const StabilityReport stab = build_world(s, w);
+    spec_ = std::move(s);
+    world_ = std::move(w);
+    stab_ = stab;
+    status_ = Status::running;
+    set_by_script_ = true;
+  }
+
+  // Columns of an (N, 2) array.
+  static std::vector<py::array_t<double, py::array::c_style | py::array::forcecast>> columns(const char* what,
+      const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+    if (a.ndim() != 2 || a.shape(1) != 2) throw py::value_error(std::string(what) + ": an (N, 2) array is needed");
+    const auto v = a.unchecked<2>();
+    py::array_t<double> x(a.shape(0)), y(a.shape(0));
+    auto xm = x.mutable_unchecked<1>();
+    auto ym = y.mutable_unchecked<1>();
+    for (py::ssize_t k = 0; k < a.shape(0); ++k) { xm(k) = v(k, 0); ym(k) = v(k, 1); }
+    return {x, y};
   }
 
   // The outputs of the world as it stands (after step or fill), as a run writes them.
@@ -231,6 +282,7 @@ class Simulation {
  private:
   SceneSpec spec_;  // the world's scene (SceneRun and the outputs read it)
   StabilityReport stab_;
+  bool set_by_script_ = false;  // the discs' start came from set_positions / set_velocities / set_spins
 };
 
 }  // namespace
@@ -247,7 +299,8 @@ void bind_simulation(py::module_& m) {
 
 step(n) steps it; fill() runs the fill to rest or end.time; run(out) runs every phase of the scene
 (fill, discharge, shear) and writes the outputs, as `dem run SCENE --out DIR --quiet`; write(out)
-writes the outputs of the world as it stands. x, y, vx, vy, omega, fx, fy, torque are read-only
+writes the outputs of the world as it stands. set_positions, set_velocities and set_spins set the discs'
+start before the first step, validated as a scene's fill. x, y, vx, vy, omega, fx, fy, torque are read-only
 views of the engine's arrays (no copy; read them again after stepping; read-only copies once the
 engine has put the discs in cell order: every array lists the discs in id order); positions, velocities,
 forces, radii, ids, contacts(), walls() and points() are copies.)")
@@ -257,6 +310,18 @@ forces, radii, ids, contacts(), walls() and points() are copies.)")
       .def("run", &S::run, py::arg("out"), py::arg("progress") = false,
            "Every phase of the scene from its start, and its outputs written into out (created), as dem run does; returns the status.")
       .def("write", &S::write, py::arg("out"), "The outputs of the world as it stands into out (created), as a run writes them.")
+      .def("set_positions", [](S& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+             s.set_start("set_positions", S::columns("set_positions", a), {&DiscInit::x, &DiscInit::y});
+           }, py::arg("positions"),
+           "Sets the discs' centres, an (N, 2) array in id order, before the first step; validated as a scene's fill "
+           "(finite, no overlap beyond fill.max_initial_overlap, inside the walls): dem.SceneError names the disc.")
+      .def("set_velocities", [](S& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+             s.set_start("set_velocities", S::columns("set_velocities", a), {&DiscInit::vx, &DiscInit::vy});
+           }, py::arg("velocities"), "Sets the discs' velocities, an (N, 2) array in id order, before the first step.")
+      .def("set_spins", [](S& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+             if (a.ndim() != 1) throw py::value_error("set_spins: an (N,) array is needed");
+             s.set_start("set_spins", {a}, {&DiscInit::omega});
+           }, py::arg("omega"), "Sets the discs' spins [1/s], an (N,) array in id order, before the first step.")
       .def_property_readonly("x", flat(&Discs::x))
       .def_property_readonly("y", flat(&Discs::y))
       .def_property_readonly("vx", flat(&Discs::vx))

@@ -77,7 +77,7 @@ def test_the_frozen_packing_is_at_rest(tmp_path):
     res = native_backend.run(case, tmp_path / "rest", 120)
     assert res.ok, res.reason
     moved = np.abs(np.array(res.discs_end, float)[:, :2] - pack[:, :2]).max()
-    assert moved < plan.options.perturb, moved
+    assert moved < plan.perturb, moved
 
 
 def _removals(rate, t0, t1, transient, seed=0):

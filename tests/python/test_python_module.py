@@ -181,3 +181,46 @@ def test_discharge_run_removes_discs(dem_module, tmp_path):
     assert sim.n_discs < n0 and sim.x.shape == (sim.n_discs,)
     with pytest.raises(RuntimeError, match="from its start"):
         sim.run(tmp_path / "again")
+
+
+def test_start_set_from_python_is_the_scene_that_says_it(dem_module, run_dem, tmp_path):
+    """Positions, velocities and spins set before the first step run bit for bit as a scene whose
+    fill file holds them; refused values (an overlap, a wrong length, after a step) leave the
+    simulation as it was, named as a scene's fill is."""
+    scene = dem_module.Scene(REPO / "examples" / "flat_silo.toml")
+    scene.set("end.time", 0.05)
+    scene.set("discharge.time", 0.05)
+    sim = dem_module.Simulation(scene)
+    p = sim.positions + [0.003, 0.0]
+    v = np.column_stack([np.linspace(-5, 5, sim.n_discs), np.full(sim.n_discs, -10.0)])
+    w = np.linspace(0, 3, sim.n_discs)
+    sim.set_positions(p)
+    sim.set_velocities(v)
+    sim.set_spins(w)
+    assert np.array_equal(sim.positions, p) and np.array_equal(sim.velocities, v) and np.array_equal(sim.omega, w)
+    bad = p.copy()
+    bad[1] = bad[0]
+    with pytest.raises(dem_module.SceneError, match=r"fill: disc 0 .* overlaps disc 1"):
+        sim.set_positions(bad)
+    with pytest.raises(ValueError, match="5 values for 102 discs"):
+        sim.set_spins(w[:5])
+    assert np.array_equal(sim.positions, p)            # unchanged by the refusals
+    assert sim.run(tmp_path / "py") in ("discharged", "jammed")
+    log = (tmp_path / "py" / "run.log").read_text()
+    assert log.startswith("dem ") and "set from Python" in log and "steps; fill rest" in log
+    with pytest.raises(ValueError, match="only before the first step"):
+        sim.set_spins(w)
+
+    radii = dem_module.Simulation(scene).radii
+    fill = tmp_path / "fill.csv"
+    fill.write_text("x,y,r,vx,vy,omega\n" + "".join(f"{a!r},{b!r},{r!r},{c!r},{d!r},{e!r}\n" for (a, b), r, (c, d), e
+                                                     in zip(p, radii, v, w)))
+    text = (REPO / "examples" / "flat_silo.toml").read_text()
+    text = text[:text.index("[fill]")] + (f'[fill]\ntype = "file"\nmaterial = "glass"\nfile = "{fill}"\nvelocities = true\n\n'
+                                          + text[text.index("[end]"):])
+    (tmp_path / "same.toml").write_text(text)
+    proc = run_dem("run", tmp_path / "same.toml", "--out", tmp_path / "cli", "--quiet", "--set", "end.time=0.05",
+                   "--set", "discharge.time=0.05")
+    assert proc.returncode == 0, proc.stderr
+    for name in ("discs.csv", "removals.csv", "wall_profiles.csv"):
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "py" / name).read_bytes(), name

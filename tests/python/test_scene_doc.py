@@ -33,3 +33,22 @@ def test_every_scene_key_has_a_row():
     assert len(keys) > 50, sorted(keys)  # the reader was found
     missing = sorted(k for k in keys if not documented(k, doc))
     assert not missing, f"docs/scene.md has no row for {missing}"
+
+
+def test_the_example_scene_is_the_one_documented_and_it_discharges(tmp_path):
+    """docs/scene.md opens with examples/flat_silo.toml verbatim; the engine settles it to rest and
+    discharges it without a jam (its slit is five diameters wide)."""
+    import json
+    import os
+    import subprocess
+    doc = (REPO / "docs" / "scene.md").read_text()
+    example = (REPO / "examples" / "flat_silo.toml").read_text()
+    block = re.search(r"```toml\n(.*?)```", doc, re.S)
+    assert block and block.group(1) == example
+    dem = os.environ.get("DEM_BINARY", str(REPO / "build" / "dem"))
+    proc = subprocess.run([dem, "run", str(REPO / "examples" / "flat_silo.toml"), "--out", str(tmp_path / "r"),
+                           "--quiet"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    d = summary["discharge"]
+    assert summary["rest"]["reached"] and not d["jammed"] and d["removed"] > 20, d["status"]

@@ -115,3 +115,28 @@ def test_resolve_names_the_units_of_its_numbers(tmp_path, dem_binary):
     assert si["system"] == "si" and si["length"] == "m" and si["force"] == "N/m" and si["density"] == "kg/m^3"
     assert cgs["system"] == "cgs" and cgs["length"] == "cm" and cgs["force"] == "dyn/cm"
     assert cgs["acceleration"] == "cm/s^2" and si["time"] == cgs["time"] == "s"
+
+
+def test_pictures_and_jitter_carry_the_scenes_units(tmp_path, dem_binary, monkeypatch):
+    """An SI scene's pictures label lengths in m and masses in kg, and dem compare's default
+    jitter is the cgs scenes' 1e-3 cm expressed in m (1e-5); a given --perturb is taken as it is."""
+    from compare.cases import plan
+    from compare.figures import runs
+    scene = si_scene(tmp_path / "si.toml")
+    _, s = run(dem_binary, scene, tmp_path / "run")
+    fig_labels = []
+    save = runs._save
+
+    def keep(fig, out_png):
+        fig_labels.extend(t.get_text() for ax in fig.axes for t in (ax.xaxis.label, ax.yaxis.label))
+        return save(fig, out_png)
+    monkeypatch.setattr(runs, "_save", keep)
+    runs.plot_network(tmp_path / "run", tmp_path / "n.png")
+    runs.plot_flow(tmp_path / "run", tmp_path / "f.png")
+    runs.plot_side_profiles([tmp_path / "run"], tmp_path / "s.png")
+    text = " ".join(fig_labels)
+    assert "[m]" in text and "[kg per m]" in text and "cm" not in text, fig_labels
+    si = plan.make_plan(plan.Entry(scene, plan.Options()))
+    cgs = plan.make_plan(plan.Entry(SCENES / "discharge_17_18.toml", plan.Options()))
+    assert si.perturb == 1e-5 and cgs.perturb == 1e-3
+    assert plan.make_plan(plan.Entry(scene, plan.Options(perturb=2e-4))).perturb == 2e-4

@@ -333,10 +333,20 @@ void read_fill(SceneSpec& s, Tab& root) {
   if (s.discs.empty()) throw SceneError(s.file + ": fill: no discs");
   s.discs.shrink_to_fit();  // read by push_back: up to 2x its length, alive until the world is built
   check_disc_budget(s, t, "type", '"' + type + '"', static_cast<double>(s.discs.size()));
+  check_disc_values(s);
+}
+
+}  // namespace
+
+// Each disc's radius, place, mass and start motion: finite, inside the limits (docs/scene.md).
+void check_disc_values(const SceneSpec& s) {
   for (std::size_t k = 0; k < s.discs.size(); ++k) {
     const DiscInit& d = s.discs[k];
     const std::string disc = s.file + ": fill: disc " + std::to_string(k);
     if (!(d.r > 0)) throw SceneError(disc + " radius = " + show(d.r) + ": must be > 0");
+    if (!(std::isfinite(d.vx) && std::isfinite(d.vy) && std::isfinite(d.omega)))
+      throw SceneError(disc + " velocity (" + show(d.vx) + ", " + show(d.vy) + "), omega " + show(d.omega) +
+                       ": must be finite");
     for (double v : {d.x, d.y, d.r})
       if (!(std::abs(v) <= kMaxCoordinate))
         throw SceneError(disc + " at (" + show(d.x) + ", " + show(d.y) + ") r = " + show(d.r) + ": beyond the limit of " +
@@ -349,8 +359,6 @@ void read_fill(SceneSpec& s, Tab& root) {
                        " is not a finite number > 0");
   }
 }
-
-}  // namespace
 
 // Overlapping discs and discs outside the walls are refused (cell grid, no O(N^2)).
 void check_initial_discs(const SceneSpec& s) {

@@ -17,6 +17,8 @@ class World;
 // Reads and validates; throws SceneError. Overrides (SceneOverrides, scene_spec.hpp) come from the CLI.
 SceneSpec load_scene(const std::string& path, const SceneOverrides& ov = {});
 
+// Refuses a disc whose radius, place, mass or start motion is not finite or beyond the limits.
+void check_disc_values(const SceneSpec& s);
 // Refuses overlapping discs and discs outside the walls (throws SceneError).
 void check_initial_discs(const SceneSpec& s);
 
