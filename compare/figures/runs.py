@@ -47,7 +47,6 @@ import textwrap
 import matplotlib
 import numpy as np
 
-
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
