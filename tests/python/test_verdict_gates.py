@@ -64,9 +64,24 @@ def test_a_fill_that_does_not_rest_is_inconclusive_and_names_the_settle(dem_bina
     rep = json.loads((out / "agreement.json").read_text())
     assert p.returncode == 3 and rep["verdict"] == "inconclusive", p.stdout + p.stderr
     m = rep["metrics"][0]
-    assert m["verdict"] == "inconclusive" and "did not reach rest in --settle 0.02 s" in m["note"]
+    assert m["verdict"] == "inconclusive" and "did not reach rest in 0.02 s (--settle 0.02;" in m["note"]
     assert "--settle 0.04" in m["note"] or "--settle 0.08" in m["note"]
     assert not list((out / "static").rglob("native/result.json"))     # the codes never started
+
+
+def test_a_discharge_whose_members_open_before_rest_is_inconclusive(dem_binary, tmp_path):
+    """--start scene with 0.05 s of settling: each member would open the gate on a falling lattice.
+    The native fill of that --settle is tried first; no member runs, the verdict is inconclusive
+    (exit 3), naming the --settle that reaches rest."""
+    out = tmp_path / "out"
+    scene = SILO.parent / "discharge_17_18.toml"
+    p = compare(dem_binary, scene, "--codes", "native", "--start", "scene", "--dt", "5e-5", "--settle", "0.05",
+                "--duration", "0.05", "--out", out)
+    rep = json.loads((out / "agreement.json").read_text())
+    assert p.returncode == 3 and rep["verdict"] == "inconclusive", p.stdout + p.stderr
+    m = rep["metrics"][0]
+    assert "did not reach rest in 0.05 s (--settle 0.05;" in m["note"] and "--settle 0.2 reaches it" in m["note"], m
+    assert not list(out.rglob("m0"))                                   # no member ran
 
 
 def test_verdicts_combine_and_map_to_exit_codes():
