@@ -744,8 +744,14 @@ def plot_run(run_dir):
         if os.path.exists(os.path.join(run_dir, "flow_series.csv")):
             out += plot_discharge(run_dir, run_dir)
         return out
-    out = [plot_network(run_dir, os.path.join(run_dir, "network.png")),
-           plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"))]
+    out = [plot_network(run_dir, os.path.join(run_dir, "network.png"))]
+    run = load_run(run_dir, parts=("contacts",))
+    if side_wall_contacts(run["summary"], run["contacts"]) is not None:
+        out.append(plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png")))
+    else:  # a discharge that ended with no disc on a side wall: its (empty) profile bins, said so
+        sys.stderr.write(f"compare.figures: {run_dir}: no disc touches a side wall at the run's end: "
+                         "side_walls.png is drawn per wall_profiles.csv bin\n")
+        out.append(plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"), per="bin"))
     if os.path.exists(os.path.join(run_dir, "flow_series.csv")):
         out += plot_discharge(run_dir, run_dir)
     return out

@@ -52,6 +52,9 @@ def run_dem(dem_binary):
 def pytest_configure(config):
     config.addinivalue_line("markers", "reference_codes: runs LIGGGHTS, YADE or LAMMPS; their runs are most of "
                             "its time, and the sanitizer build's run leaves it out")
+    config.addinivalue_line("markers", "release_only: checks what the release build gives (a study's figures, an "
+                            "installed copy), which a sanitized engine would only give more slowly; the sanitizer "
+                            "build's run leaves it out")
 
 
 def pytest_collection_modifyitems(config, items):
@@ -63,6 +66,6 @@ def pytest_collection_modifyitems(config, items):
     if os.environ.get("DEM_ENGINE_TESTS_ONLY") != "1":
         return
     keep = [item for item in items if "dem_binary" in getattr(item, "fixturenames", ())
-            and item.get_closest_marker("reference_codes") is None]
+            and item.get_closest_marker("reference_codes") is None and item.get_closest_marker("release_only") is None]
     config.hook.pytest_deselected(items=[item for item in items if item not in keep])
     items[:] = keep

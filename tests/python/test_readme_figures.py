@@ -5,6 +5,8 @@ equal to what they give."""
 import importlib.util
 from pathlib import Path
 
+import pytest
+
 from compare.papers import paper_discharge, paper_static
 
 REPO = Path(__file__).resolve().parents[2]
@@ -13,6 +15,7 @@ readme_figures = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(readme_figures)
 
 
+@pytest.mark.release_only
 def test_readme_quotes_the_main_job(tmp_path, dem_binary, monkeypatch):
     out = tmp_path / "paper_silo"
     monkeypatch.setattr(paper_static, "STEPS", [1e-4])

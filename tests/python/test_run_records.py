@@ -58,6 +58,26 @@ def test_run_log_holds_the_header_and_the_status_line(fill_run):
     assert log.startswith(p.stdout.splitlines()[0])  # what the run printed
 
 
+def test_run_log_echoes_the_resolved_scene_and_times_the_loop(fill_run):
+    """Like log.lammps, run.log echoes the input as the engine resolved it (never printed on
+    screen) and ends with where the loop's time went, part by part, the shares adding to 100 %."""
+    import json
+    import re
+    out, p = fill_run
+    log = (out / "run.log").read_text()
+    assert "resolved scene (dem resolve; its 350 discs not listed):" in log and "resolved scene" not in p.stdout
+    echo = dict(re.findall(r"^    (\w+) = (.*)$", log, re.M))
+    assert json.loads(echo["integrator"])["dt"] == 1e-4 and json.loads(echo["end"])["stop_at_rest"] is False
+    total = float(re.search(r"loop time by part, this process \(([\d.]+) s\):", log).group(1))
+    parts = re.findall(r"^    (.+?)\s+([\d.]+) s\s+([\d.]+) %$", log, re.M)
+    names = [n for n, _, _ in parts]
+    assert names[0].startswith("time step") and "checks" in names[1] and "checkpoints" in names
+    assert sum(float(s) for _, s, _ in parts) == pytest.approx(total, abs=1e-3 + 1e-3 * total)
+    assert sum(float(f) for _, _, f in parts) == pytest.approx(100.0, abs=0.5)
+    wall = json.loads((out / "summary.json").read_text())["wall_time_s"]
+    assert total == pytest.approx(wall, rel=0.05, abs=2e-3)
+
+
 def test_run_log_of_a_quiet_and_of_an_unstable_run(tmp_path, dem_binary):
     """--quiet prints nothing but still writes run.log; an unstable run's log has its warning."""
     out = tmp_path / "unstable"

@@ -37,7 +37,8 @@ def test_every_scene_key_has_a_row():
 
 def test_the_example_scene_is_the_one_documented_and_it_discharges(tmp_path):
     """docs/scene.md opens with examples/flat_silo.toml verbatim; the engine settles it to rest and
-    discharges it without a jam (its slit is five diameters wide)."""
+    discharges it without a jam (its slit is five diameters wide), and --pictures draws its five
+    pictures although no disc touches a side wall at its end."""
     import json
     import os
     import subprocess
@@ -47,8 +48,10 @@ def test_the_example_scene_is_the_one_documented_and_it_discharges(tmp_path):
     assert block and block.group(1) == example
     dem = os.environ.get("DEM_BINARY", str(REPO / "build" / "dem"))
     proc = subprocess.run([dem, "run", str(REPO / "examples" / "flat_silo.toml"), "--out", str(tmp_path / "r"),
-                           "--quiet"], capture_output=True, text=True, timeout=120)
+                           "--quiet", "--pictures"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert sorted(p.name for p in (tmp_path / "r").glob("*.png")) == \
+        ["flow.png", "frames.png", "network.png", "side_walls.png", "wall_ratios.png"]
     d = summary["discharge"]
     assert summary["rest"]["reached"] and not d["jammed"] and d["removed"] > 20, d["status"]

@@ -22,6 +22,8 @@ class RunLog {
   void say(const char* format, ...) __attribute__((format(printf, 2, 3)));
   void warn(const char* format, ...) __attribute__((format(printf, 2, 3)));
   void add(const std::string& text, bool to_stderr = false);
+  // Into the file only, never printed (the resolved scene, as log.lammps echoes its input).
+  void file_only(const std::string& text) { text_ += text; }
   const std::string& text() const { return text_; }
   // Writes DIR/run.log atomically; `append`: after the log already there (a resumed run).
   void write(const std::string& dir, bool append) const;

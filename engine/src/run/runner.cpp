@@ -70,6 +70,23 @@ std::string Runner::check(World& w, const Phase& phase) {
   return "";
 }
 
+std::string LoopTimes::text() const {
+  const double rest = std::max(0.0, total - step - checks - measures - records - checkpoints);
+  const std::pair<const char*, double> parts[] = {
+      {"time step (forces, contact lists, moves)", step}, {"checks (overlap, finiteness, energy)", checks},
+      {"the phase's measures (rest, flow, walls)", measures}, {"records (thermo rows, snapshots)", records},
+      {"checkpoints", checkpoints}, {"rest of the loop (progress, stop requests)", rest}};
+  char head[96];
+  std::snprintf(head, sizeof head, "  loop time by part, this process (%.3f s):\n", total);
+  std::string out = head;
+  for (const auto& [name, s] : parts) {
+    char line[160];
+    std::snprintf(line, sizeof line, "    %-44s %10.4f s %6.1f %%\n", name, s, total > 0 ? 100.0 * s / total : 0.0);
+    out += line;
+  }
+  return out;
+}
+
 Status Runner::run(Phase& phase, World& w, bool fresh) {
   phase.attach(w);
   Status status = Status::running;
@@ -98,20 +115,29 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     const auto t_step = Clock::now();
     w.defer_closing_kick = phase.pays_own_kick();
     w.step();
-    thread_choice.after_step(w, seconds_since(t_step));
+    const auto t_stepped = Clock::now();
+    const double stepped = std::chrono::duration<double>(t_stepped - t_step).count();
+    loop.step += stepped;
+    thread_choice.after_step(w, stepped);
     // Velocity Verlet's closing half kick is owed to the next step's first sweep (one pass over
     // the arrays instead of two) unless this step's checks, records or checkpoint read the
     // velocities.
     if (w.steps % kCheckEvery == 0 || record.due(w.steps) || (checkpoint_every > 0 && w.steps % checkpoint_every == 0))
       w.pay_kick();
-    if (std::string why = check(w, phase); !why.empty()) {
+    std::string why = check(w, phase);
+    const auto t_checked = Clock::now();
+    loop.checks += std::chrono::duration<double>(t_checked - t_stepped).count();
+    if (!why.empty()) {
       reason = why;
       status = Status::unstable;
       break;
     }
     status = phase.after_step(w);
+    const auto t_measured = Clock::now();
+    loop.measures += std::chrono::duration<double>(t_measured - t_checked).count();
     if (status != Status::running) break;
     record.after_step(w, phase.name());  // before a stop: the step's row is in the checkpoint
+    loop.records += seconds_since(t_measured);
     // A stop request ends the run on a step that recorded its pair forces (the contacts
     // output): this one, or the next, which before_step then asks to record.
     if (stop_signal()) stopping = true;
@@ -121,8 +147,10 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
     }
     // Checkpoints follow the world's step count: a resumed run writes them at the same steps.
     if (checkpoint_every > 0 && w.steps % checkpoint_every == 0 && write_checkpoint) {
+      const auto t_ckpt = Clock::now();
       phase.flush();
       write_checkpoint(phase);
+      loop.checkpoints += seconds_since(t_ckpt);
     }
     if (progress && (w.steps & 1023) == 0) {
       const auto now = Clock::now();
@@ -142,6 +170,7 @@ Status Runner::run(Phase& phase, World& w, bool fresh) {
   w.pay_kick();  // what follows (the phase's end, its files, another phase) reads v(t)
   w.defer_closing_kick = false;
   wall_seconds = run_start_ + seconds_since(phase_start_);
+  loop.total += seconds_since(phase_start_);
   running_ = false;
   phase.finish(w, status);
   record.phase_end(w, phase.name(), status);

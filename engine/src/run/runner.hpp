@@ -29,6 +29,15 @@ struct Guard {
   EnergyWatch energy;        // budget from the phase's start (blowup.hpp)
 };
 
+// Where a run's loop spends its wall time (this process's part of the run): the time step itself
+// (forces, contact lists, moves), the stability checks, the phase's own measures, the records
+// (thermo rows, snapshots), checkpoints, and the rest of the loop (progress line, stop requests).
+struct LoopTimes {
+  double step = 0, checks = 0, measures = 0, records = 0, checkpoints = 0, total = 0;
+  // Lines for run.log: each part in seconds and as a share of the loop.
+  std::string text() const;
+};
+
 class Runner {
  public:
   explicit Runner(const SceneSpec& spec) : spec_(spec) {}
@@ -46,6 +55,7 @@ class Runner {
   ThreadChoice thread_choice;  // the threads each step runs with (integrator.thread_choice)
   Guard guard;
   double wall_seconds = 0;   // [s] of stepping, every phase and every process of the run
+  LoopTimes loop;            // this process's loop, by part (run.log's timing breakdown)
   std::string reason;        // why the run is unstable
 
   // The wall time so far, this process's current phase included.

@@ -4,6 +4,7 @@
 
 #include "io/binary.hpp"
 #include "physics/world.hpp"
+#include "scene/resolve.hpp"
 #include "scene/scene.hpp"
 
 namespace dem {
@@ -19,7 +20,8 @@ SceneRun::SceneRun(const SceneSpec& spec, World& w, const std::string& out) : ru
     shear = std::make_unique<ShearPhase>(spec, out);
     phases_.push_back(shear.get());
   }
-  runner.last_good.set_file(out.empty() ? "" : out + "/last_good.bin");  // beside the outputs, not in memory (last_good.hpp)
+  // Beside the outputs for large worlds, in memory for small ones (last_good.hpp).
+  runner.last_good.set_file(out.empty() || w.discs.size() < kLastGoodInFileFrom ? "" : out + "/last_good.bin");
   runner.record.configure(spec, out, w.dt);
   if (discharge) discharge->record = &runner.record;
   if (shear) shear->record = &runner.record;
@@ -58,9 +60,22 @@ void SceneRun::resume(const std::string& path, const CheckpointKey& key) {
 
 const char* SceneRun::phase_name() const { return current_ < phases_.size() ? phases_[current_]->name() : "end"; }
 
+namespace {
+// The scene as the engine resolved it (dem resolve: every value with its default), one table a
+// line, the discs counted rather than listed: run.log's echo of its input.
+std::string resolved_echo(const SceneSpec& s, std::size_t n_discs) {
+  nlohmann::json j = resolved_scene_json(s);  // s.discs may be released once the world holds them
+  std::string out = "  resolved scene (dem resolve; its " + std::to_string(n_discs) + " discs not listed):\n";
+  j.erase("discs");
+  for (auto it = j.begin(); it != j.end(); ++it) out += "    " + it.key() + " = " + it.value().dump() + "\n";
+  return out;
+}
+}  // namespace
+
 Status SceneRun::run(bool progress, bool print) {
   runner.progress = progress;
   if (fresh_ && current_ == 0) runner.last_good.keep(w_.discs, w_.time);
+  if (log && fresh_ && current_ == 0) log->file_only(resolved_echo(spec_, w_.discs.size()));
   for (; current_ < phases_.size(); ++current_, fresh_ = true) {
     Phase& p = *phases_[current_];
     if ((print || log) && fresh_ && &p != &fill) {
@@ -82,6 +97,7 @@ Status SceneRun::run(bool progress, bool print) {
   }
   if (phases_.empty()) status = Status::end_time;  // a state file and nothing to run
   runner.record.write();
+  if (log) log->file_only(runner.loop.text());
   if (discharge) discharge->at_open().discard();  // a checkpoint carries its own copy
   return status;
 }
