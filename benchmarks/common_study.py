@@ -1,8 +1,8 @@
 """Shared helpers of the work-precision and stability studies.
 
 Both studies drive the engine binary (``--dem PATH``, else ``$DEM_BINARY``, else
-``build/dem``) as a subprocess, write their scenes with ``compare.scene_toml``, read its
-``summary.json`` and ``discs.csv`` with ``compare.run_dir``, and write
+``build/dem``) as a subprocess, write their scenes with ``compare.io.scene_toml``, read its
+``summary.json`` and ``discs.csv`` with ``compare.io.run_dir``, and write
 ``results.json`` + ``report.md`` (+ PNGs) under ``--out``. Python is Debian's
 ``/usr/bin/python3`` (numpy, matplotlib). Nothing here edits the engine or ``compare/``.
 """
@@ -217,7 +217,7 @@ def savefig(fig, path: Path) -> None:
 def scene_with(base: Path, out: Path, changes: dict | None = None, add: dict | None = None, remove=(),
                pairs_scale: dict | None = None) -> Path:
     """Writes the scene ``base`` to ``out`` with keys changed, added and removed by dotted path
-    (compare.scene_toml.edit: a key to change or remove that the scene does not have is an
+    (compare.io.scene_toml.edit: a key to change or remove that the scene does not have is an
     error) and the constants of every [[pairs]] entry scaled (pairs_scale: key -> factor, e.g.
     {"ks_rho_g": 2.0}; each entry must have the key). Returns out."""
     changes = dict(changes or {})

@@ -9,9 +9,9 @@ Method (the report this writes, DIR/report.md, repeats it):
 
 - The case: ``bench_silo_SIZE.toml`` settled by the native engine (benchmarks/speed.py's settled
   packing, made once under DIR), at rest, no contact history, run for ``--steps`` steps of the
-  shared law (compare/common.py SHARED_VARIANT) at dt = 5e-5 s. The reference codes get it from
+  shared law (compare/cases/common.py SHARED_VARIANT) at dt = 5e-5 s. The reference codes get it from
   ``dem run SCENE --engine CODE --np N``: the user's command. The native engine runs the very case
-  the translation runs, written by compare/native_backend.py.
+  the translation runs, written by compare/codes/native_backend.py.
 - Time: each code's own loop time (native: summary.json ``wall_time_s``; LIGGGHTS and LAMMPS: the
   sum of their "Loop time" lines less the Output row of the timing breakdown), divided by the
   particle-steps (steps x discs): microseconds per particle-step; x ranks: per rank. The whole
@@ -21,7 +21,7 @@ Method (the report this writes, DIR/report.md, repeats it):
   (n / ranks): bytes per disc per rank. Native: GNU time's peak of the one process.
 - Outputs: each run's wall totals (summary.json: every wall group's normal and shear force) against
   the native 1-thread run of the same case, relative, with the comparison's static tolerances
-  (compare/pipeline.py TOL_STATIC_TOTAL for normal totals, TOL_STATIC_SHEAR for side friction).
+  (compare/verdict/pipeline.py TOL_STATIC_TOTAL for normal totals, TOL_STATIC_SHEAR for side friction).
 - The 10^7 estimate: time per step on R ranks = 10^7 x (per-rank microseconds per particle-step
   at the most ranks run without oversubscription) / R, assuming that per-rank throughput holds
   (the decomposition's halo grows as the strips thin: stated beside the estimate); memory per rank

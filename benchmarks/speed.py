@@ -26,7 +26,7 @@ settled start is the dense packing a silo study spends its time in. --start shuf
 settled packing written as a file fill in a seeded random order (SHUFFLE_SEED): a user's file
 in any order, the case of the engine's disc re-sort (benchmarks/README.md, "Disc order").
 
-Physics: LIGGGHTS, LAMMPS (pair_style granular) and YADE run the law the codes share (compare/common.py SHARED_VARIANT,
+Physics: LIGGGHTS, LAMMPS (pair_style granular) and YADE run the law the codes share (compare/cases/common.py SHARED_VARIANT,
 velocity Verlet) at dt = 5e-5 s (Verlet is unstable at the paper's 1e-4 s); the native engine runs
 that same case (the comparison rows) and, as its own row, the paper's law with eq. (19) at 1e-4 s.
 """

@@ -6,7 +6,7 @@ overlap spring) over a dt sweep, and the same points for LIGGGHTS and YADE where
     /usr/bin/python3 benchmarks/work_precision.py --out out/work_precision [--quick] [--dem PATH]
 
 Problems (method and references in the report this writes, DIR/report.md):
-  (a) head-on collisions (disc-disc, disc-wall; compare/calibration.py's cases, damping ratio
+  (a) head-on collisions (disc-disc, disc-wall; compare/verdict/calibration.py's cases, damping ratio
       0.3, 50 cm/s) against the closed-form damped spring-dashpot: the paper's law
       (e = exp(-pi zeta / sqrt(1 - zeta^2)), t_c = pi / omega_d) for the three schemes, the
       shared variant (force clamped >= 0: the force vanishes before the overlap does) for the
@@ -126,7 +126,7 @@ def closed_form(k: float, c: float, m: float, v0: float, law: str) -> dict:
 
 
 def collision_setup():
-    """The head-on calibration scenes (compare/calibration.py) with the closed forms of the
+    """The head-on calibration scenes (compare/verdict/calibration.py) with the closed forms of the
     paper's law and the shared one, and compare/'s RK4 integration of the shared law (dt / 1000)."""
     from compare.verdict import calibration as cal
     from compare.cases.common import disc_material, pair
@@ -328,7 +328,7 @@ def problem_static_paper(cfg, out: Path, repeats: int) -> dict:
 
 
 def problem_static_shared(cfg, out: Path, codes, repeats: int) -> dict:
-    """The shared variant: the comparison's frozen packing (compare/pipeline.py: the native engine
+    """The shared variant: the comparison's frozen packing (compare/verdict/pipeline.py: the native engine
     fills 17/18 with the shared law, velocities zeroed), re-rested for shared_duration in every code."""
     from compare.verdict import pipeline
     from compare.cases import plan as cplan
@@ -336,7 +336,7 @@ def problem_static_shared(cfg, out: Path, codes, repeats: int) -> dict:
     base = out / "b_shared"
     base.mkdir(parents=True, exist_ok=True)
     scene = cs.SCENES / "silo_17_18.toml"
-    log("(b) shared variant: frozen packing (compare.pipeline.frozen_packing, dt 2e-5 s, 1 s)")
+    log("(b) shared variant: frozen packing (compare.verdict.pipeline.frozen_packing, dt 2e-5 s, 1 s)")
     frozen = cplan.make_plan(cplan.Entry(scene, cplan.Options(dt=2e-5, settle=1.0)))
     pack = pipeline.frozen_packing(frozen, base / "packing")
     side = None
@@ -392,7 +392,7 @@ def problem_static_shared(cfg, out: Path, codes, repeats: int) -> dict:
     return {"side_walls": side, "duration": cfg["shared_duration"], "n_discs": int(len(pack)),
             "reference": {"dt": cfg["shared_ref_dt"], "loop_s": ref["loop_s"]}, "floor": floor,
             "reference_profile": pref.tolist(), "points": points,
-            "method": "as the paper-law case, from compare.study's frozen packing (shared law, all codes start from it)"}
+            "method": "as the paper-law case, from compare.verdict.study's frozen packing (shared law, all codes start from it)"}
 
 
 # ------------------------------------------------------------------ (c) flow rate
@@ -663,7 +663,7 @@ def write_report(res: dict, out: Path) -> None:
           "LIGGGHTS: the sum of its `Loop time` lines; YADE: the loop time its script measures), median over "
           "repeats or start phases; the *process* column adds start-up (LIGGGHTS about 1 s, YADE about 2.5 s: "
           "they dominate a 2-disc collision). The machine is shared, so timings carry tens of per cent of noise.",
-          "- **(a) Collisions** (compare/calibration.py's head-on cases: r = 1 cm, 50 cm/s, the paper's "
+          "- **(a) Collisions** (compare/verdict/calibration.py's head-on cases: r = 1 cm, 50 cm/s, the paper's "
           "stiffness, dashpots for a damping ratio of 0.3 — the paper's own damping is critical and would give "
           "no rebound): the reference is the closed-form damped oscillator. Paper's law: the overlap returns "
           "to zero at t_c = pi/omega_d, e = exp(-pi zeta/sqrt(1 - zeta^2)) (the dashpot may pull, eq. 8 clamps "

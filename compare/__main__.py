@@ -4,7 +4,7 @@ python3 -m compare translate [--check | --out DIR]
 
 Runs scenes in the native engine and the real reference codes with the shared law and writes
 DIR/report.md, DIR/agreement.json and the PNGs. Every metric agrees, disagrees or is
-inconclusive (compare/verdict.py); the exit code says which of the three the report is, 2 for bad
+inconclusive (compare/verdict/verdict.py); the exit code says which of the three the report is, 2 for bad
 input refused before any run.
 """
 import argparse
@@ -97,7 +97,7 @@ def _common(p) -> None:
     p.add_argument("--until-decided", action="store_true",
                    help="add members in batches (as many as the first) to every ensemble scene with an "
                         "inconclusive statistical metric until each agrees or disagrees, --max-members or --budget "
-                        "(the level split over the planned looks; compare/sequential.py)")
+                        "(the level split over the planned looks; compare/verdict/sequential.py)")
     p.add_argument("--budget", type=float, default=60.0, metavar="MINUTES",
                    help="with --until-decided: no new look that would end after this many minutes (default 60)")
     p.add_argument("--max-members", type=int, default=0, metavar="N",
@@ -190,7 +190,7 @@ def exit_code(rep: dict, with_mutants: bool) -> int:
 
 
 def with_set(entries, assignments, folder: Path):
-    """The entries with their scenes changed by ``--set`` (compare.scene_toml), each written into
+    """The entries with their scenes changed by ``--set`` (compare.io.scene_toml), each written into
     folder/KK/ under its own name and validated by the engine (``dem resolve``); PlanError names
     the key or the field the engine refuses."""
     out = []

@@ -41,7 +41,7 @@ GAP = 0.004      # [cm] initial gap between diagonal neighbours and to the walls
 ALPHAS = (58, 50, 35)
 VARIANTS = ("free", "clusters", "touching")
 
-# HEADER's tables are text, their literals as written: compare/shear_study.py derives its variants
+# HEADER's tables are text, their literals as written: compare/papers/shear_study.py derives its variants
 # by replacing that text ('dt = 1e-4 ', 'plate_horizontal = "free"', ...). The computed values
 # (width, height, gap, the clusters and the discs) are written by compare.scene_toml.
 HEADER = """# Paper 2's simple shear test (Sumita, Kiyama & Nishimura), alpha = {alpha} deg ({variant}).

@@ -181,7 +181,7 @@ class Case:
     discs: np.ndarray           # (n, 6): x, y, r [cm], vx, vy [cm/s], omega [1/s] at the start
     dt: float                   # [s]
     duration: float             # [s] simulated (static: settling time; discharge: after opening)
-    mode: str = "static"        # "static" | "discharge" | "shear" (compare/shear.py)
+    mode: str = "static"        # "static" | "discharge" | "shear" (compare/cases/shear.py)
     settle: float = 0.0         # [s] discharge: settling before the gate opens
     series_interval: float = 0.005  # [s] wall-force sampling
     seed: int = 0               # ensemble member (perturbation already applied to discs)

@@ -8,7 +8,7 @@ depth z below the top surface), leaving out the lowest ~W/2 near the floor corne
 lambda the model is linear in A = p_inf and B = -p_inf exp(z0 / lambda), so the fit is an exact
 1D minimisation over lambda (golden section on log lambda, bracketed by a grid).
 
-The ensemble test (``--kind janssen``, compare/pipeline.py ``janssen_column``) measures each
+The ensemble test (``--kind janssen``, compare/verdict/pipeline.py ``janssen_column``) measures each
 member's run with ``member_record`` and fits the members' mean profile with ``ensemble_fit``
 (scipy's curve_fit, 95 % intervals from its covariance).
 """

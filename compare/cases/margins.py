@@ -1,7 +1,7 @@
 """The margins of agreement: the difference between two codes that still counts as agreement.
 
 A statistical metric agrees when the interval of its difference lies inside [-margin, margin]
-(compare/stats.py). Every metric kind has one default per profile; `--margin KIND=DELTA` (on the
+(compare/cases/stats.py). Every metric kind has one default per profile; `--margin KIND=DELTA` (on the
 command line or a list line) overrides it for the scenes it applies to. Relative margins are
 fractions of the reference code's (the native engine's) mean; the jam fraction's is absolute.
 docs/compare.md ("Margins") gives the reason for each size.

@@ -7,14 +7,14 @@ not write as a scene and a line of options.
 
 Kinds (``--kind``, default from the scene):
 - ``collision``: one or two discs that meet and part (gravity may be on): every code runs the
-  scene as written (its own velocities), measured from the end state (compare/calibration.py);
+  scene as written (its own velocities), measured from the end state (compare/verdict/calibration.py);
 - ``static`` (a scene without ``[discharge]``): ``--start frozen`` (default) lets the native
   engine fill the scene with the shared law, zeroes the velocities, and every code rests from that
   same packing for ``--duration``; ``--start scene --members N`` runs every code from the scene's
   own start, each member jittered by ``--perturb`` (independent dynamics, judged statistically);
 - ``janssen``: a tall column run as ``static --start scene`` members for the scene's end.time (or
   ``--duration``), its floor lowered by the scene's prescribed translation, the side-wall profiles
-  averaged over the members and fitted with Janssen's law (compare/janssen.py);
+  averaged over the members and fitted with Janssen's law (compare/cases/janssen.py);
 - ``discharge`` (a scene with ``[discharge]``): members jittered by ``--perturb``, each settles
   for ``--settle`` then the gate opens for the scene's ``discharge.time`` (or ``--duration``).
   ``--start frozen`` (default): the native engine fills the scene once with the shared law for the
@@ -25,7 +25,7 @@ Kinds (``--kind``, default from the scene):
   free discs): members jittered by ``--perturb``, each compressed under the plate to rest (at most
   ``end.time``, or ``--settle``) and sheared to ``shear.max_strain`` (or for ``--duration`` s of
   wall rotation); dt: ``--dt``, else the scene's halved until the shared scheme is stable with
-  the clusters (compare/shear.py ``stable_dt``). LIGGGHTS refuses it (compare/shear.py
+  the clusters (compare/cases/shear.py ``stable_dt``). LIGGGHTS refuses it (compare/cases/shear.py
   ``liggghts_refusal``).
 
 Every code runs the shared law (common.SHARED_VARIANT) and velocity Verlet at the same dt.
@@ -39,9 +39,7 @@ import copy
 import dataclasses
 import math
 import shlex
-import tempfile
 from pathlib import Path
-from importlib import import_module
 
 import numpy as np
 
@@ -87,7 +85,7 @@ class Options:
     jobs: int = 1                # ensemble members run at once (each member's codes one after another)
     resume: bool = False         # reuse finished runs whose translated inputs are unchanged
     codes: tuple = ()            # a list line's --codes: the codes this entry runs (empty: the command's)
-    margins: dict = dataclasses.field(default_factory=dict)   # --margin KIND=DELTA overrides (compare/margins.py)
+    margins: dict = dataclasses.field(default_factory=dict)   # --margin KIND=DELTA overrides (compare/cases/margins.py)
     metrics: tuple = ()          # --metrics: the statistical metric kinds judged (empty: all of the kind's)
 
     def resolved_members(self) -> int:
@@ -327,25 +325,6 @@ def member_case(plan: Plan, member: int, discs: np.ndarray | None = None, resolv
                     mode="shear", settle=plan.settle, seed=member, materials=mats)
     return Case(name=f"{plan.name}{suffix}", resolved=r, discs=discs, dt=plan.dt, duration=plan.duration,
                 seed=member, materials=mats)
-
-
-def refusals(plan: Plan, codes) -> list[str]:
-    """What each reference code refuses to translate in this plan (its own translation, dry-run on
-    the first case); empty when every code can express the scene."""
-    out = []
-    case = member_case(plan, 0)
-    if plan.kind == "discharge" and not plan.shared.get("discharge", {}).get("gate"):
-        out.append(f"{plan.entry.scene}: discharge.gate: the comparison opens a gate wall; the scene has none")
-    for code in codes:
-        if code == "native":
-            continue
-        be = import_module(f"compare.codes.{code}_backend")
-        with tempfile.TemporaryDirectory() as tmp:
-            try:
-                be.write_inputs(case, Path(tmp))
-            except CaseError as e:
-                out.append(f"{plan.entry.scene}: {code} cannot express it: {e}")
-    return out
 
 
 def default_list(profile: str) -> Path:

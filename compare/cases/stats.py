@@ -137,7 +137,7 @@ def members_for(rel_diff: float, cv: float, alpha: float, power: float = POWER) 
 # disagrees" is a union claim: its interval is the wider (1 - 2 alpha / m) one, m the statistical
 # metrics of the report (Bonferroni), so that a report of true agreements says "disagree" with
 # probability at most alpha. With sequential looks (--until-decided) both levels are split
-# further over the planned looks (compare/sequential.py).
+# further over the planned looks (compare/verdict/sequential.py).
 
 AGREE, DISAGREE, INCONCLUSIVE = "agree", "disagree", "inconclusive"
 

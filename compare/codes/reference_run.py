@@ -1,8 +1,8 @@
 """``dem run SCENE.toml --engine liggghts|lammps|yade [--np N] --out DIR``: one scene run in a
 reference code, written as the engine's own run folder (docs/outputs.md), so that
-compare.run_dir (strict) and ``python3 -m compare.figures run DIR`` read it unchanged.
+compare.io.run_dir (strict) and ``python3 -m compare.figures run DIR`` read it unchanged.
 
-The scene becomes one comparison case (compare/plan.py): the shared law (common.SHARED_VARIANT),
+The scene becomes one comparison case (compare/cases/plan.py): the shared law (common.SHARED_VARIANT),
 the scene's dt, and
 
 - a static scene: the scene's own start (its lattice or disc file, its velocities, no jitter)
@@ -11,7 +11,7 @@ the scene's dt, and
 - a discharge scene: the same start settles for ``--settle`` s (the comparison's default), the
   gate opens, ``discharge.time`` s of flow, discs below the outlet removed (as ``dem compare
   --kind discharge`` runs each member). The code dumps its discs at every wall-series sample;
-  compare/engine_flow.py measures flow_series.csv, the pattern, the jams and the dead fraction
+  compare/codes/frame_measures.py measures flow_series.csv, the pattern, the jams and the dead fraction
   from those frames, and the snapshots are the frames at ``discharge.snapshots``.
 
 ``--set KEY=VALUE`` changes the scene as ``dem run --set`` does; ``--member-start FILE`` starts
@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import importlib
 import json
 import math
 import os
@@ -45,7 +44,8 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from compare.codes import frame_measures as engine_flow
+from compare.codes.backends import backend
+from compare.codes import frame_measures
 from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall,
                      outlet_y, resolve, scene_material_index, tangent)
 from compare.io import atomic_file, scene_toml
@@ -105,7 +105,7 @@ def make_case(scene: Path, settle: float) -> Case:
 
 
 def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
-    """The scene with the ``--set`` assignments applied (compare.scene_toml, as `dem compare
+    """The scene with the ``--set`` assignments applied (compare.io.scene_toml, as `dem compare
     --set`), written into ``folder`` under the scene's own name (its relative paths rebased), for
     the engine to validate as it resolves it; the scene itself without assignments."""
     if not assignments:
@@ -119,7 +119,7 @@ def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
     return path
 
 
-# A deliberately wrong translation, for the tests that must be able to fail (as compare/mutants.py
+# A deliberately wrong translation, for the tests that must be able to fail (as compare/cases/mutants.py
 # does for the comparison): DEM_ENGINE_MUTANT=WHAT:FACTOR scales one constant of what the code is
 # given (WHAT: density, gravity, or a pair constant kn, ks, eta_n, eta_s, mu of every pair); the
 # outputs are still measured against the scene as it is.
@@ -304,13 +304,13 @@ def peak_ratios(case: Case, res: Result, window: float | None) -> dict:
 
 def removal_rows(case: Case, res: Result, frames: list[Snapshot]) -> list[tuple[float, int, tuple]]:
     """(t, id, (vx, vy)) of every disc out, in time order: the id where the code names it
-    (LIGGGHTS, YADE), else from the disc frames (engine_flow.removal_ids); the velocity where the
+    (LIGGGHTS, YADE), else from the disc frames (frame_measures.removal_ids); the velocity where the
     code logs it (LIGGGHTS), else nan."""
     rem = sorted(float(x) for x in res.removals)
     idx = res.extra.get("removal_index")
     vel = res.extra.get("removal_velocity")
     if idx is None or len(idx) != len(rem):
-        idx = engine_flow.removal_ids(frames, rem, case.dt)
+        idx = frame_measures.removal_ids(frames, rem, case.dt)
     return [(t, int(idx[k]), tuple(vel[k]) if vel is not None and k < len(vel) else (None, None))
             for k, t in enumerate(rem)]
 
@@ -434,11 +434,11 @@ def discharge_block(case: Case, res: Result, out: Path, frames: list[Snapshot], 
         lines.append(f"{_fmt(t)},{i},{_fmt(mass[i]) if i >= 0 else 'nan'},{_fmt(v[0])},{_fmt(v[1])},outlet")
     write_text_atomic(out / "removals.csv", "\n".join(lines) + "\n")
     write_series(out, case, res)
-    f = engine_flow.silo_frame(case.resolved)
-    fl = engine_flow.flow(frames, [(t, i) for t, i, _v in rows], mass, len(case.discs), f, case.resolved, case.dt)
+    f = frame_measures.silo_frame(case.resolved)
+    fl = frame_measures.flow(frames, [(t, i) for t, i, _v in rows], mass, len(case.discs), f, case.resolved, case.dt)
     write_text_atomic(out / "flow_series.csv", "\n".join(fl["rows"]) + "\n")
     snaps = write_snapshots(out, case, frames, wall_names)
-    jam_at, jams = engine_flow.jams([t for t, _i, _v in rows], frames, f, float(d["jam_time"]), case.duration,
+    jam_at, jams = frame_measures.jams([t for t, _i, _v in rows], frames, f, float(d["jam_time"]), case.duration,
                                     case.dt)
     rem = [t for t, _i, _v in rows]
     q = flow_rate(rows, mass)
@@ -519,7 +519,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
     s = {
         "engine": f"{code} {res.version}".strip(),
         "engine_name": code, "engine_version": res.version,
-        "translated_by": "compare/engine_run.py (the shared law of the comparison layer)",
+        "translated_by": "compare/codes/reference_run.py (the shared law of the comparison layer)",
         "np": np_, "ranks": np_ if code != "yade" else 1, "threads": np_ if code == "yade" else 1,
         "scene": {"name": r.get("name", scene.stem), "file": str(scene), "description": r.get("description", "")},
         "status": status,
@@ -528,7 +528,7 @@ def summary(case: Case, res: Result, code: str, np_: int, scene: Path, walls: li
         "options": {"scheme": SCHEME[code], "dt": case.dt, "dt_forced": False, "threads": 1,
                     **{k: r["contact"][k] for k in ("normal_spring", "no_tension", "friction_cap", "lever_arm")},
                     "gravity": gvec.tolist(), "skin": None, "cell": None, "profile_bin": case.profile_bin,
-                    "law": "the shared law (compare/common.py SHARED_VARIANT), whatever the scene's [contact]"},
+                    "law": "the shared law (compare/cases/common.py SHARED_VARIANT), whatever the scene's [contact]"},
         "n_discs": int(len(rows)), "steps": steps, "time": steps * case.dt,
         "wall_time_s": wall_s, "particle_steps": psteps,
         "particle_steps_per_s": psteps / wall_s if wall_s > 0 else None,
@@ -601,7 +601,7 @@ def main(argv=None) -> int:
 _MEMBER_START: list[str] = []   # the --member-start of this process's run
 
 
-def _main(argv=None) -> int:
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="dem run SCENE.toml --engine CODE",
                                  description="Run a scene in a reference code; write the engine's run folder.")
     ap.add_argument("scene")
@@ -619,6 +619,34 @@ def _main(argv=None) -> int:
     ap.add_argument("--quiet", action="store_true")
     ap.add_argument("--pictures", action="store_true",
                     help="also draw the run's pictures into OUT (python3 -m compare.figures run OUT), as dem run --pictures")
+    return ap
+
+
+def _unstable_summary(out: Path, case, res, code: str, np_: int) -> None:
+    """What a run that blew up still tells: the scene's walls and discs, no loads (non-strict readers)."""
+    walls, _top = _wall_geometry(case)
+    g = float(np.linalg.norm(case.resolved["gravity"]))
+    write_text_atomic(out / "summary.json", json.dumps(
+        {"engine": f"{code} {res.version}".strip(), "engine_name": code, "status": "unstable",
+         "reason": res.reason, "np": np_, "n_discs": len(case.discs), "steps": res.steps or None,
+         "disc_weight": float(_masses(case)[0] * g) if len(case.discs) else 0.0,
+         "walls": [{k: w[k] for k in ("name", "group", "from", "to")} for w in walls]},
+        indent=1, default=_json) + "\n")
+
+
+def _pictures(out: Path, code: str, quiet: bool) -> int:
+    """--pictures: python3 -m compare.figures run OUT; 0, or the failure's exit status."""
+    drawn = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(out)] + (["--quiet"] if quiet else []),
+                           capture_output=True, text=True)
+    sys.stderr.write(drawn.stderr)
+    if drawn.returncode != 0:
+        return _fail_exit(code, f"--pictures: the pictures were not drawn: {drawn.stderr.strip()}", EXIT_FAILED)
+    sys.stdout.write(drawn.stdout)
+    return 0
+
+
+def _main(argv=None) -> int:
+    ap = _parser()
     try:
         a = ap.parse_args(argv)
     except SystemExit as e:
@@ -650,7 +678,7 @@ def _main(argv=None) -> int:
     if run_case is not case:
         sys.stderr.write(f"dem run --engine {code}: {MUTANT_ENV}={os.environ[MUTANT_ENV]}: a deliberately wrong "
                          "translation (testing)\n")
-    be = importlib.import_module(f"compare.codes.{code}_backend")
+    be = backend(code)
     with tempfile.TemporaryDirectory() as tmp:
         try:
             be.write_inputs(run_case, Path(tmp))
@@ -667,15 +695,7 @@ def _main(argv=None) -> int:
     if not res.ok:
         status = classify(res.reason)
         if status == EXIT_UNSTABLE:
-            # what the failed run still tells: the scene's walls and discs, no loads (non-strict readers)
-            walls, _top = _wall_geometry(case)
-            g = float(np.linalg.norm(case.resolved["gravity"]))
-            write_text_atomic(out / "summary.json", json.dumps(
-                {"engine": f"{code} {res.version}".strip(), "engine_name": code, "status": "unstable",
-                 "reason": res.reason, "np": a.np, "n_discs": len(case.discs), "steps": res.steps or None,
-                 "disc_weight": float(_masses(case)[0] * g) if len(case.discs) else 0.0,
-                 "walls": [{k: w[k] for k in ("name", "group", "from", "to")} for w in walls]},
-                indent=1, default=_json) + "\n")
+            _unstable_summary(out, case, res, code, a.np)
         return _fail_exit(code, f"{'unstable run' if status == EXIT_UNSTABLE else 'the run failed'}: "
                                 f"{res.reason} (program files in {out / code})", status)
     frames = []
@@ -695,14 +715,7 @@ def _main(argv=None) -> int:
     if not a.quiet:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
               f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
-    if a.pictures:
-        drawn = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(out)] + (["--quiet"] if a.quiet else []),
-                               capture_output=True, text=True)
-        sys.stderr.write(drawn.stderr)
-        if drawn.returncode != 0:
-            return _fail_exit(code, f"--pictures: the pictures were not drawn: {drawn.stderr.strip()}", EXIT_FAILED)
-        sys.stdout.write(drawn.stdout)
-    return 0
+    return _pictures(out, code, a.quiet) if a.pictures else 0
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 """Paper 2's simple shear test in YADE 2023.02a from a scene file: the YADE backend's shear path
-(compare/yade_backend.py, ``shear_case_data`` and compare/shear_yade_template.py), the same
+(compare/codes/yade_backend.py, ``shear_case_data`` and compare/codes/shear_yade_template.py), the same
 translation ``dem compare`` runs for a shear-box scene.
 
     /usr/bin/python3 -m compare.codes.shear_yade SCENE.toml --out DIR [--clusters bonds|clumps]
@@ -7,7 +7,7 @@ translation ``dem compare`` runs for a shear-box scene.
 
 The scene is resolved by the engine itself (``dem resolve``: discs, constants, box, clusters) and
 becomes one shear case: the scene's own start, YADE's law (the shared contact variant:
-compare/common.py SHARED_VARIANT; the paper's incremental spring and elastic-force rules are not
+compare/cases/common.py SHARED_VARIANT; the paper's incremental spring and elastic-force rules are not
 expressible in YADE), leapfrog at ``--dt`` (default 5e-5 s: at the paper's 1e-4 s YADE's
 near-critical dashpots are unstable, reference-codes.md), the compression to rest for at most the
 scene's ``end.time``. The backend writes DIR/shear_series.csv, shear_planes.csv, summary.json and

@@ -1,10 +1,10 @@
-# Paper 2's simple shear test in YADE 2023.02a: the shear path of compare/yade_backend.py, run as
+# Paper 2's simple shear test in YADE 2023.02a: the shear path of compare/codes/yade_backend.py, run as
 # `yade -n -jN -x yade_script.py` in the case's folder, next to yade_case.json (written by
 # yade_backend.shear_case_data: every value is there, nothing here is a scene constant). Writes, at
 # full precision, into that folder: shear_series.csv, shear_planes.csv, summary.json, snapshots/
 # (contacts and discs CSV as the engine's, index.json).
 #
-# The model (the translation and what differs: compare/yade_backend.py):
+# The model (the translation and what differs: compare/codes/yade_backend.py):
 # - 2D discs: spheres at z = 0, blockedDOFs 'zXY', mass rho pi r^2, inertia m r^2 / 2 (per cm),
 #   each disc with its own material's density;
 # - contacts between clusters, free discs, walls and plate: ViscElMat (F_n = kn overlap + cn v_n

@@ -1,5 +1,5 @@
 """YADE 2023.02a as a compared code: translator (yade_case.json + the script
-compare/yade_template.py), runner (``yade -n -jN -x yade_script.py``) and reader.
+compare/codes/yade_template.py), runner (``yade -n -jN -x yade_script.py``) and reader.
 
 What the translation does (measured facts: docs/compare.md):
 - true 2D: spheres at z = 0 with ``blockedDOFs = 'zXY'``, mass rho pi r^2 (per 1 cm of thickness)
@@ -51,9 +51,9 @@ What the translation does (measured facts: docs/compare.md):
   yade_template.py), yade.log, yade_process.json (exit code, wall time), yade_result.json and
   yade_series.csv (written by the script, full precision).
 
-- shear (``case.mode == "shear"``: paper 2's shear box, compare/shear.py): ``shear_case_data``
+- shear (``case.mode == "shear"``: paper 2's shear box, compare/cases/shear.py): ``shear_case_data``
   gives the same materials, friction and masses (``materials``) to the script
-  compare/shear_yade_template.py (copied as yade_script.py): the floor and side walls are fixed
+  compare/codes/shear_yade_template.py (copied as yade_script.py): the floor and side walls are fixed
   boxes, the side walls turned about their lower inner corners by RotationEngines, the plate a
   dynamic box of the plate's mass free in x and y (no rotation), placed plate_gap above the case's
   highest disc; compression to the engine's rest criterion (mean |du| and |dv| per step below
@@ -64,7 +64,7 @@ What the translation does (measured facts: docs/compare.md):
   distance change since bonding; shear force rotated with the contact frame; lever arms to the
   mid-gap point with avoidGranularRatcheting = False); "clumps", rigid YADE clumps. It writes the
   engine's shear outputs (shear_series.csv, shear_planes.csv, summary.json, snapshots/), read by
-  compare.shear.read_outputs into ``Result.extra["shear"]``.
+  compare.cases.shear.read_outputs into ``Result.extra["shear"]``.
 
 What YADE cannot express exactly (see also the module's ``LIMITATIONS``): the paper's incremental
 normal spring and elastic-force rules (only the shared variant); the engine's integration
@@ -261,7 +261,7 @@ def _steps(x: float, dt: float, what: str) -> int:
 
 
 def shear_case_data(case: Case) -> dict:
-    """Everything the shear script (compare/shear_yade_template.py) needs (yade_case.json)."""
+    """Everything the shear script (compare/codes/shear_yade_template.py) needs (yade_case.json)."""
     _check_variant(case)
     r = case.resolved
     if not shear.is_shear(r):
@@ -488,6 +488,27 @@ def read(case: Case, out_dir: Path) -> Result:
         return _fail(case, out_dir, f"unreadable YADE outputs: {e!r}")
 
 
+def _wall_series(case: Case, out_dir: Path, res: dict, walls: list) -> dict:
+    """The wall-force series: SERIES_FILE's per-contact rows grouped by sample time, binned like
+    the profiles (a moving wall's bins where it is at that time)."""
+    pb, centre = case.profile_bin, case.centre
+    by_t: dict[float, list] = {float(t): [] for t in res["series_t"]}
+    with open(out_dir / SERIES_FILE, newline="") as fh:
+        for row in csv.DictReader(fh):
+            t = float(row["t"])
+            by_t.setdefault(t, []).append((row["wall"], float(row["px"]), float(row["py"]),
+                                           float(row["fx"]), float(row["fy"])))
+    ts = sorted(by_t)
+    series = {"t": ts, "walls": {w["name"]: {"normal": [], "shear": []} for w in walls}}
+    for t in ts:
+        t_run = t + (case.settle if case.mode == "discharge" else 0.0)
+        prof = profiles_from_contacts([moved_wall(w, t_run) for w in walls], pb, centre, by_t[t])
+        for name, p in prof.items():
+            series["walls"][name]["normal"].append(p["normal"])
+            series["walls"][name]["shear"].append(p["shear"])
+    return series
+
+
 def _read(case: Case, out_dir: Path) -> Result:
     proc = {}
     if (out_dir / PROCESS_FILE).exists():
@@ -545,25 +566,11 @@ def _read(case: Case, out_dir: Path) -> Result:
     # a moving wall's bins run along it where it is (the contact points are on the moved facet)
     profiles = profiles_from_contacts([moved_wall(w, case.end_time) for w in walls], pb, centre, final)
 
-    # Series: per-contact rows grouped by sample time, binned like the profiles.
-    by_t: dict[float, list] = {float(t): [] for t in res["series_t"]}
-    with open(out_dir / SERIES_FILE, newline="") as fh:
-        for row in csv.DictReader(fh):
-            t = float(row["t"])
-            by_t.setdefault(t, []).append((row["wall"], float(row["px"]), float(row["py"]),
-                                           float(row["fx"]), float(row["fy"])))
-    ts = sorted(by_t)
-    series = {"t": ts, "walls": {w["name"]: {"normal": [], "shear": []} for w in walls}}
-    for t in ts:
-        t_run = t + (case.settle if case.mode == "discharge" else 0.0)
-        prof = profiles_from_contacts([moved_wall(w, t_run) for w in walls], pb, centre, by_t[t])
-        for name, p in prof.items():
-            series["walls"][name]["normal"].append(p["normal"])
-            series["walls"][name]["shear"].append(p["shear"])
-    for name, s in series["walls"].items():
-        for key in ("normal", "shear"):
-            if s[key] and not np.all(np.isfinite(np.array(s[key], float))):
-                return _fail(case, out_dir, f"NaN or inf in the wall-force series of {name}", **common)
+    series = _wall_series(case, out_dir, res, walls)
+    bad = [name for name, s in series["walls"].items() for key in ("normal", "shear")
+           if s[key] and not np.all(np.isfinite(np.array(s[key], float)))]
+    if bad:
+        return _fail(case, out_dir, f"NaN or inf in the wall-force series of {bad[0]}", **common)
 
     ps = res.get("particle_steps") or 0
     loop = float(res.get("loop_time_s", float("nan")))
@@ -592,7 +599,7 @@ def _read(case: Case, out_dir: Path) -> Result:
 
 
 def _read_shear(case: Case, out_dir: Path, proc: dict) -> Result:
-    """A shear run: the script's summary.json and shear_series.csv (compare.shear.read_outputs)."""
+    """A shear run: the script's summary.json and shear_series.csv (compare.cases.shear.read_outputs)."""
     common = {"wall_time_s": float(proc.get("wall_time_s", float("nan")))}
     if proc.get("error"):
         return _fail(case, out_dir, proc["error"], **common)

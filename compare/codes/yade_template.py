@@ -1,5 +1,5 @@
 # YADE 2023.02a script for one comparison case; copied next to yade_case.json by
-# compare/yade_backend.py and run there as `yade -n -jN -x yade_script.py` (cwd = the run folder).
+# compare/codes/yade_backend.py and run there as `yade -n -jN -x yade_script.py` (cwd = the run folder).
 # Not importable outside YADE: it uses YADE's globals (O, ViscElMat, PyRunner, ...).
 #
 # What it does (every number comes from yade_case.json, written by the backend):

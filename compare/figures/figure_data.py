@@ -1,7 +1,7 @@
 """The data of compare.figures' pictures, without matplotlib: reading a run directory (with a
 message that names the offending file), captions, and the pure maths of the pictures (contact-force
 segments, side-wall profiles, the discharge pictures' matrices and fits). compare.figures re-exports every name; the studies' main processes
-(compare.paper_claims in them) import this module alone, so that matplotlib is imported only in
+(compare.papers.paper_claims in them) import this module alone, so that matplotlib is imported only in
 the processes that draw.
 """
 
@@ -33,7 +33,7 @@ def _fail(path, message):
 
 
 def _reading(fn, *args, **kwargs):
-    """fn(...) of compare.run_dir, its RunDirError a stop that names the file."""
+    """fn(...) of compare.io.run_dir, its RunDirError a stop that names the file."""
     try:
         return fn(*args, **kwargs)
     except RunDirError as err:
@@ -41,13 +41,13 @@ def _reading(fn, *args, **kwargs):
 
 
 def read_csv(path, columns, empty=None):
-    """A CSV file of a run as a dict of numpy arrays (compare.run_dir.read_csv); a missing or
+    """A CSV file of a run as a dict of numpy arrays (compare.io.run_dir.read_csv); a missing or
     malformed file stops with SystemExit naming it."""
     return _reading(_run_dir.read_csv, path, columns, empty=empty)
 
 
 def read_summary(path):
-    """summary.json (compare.run_dir.read_summary) with a positive ``disc_weight``: the unit of
+    """summary.json (compare.io.run_dir.read_summary) with a positive ``disc_weight``: the unit of
     the figures' force scale."""
     summary = _reading(_run_dir.read_summary, path)
     if not summary["disc_weight"] > 0:
@@ -340,13 +340,13 @@ def gate_name(summary):
 
 def read_pvd(path):
     """The DataSets of a ParaView collection (.pvd) as (timestep, file) pairs sorted by time
-    (compare.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
+    (compare.io.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
     return _reading(_run_dir.read_pvd, path)
 
 
 def snapshot_index(run_dir):
     """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t
-    (compare.run_dir.RunDir.discharge_snapshots)."""
+    (compare.io.run_dir.RunDir.discharge_snapshots)."""
     return _reading(RunDir(run_dir).discharge_snapshots)
 
 

@@ -47,14 +47,13 @@ import textwrap
 import matplotlib
 import numpy as np
 
-
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 
-# Reading and the pure maths (compare/figure_data.py, no matplotlib), re-exported here.
+# Reading and the pure maths (compare/figures/figure_data.py, no matplotlib), re-exported here.
 from compare.io import atomic_file  # noqa: E402
 from compare.io import run_dir as _run_dir  # noqa: E402,F401
 from compare.figures.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH, SHARED_LAW,  # noqa: E402,F401
@@ -62,7 +61,7 @@ from compare.figures.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SA
                                  network_segments, point_positions, read_csv, read_summary,
                                  reference_radius, run_caption, scene_name, side_profile,
                                  side_wall_contacts)
-# The discharge pictures' data (compare/figure_data.py), re-exported here.
+# The discharge pictures' data (compare/figures/figure_data.py), re-exported here.
 from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRACTION,  # noqa: E402,F401
                                  SURFACE_COLOURS, _discharge_head, _fmt, _rest_text, cell_edges,
                                  discharge_info, displacement_radii, flow_fit_line, gate_name,
@@ -72,7 +71,7 @@ from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, ST
                                  ratios_title, flow_title, side_bins_title)
 # PNG writing (compare/figures/png_file.py), re-exported here.
 from compare.figures.png_file import SAVE_DPI, png_bytes  # noqa: E402,F401
-# The columns of the run's files (docs/outputs.md), as compare/run_dir.py reads them.
+# The columns of the run's files (docs/outputs.md), as compare/io/run_dir.py reads them.
 from compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
@@ -610,26 +609,8 @@ def plot_wall_ratios(run_dir, out_png, fraction=STATIC_FRACTION):
     return _save(fig, out_png)
 
 
-def plot_flow(run_dir, out_png):
-    """Flow during discharge in four panels against time since opening.
-
-    (a) cumulative removed mass (removals.csv; keystones removed by hand marked) with the
-    fitted flow line (slope summary flow_rate_mass, intercept fitted as in flow_fit_line) and,
-    when all removed discs weigh the same, a removed-disc count axis; (b) discs in the silo and
-    below the floor, and the moved fraction; (c) the three surface heights with the sink times
-    (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
-    """
-    d = flow_data(run_dir)
-    summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
-
-    title = flow_title(summary, info)
-    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
-    # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
-    # each.
-    _fixed_layout(fig, left=0.75, right=0.75, bottom=0.5, top=0.42 + 0.2 * (title.count("\n") + 1),
-                  wspace=1.45, hspace=0.45)
-    (ax_out, ax_n), (ax_s, ax_a) = axes
-
+def _removed_panel(ax_out, removals, info, t_end, summary):
+    """plot_flow's (a): cumulative removed mass, keystones, the fitted flow line, the first jam."""
     cumulative = np.cumsum(removals["mass"])
     ax_out.step(np.concatenate([[0.0], removals["t"], [t_end]]),
                 np.concatenate([[0.0], cumulative, cumulative[-1:] if len(cumulative) else [0]]),
@@ -657,6 +638,49 @@ def plot_flow(run_dir, out_png):
     ax_out.set_ylabel(f"removed mass [{units_of(summary)['mass']} per {units_of(summary)['length']}]")
     ax_out.set_title("(a) discs through the outlet", fontsize=10, loc="left", y=1.0)
     ax_out.legend(fontsize=8, loc="upper left")
+
+
+def _arch_panel(ax_a, flow, summary):
+    """plot_flow's (d): the arch's crown height and its discs against time."""
+    ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
+              label="crown height (left)")
+    ax_a.set_ylabel(f"arch crown Y [{units_of(summary)['length']}]")
+    ax_a.set_ylim(bottom=0)
+    twin = ax_a.twinx()
+    twin.plot(flow["t"], flow["arch_discs"], color="0.5", linewidth=0.8,
+              drawstyle="steps-post", label="discs in the arch (right)")
+    twin.set_ylabel("discs in the arch")
+    twin.set_ylim(bottom=0)
+    h1, l1 = ax_a.get_legend_handles_labels()
+    h2, l2 = twin.get_legend_handles_labels()
+    ax_a.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
+    ax_a.set_xlabel("time since opening [s]")
+    no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
+    ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
+                   fontsize=10, loc="left", y=1.0)
+
+
+def plot_flow(run_dir, out_png):
+    """Flow during discharge in four panels against time since opening.
+
+    (a) cumulative removed mass (removals.csv; keystones removed by hand marked) with the
+    fitted flow line (slope summary flow_rate_mass, intercept fitted as in flow_fit_line) and,
+    when all removed discs weigh the same, a removed-disc count axis; (b) discs in the silo and
+    below the floor, and the moved fraction; (c) the three surface heights with the sink times
+    (summary surface_sink_time) marked; (d) the arch over the outlet: crown height and discs.
+    """
+    d = flow_data(run_dir)
+    summary, info, removals, flow, t_end = (d[k] for k in ("summary", "info", "removals", "flow", "t_end"))
+
+    title = flow_title(summary, info)
+    fig, axes = plt.subplots(2, 2, sharex=True, figsize=(12, 8))
+    # A fixed layout (inches): the title's lines, a title above each panel, a right-hand axis on
+    # each.
+    _fixed_layout(fig, left=0.75, right=0.75, bottom=0.5, top=0.42 + 0.2 * (title.count("\n") + 1),
+                  wspace=1.45, hspace=0.45)
+    (ax_out, ax_n), (ax_s, ax_a) = axes
+
+    _removed_panel(ax_out, removals, info, t_end, summary)
 
     present = flow["discs_in_silo"] + flow["discs_below"]
     ax_n.plot(flow["t"], flow["discs_in_silo"], color="tab:blue", label="discs in the silo")
@@ -690,22 +714,7 @@ def plot_flow(run_dir, out_png):
     ax_s.set_title(f"(c) top surface in the wall and centre columns: "
                    f"{info.get('pattern', '?')}", fontsize=10, loc="left", y=1.0)
 
-    ax_a.plot(flow["t"], flow["arch_crown_y"], ".", color="tab:brown", markersize=3,
-              label="crown height (left)")
-    ax_a.set_ylabel(f"arch crown Y [{units_of(summary)['length']}]")
-    ax_a.set_ylim(bottom=0)
-    twin = ax_a.twinx()
-    twin.plot(flow["t"], flow["arch_discs"], color="0.5", linewidth=0.8,
-              drawstyle="steps-post", label="discs in the arch (right)")
-    twin.set_ylabel("discs in the arch")
-    twin.set_ylim(bottom=0)
-    h1, l1 = ax_a.get_legend_handles_labels()
-    h2, l2 = twin.get_legend_handles_labels()
-    ax_a.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
-    ax_a.set_xlabel("time since opening [s]")
-    no_arch = float(np.mean(np.isnan(flow["arch_crown_y"]))) if len(flow["t"]) else 0.0
-    ax_a.set_title(f"(d) arch from slit end to slit end (none in {no_arch:.0%} of samples)",
-                   fontsize=10, loc="left", y=1.0)
+    _arch_panel(ax_a, flow, summary)
     for ax in axes.flat:
         ax.grid(True, alpha=0.4)
         ax.set_xlim(0.0, t_end)

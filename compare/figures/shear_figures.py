@@ -1,6 +1,6 @@
 """Figures of paper 2's simple shear test (Sumita, Kiyama & Nishimura), from `dem run`
 directories of shear scenes (docs/outputs.md, "Shear outputs") and from the YADE runs of
-compare/shear_yade.py (same file layout for the series).
+compare/codes/shear_yade.py (same file layout for the series).
 
 - ``ratio``:   tau/sigma against shear strain, one panel per alpha, one curve per variant (with
   and without clusters, native and YADE): the analogue of the paper's Fig. 7;
@@ -10,8 +10,8 @@ compare/shear_yade.py (same file layout for the series).
 
 Usage, from the repository root::
 
-    /usr/bin/python3 -m compare.shear_figures ratio --runs A:LABEL:DIR ... --out fig7.png
-    /usr/bin/python3 -m compare.shear_figures network DIR:K[:TITLE] ... --out fig6.png
+    /usr/bin/python3 -m compare.figures.shear_figures ratio --runs A:LABEL:DIR ... --out fig7.png
+    /usr/bin/python3 -m compare.figures.shear_figures network DIR:K[:TITLE] ... --out fig6.png
 """
 
 import argparse
@@ -35,7 +35,7 @@ STYLES = {"free": ("0.2", "-"), "clusters": ("tab:red", "-"), "touching": ("tab:
 
 def read_series(path):
     """shear_series.csv as a dict of float arrays (the columns its header names;
-    compare.run_dir.read_header_csv)."""
+    compare.io.run_dir.read_header_csv)."""
     return _reading(read_header_csv, path, SERIES_NEEDED)
 
 
@@ -167,7 +167,7 @@ def plot_networks(items, out_png, ncols=2):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="compare.shear_figures", description=__doc__,
+    ap = argparse.ArgumentParser(prog="compare.figures.shear_figures", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("ratio", help="tau/sigma against strain (Fig. 7 analogue)")

@@ -1,15 +1,16 @@
-"""The one job pool of a comparison and of every study: ``--jobs`` places shared by the runs and
-the pictures.
+"""The one job pool of a comparison and of every study: ``--jobs`` places for the runs, and
+figure processes for the pictures.
 
 A run is a task of a thread that starts a program (the engine or a reference code) and waits for
-it; a picture is drawn in a figure process, forked from a server that imported the figure module
-once (a fork of a process that runs threads could inherit a held lock), and while it draws it
-holds one of the places (``draw``: a run task that waits for its figure process), so that no
-more programs run or draw at a time than there are places.
+it. A picture is drawn in a figure process, forked from a server that imported the figure module
+once (a fork of a process that runs threads could inherit a held lock): ``draw`` starts it at
+once, beside the runs (up to ``jobs`` figure processes); ``drawn`` waits for it, so that a run
+task that calls it holds one of the places while its picture is drawn (no more programs run or
+draw at a time than there are places).
 
     with JobPool(jobs, figures="compare.figures.runs") as pool:
         done = [pool.run(run_one, case) for case in cases]
-        drawn = pool.draw(plot, run_dir, png)
+        picture = pool.draw(plot, run_dir, png)
 
 ``in_order(fn, items, jobs)``: fn over the items, up to ``jobs`` at once, the results in the
 items' order (one job: in this thread).
@@ -50,13 +51,13 @@ class JobPool:
 
     def drawn(self, fn, *args):
         """fn(*args) in a figure process, waited for; its result (its error raised here)."""
-        if self._pictures is None:
-            raise RuntimeError("JobPool: a pool without figures draws nothing")
-        return self._pictures.submit(fn, *args).result()
+        return self.draw(fn, *args).result()
 
     def draw(self, fn, *args) -> cf.Future:
-        """fn(*args) drawn in a figure process, as a task that holds one place while it draws."""
-        return self.run(self.drawn, fn, *args)
+        """fn(*args) in a figure process, started at once beside the runs."""
+        if self._pictures is None:
+            raise RuntimeError("JobPool: a pool without figures draws nothing")
+        return self._pictures.submit(fn, *args)
 
 
 def in_order(fn, items, jobs: int) -> list:

@@ -17,7 +17,7 @@ each CSV as a dict of numpy arrays keyed by column (text columns str, counters i
 float). A file that is missing or malformed raises RunDirError, whose message starts with the
 file's path and says what is wrong (the missing file, key or column, the bad line).
 
-The same layout is written by compare/shear_yade.py (a shear's series, snapshots and a
+The same layout is written by compare/codes/shear_yade.py (a shear's series, snapshots and a
 summary.json of its own keys), which is read without ``strict``.
 """
 from __future__ import annotations

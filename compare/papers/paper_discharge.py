@@ -40,7 +40,7 @@ CONFIGS = [  # (tag, arrangement, scheme, dt, contact overrides)
 
 
 def scene_with(arr, contact, folder):
-    """The paper's discharge scene with the contact-law keys changed (compare.scene_toml: a key
+    """The paper's discharge scene with the contact-law keys changed (compare.io.scene_toml: a key
     the scene does not have is an error, never a silent no-op), written into folder."""
     path = folder / f"discharge_{arr}_{'_'.join(contact.values()) or 'paper'}.toml"
     return scene_toml.edit(SCENES / f"discharge_{arr}.toml", {f"contact.{k}": v for k, v in contact.items()}, path)
@@ -130,6 +130,30 @@ def run_order(plan):
     return sorted(range(len(plan)), key=lambda k: plan[k][3])
 
 
+def configuration_record(args, planned):
+    """A configuration whose runs have all ended: its members merged (``dem ensemble``'s gather),
+    its record, and the folder of the member its pictures show (None: no picture)."""
+    tag, arr, scheme, dt, contact, scene, ens, common = planned
+    proc = gather(args.dem, scene, ens, args.members, args.seed, common)
+    rec = {"tag": tag, "arrangement": arr.replace("_", "/"), "scheme": scheme, "dt": dt,
+           "contact": contact or "paper", "exit": proc.returncode}
+    plain = ens / "as_written" / "ensemble.json"
+    if plain.exists():
+        one = (json.loads(plain.read_text()).get("runs") or [{}])[0]
+        rec["as_written"] = one.get("discs_out_at_1s") \
+            if one.get("status") in ("discharged", "jammed", "emptied") else one.get("status", "-")
+    if not (ens / "ensemble.json").exists():
+        rec["error"] = proc.stderr.strip()[-400:]
+        return rec, None
+    rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
+    med = median_member(rec["ensemble"])
+    pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
+    if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
+        rec["pictured"] = med["member"]
+        return rec, pictured.path
+    return rec, None
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="out/paper_silo/discharge")
@@ -167,28 +191,12 @@ def main(argv=None):
             done, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for k in [k for k, futs in waiting.items() if not futs & pending]:
                 del waiting[k]
-                tag, arr, scheme, dt, contact, scene, ens, common = plan[k]
-                proc = gather(args.dem, scene, ens, args.members, args.seed, common)
-                rec = {"tag": tag, "arrangement": arr.replace("_", "/"), "scheme": scheme, "dt": dt,
-                       "contact": contact or "paper", "exit": proc.returncode}
-                plain = ens / "as_written" / "ensemble.json"
-                if plain.exists():
-                    one = (json.loads(plain.read_text()).get("runs") or [{}])[0]
-                    rec["as_written"] = one.get("discs_out_at_1s") \
-                        if one.get("status") in ("discharged", "jammed", "emptied") else one.get("status", "-")
-                if (ens / "ensemble.json").exists():
-                    rec["ensemble"] = json.loads((ens / "ensemble.json").read_text())
-                    med = median_member(rec["ensemble"])
-                    pictured = RunDir(ens / f"member_{med['member']:02d}") if med else None
-                    if pictured and pictured.status != "unstable" and pictured.file("snapshots").exists():
-                        rec["pictured"] = med["member"]
-                        drawing += [pool.run(draw_in, pool, pictured.path, out, tag, name)
-                                    for name, _ in PICTURES]
-                else:
-                    rec["error"] = proc.stderr.strip()[-400:]
+                rec, pictured = configuration_record(args, plan[k])
+                if pictured is not None:
+                    drawing += [pool.run(draw_in, pool, pictured, out, rec["tag"], name) for name, _ in PICTURES]
                 results[k] = rec
                 e = rec.get("ensemble", {})
-                print(f"{tag:34s} exit {proc.returncode}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
+                print(f"{rec['tag']:34s} exit {rec['exit']}  out@1s {fmt(e.get('discs_out_at_1s'))}  "
                       f"jam {e.get('jam_fraction', {}).get('value', '-')}  pattern {e.get('pattern', '-')}",
                       flush=True)
         for f in drawing:
@@ -221,7 +229,7 @@ def main(argv=None):
               "statistic (the jam fraction is of the members with a result).", "",
               "## The paper's statements against these ensembles", "",
               f"The paper's scheme (eq. 19, dt = 1e-4 s), {args.members} members each; peak ratios are "
-              "ensemble means (`compare/paper_claims.py` says how each is judged).", ""]
+              "ensemble means (`compare/papers/paper_claims.py` says how each is judged).", ""]
     paper = {r["arrangement"]: r["ensemble"] for r in results
              if r["scheme"] == "paper_eq19" and r["contact"] == "paper" and "ensemble" in r}
     lines += paper_claims.table(paper_claims.discharge(paper)) + ["",

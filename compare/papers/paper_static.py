@@ -148,7 +148,7 @@ def write_report(out_root, records, dem):
         lines.append(f"![{f.stem}]({f.name})")
     lines += ["", "## The paper's statements against these runs", "",
               "Each statement of section 5(1) (Kiyama & Fujimura 1983) measured on the runs at rest "
-              "(`compare/paper_claims.py` says how).", ""]
+              "(`compare/papers/paper_claims.py` says how).", ""]
     for scheme, dt in (PAPER, REFERENCE):
         rested = [by[(scheme, dt, s)] for s in ARRANGEMENTS
                   if (scheme, dt, s) in by and verdict(by[(scheme, dt, s)]) == "rest"]

@@ -55,7 +55,7 @@ leapfrog, half a step behind in v, is at 0.5), while a 10 % error in mu or k_n m
 t_c beyond it.
 Between codes that run the same discrete law the tolerance is CODE_REL = 1e-4 of the scale.
 
-``python3 -m compare.calibration --out DIR [--codes native,liggghts,yade[,lammps]]`` runs every
+``python3 -m compare.verdict.calibration --out DIR [--codes native,liggghts,yade[,lammps]]`` runs every
 scene in each code and writes DIR/calibration.md and DIR/calibration.json; exit 1 when a code is outside a
 tolerance, differs from another code, or fails to run. A code that cannot express a scene (LAMMPS:
 the open slit) is listed as refused and not run.
@@ -63,15 +63,14 @@ the open slit) is listed as refused and not run.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from compare.codes import backends
 from compare.cases.common import ROOT, Case, CaseError, disc_material, pair, resolve, Result
 from compare.verdict import study
 
@@ -451,14 +450,7 @@ def within(measured: dict, ref: dict, dt: float, other: dict | None = None) -> d
 
 def _refusal(code: str, c: Case) -> str:
     """Why the code cannot express the scene (its own translation, dry-run), or ''."""
-    if code == "native":
-        return ""
-    with tempfile.TemporaryDirectory() as tmp:
-        try:
-            importlib.import_module(f"compare.codes.{code}_backend").write_inputs(c, Path(tmp))
-        except CaseError as e:
-            return f"{code} cannot express it: {e}"
-    return ""
+    return backends.refusal(code, c)
 
 
 def run_scene(name: str, codes, out: Path, timeout: float = 300, reuse: bool = False) -> dict:
@@ -527,7 +519,7 @@ def table(rows: list, codes) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python3 -m compare.calibration", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python3 -m compare.verdict.calibration", description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", required=True, type=Path)
     ap.add_argument("--codes", default="native,liggghts,yade")
     ap.add_argument("--scenes", default="", help="comma-separated scene names (default: all)")

@@ -1,4 +1,4 @@
-"""The verdict on a collision scene (compare/calibration.py measures it): each code against the
+"""The verdict on a collision scene (compare/verdict/calibration.py measures it): each code against the
 analytic or independent reference within the scheme's first-order error in dt / t_c
 (calibration.tolerances), and each reference code against the native engine within
 calibration.CODE_REL of each quantity's scale (the codes run the same discrete law at the same dt);

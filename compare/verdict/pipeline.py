@@ -1,17 +1,17 @@
 """One pipeline for every comparison: entries (scene + options) -> runs in every code -> metrics.
 
 ``dem compare`` (python3 -m compare scene) and the studies (the list files under
-reference_inputs/agreement/) both call ``run``. For each entry (compare/plan.py) it
+reference_inputs/agreement/) both call ``run``. For each entry (compare/cases/plan.py) it
 1. refuses what a reference code cannot express, before any run (PlanError, exit 2);
 2. reads each reference code's effective constants back from the code itself and compares them
-   with ``dem resolve`` (compare/probe.py), and its walls, points, radii and start positions after
-   its setup against the case's (compare/geometry_probe.py): the translation check, metrics of
+   with ``dem resolve`` (compare/verdict/probe.py), and its walls, points, radii and start positions after
+   its setup against the case's (compare/verdict/geometry_probe.py): the translation check, metrics of
    every scene;
-3. runs the members in every code (compare/study.py's runners and readers) and judges them:
+3. runs the members in every code (compare/verdict/study.py's runners and readers) and judges them:
    deterministic kinds against tolerances matched to the codes' measured agreement, ensembles
-   by equivalence against declared margins: agree, disagree or inconclusive (compare/verdict.py).
+   by equivalence against declared margins: agree, disagree or inconclusive (compare/verdict/verdict.py).
 
-A *mutation* (compare/mutants.py) hands one reference code a deliberately wrong scene (one
+A *mutation* (compare/cases/mutants.py) hands one reference code a deliberately wrong scene (one
 constant changed) while the expected constants and every other code stay as they are; results
 of unmutated runs are reused from the baseline's folders.
 """
@@ -30,8 +30,9 @@ import numpy as np
 from compare.verdict import collision_judge, preflight, study, verdict, geometry_probe, probe, shear_judge
 from compare.cases import janssen, stats
 from compare.codes import native_backend
+from compare.codes.backends import refusals
 from compare.cases.common import Case, Result, scene_material_index, inward_normal, tangent
-from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, refusals, start_discs
+from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, start_discs
 from compare.figures import janssen_figure
 from compare.io.job_pool import in_order
 
@@ -87,9 +88,9 @@ def run_all(codes, case: Case, plan: Plan, out: Path, mutation=None) -> dict:
 # ------------------------------------------------------------------------ translation check
 
 def translation_check(plan: Plan, codes, out: Path, mutation=None) -> list:
-    """Each reference code's constants read back from the code (compare/probe.py) against
+    """Each reference code's constants read back from the code (compare/verdict/probe.py) against
     ``dem resolve`` to 1e-9 relative, and its walls, points, radii and start positions read back
-    after its setup (compare/geometry_probe.py) against the case's to 1e-9 of the scene's length."""
+    after its setup (compare/verdict/geometry_probe.py) against the case's to 1e-9 of the scene's length."""
     codes = codes_of(plan, codes)
     metrics = []
     case = member_case(plan, 0, start_discs(plan.shared))
@@ -147,7 +148,7 @@ def input_key(write) -> str:
 
 
 def probe_key(module, code: str, case: Case) -> str:
-    """The cache key of a probe (``module``: compare.probe or compare.geometry_probe): the bytes of
+    """The cache key of a probe (``module``: compare.verdict.probe or compare.verdict.geometry_probe): the bytes of
     the inputs it runs, written by the backend's own translation; any change to the translation
     (a mutant, a backend bug) gets its own probe, and cases that translate alike share one."""
     writer = module.write_probe_inputs if hasattr(module, "write_probe_inputs") else module.write_inputs
@@ -455,7 +456,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png, "fits": summary}
 
 
-JANSSEN_JUDGED = ("K", "lambda", "mu_w_eff")   # the fit's parameters with a margin (compare/margins.py)
+JANSSEN_JUDGED = ("K", "lambda", "mu_w_eff")   # the fit's parameters with a margin (compare/cases/margins.py)
 
 
 def janssen_metrics(plan: Plan, a: dict, b: dict, code: str) -> list:

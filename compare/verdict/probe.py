@@ -796,10 +796,10 @@ def check_case(case: Case, out_root: Path, codes=CODES, timeout: float = 120, re
 
 
 def main(argv=None) -> int:
-    """python3 -m compare.probe [--out DIR] [--codes ...]: probes the paper's translated cases
-    (compare.translate.cases) and prints each code's largest relative difference and wall time."""
+    """python3 -m compare.verdict.probe [--out DIR] [--codes ...]: probes the paper's translated cases
+    (compare.verdict.translate.cases) and prints each code's largest relative difference and wall time."""
 
-    ap = argparse.ArgumentParser(prog="python3 -m compare.probe")
+    ap = argparse.ArgumentParser(prog="python3 -m compare.verdict.probe")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--codes", default=",".join(CODES))
     a = ap.parse_args(argv)

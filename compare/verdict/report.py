@@ -226,10 +226,10 @@ def _ms(v) -> str:
 METHOD = [
     "- Each scene (the engine's TOML, resolved by `dem resolve`) is translated for each code; every code "
     "uses the contact law all three express (e_n = K_n x overlap, the total normal force clamped at 0, the "
-    "Coulomb cap on the total normal force, shear dashpot off while sliding: `compare/common.py`), velocity "
+    "Coulomb cap on the total normal force, shear dashpot off while sliding: `compare/cases/common.py`), velocity "
     "Verlet, the same dt. Whatever a code cannot express is refused before any run.",
     "- Translation check: each reference code's effective constants (k_n, k_t, both dashpots, mu per material "
-    "pair, mass and inertia, gravity, dt) are read back from the code itself (compare/probe.py) and compared "
+    "pair, mass and inertia, gravity, dt) are read back from the code itself (compare/verdict/probe.py) and compared "
     "with `dem resolve` to 1e-9 relative.",
     "- Collisions: each code's rebound against the analytic result (or an independent integration of the "
     "contact equations) within the scheme's first-order error in dt/t_c, and the codes against each other "
@@ -271,8 +271,8 @@ def headline(report: dict) -> list:
     return L
 
 
-def write(report: dict, out: Path) -> None:
-    out.mkdir(parents=True, exist_ok=True)
+def _plots(report: dict, out: Path) -> list:
+    """Draws the report's plots into out; [(title, PNG name)] of those written."""
     pngs = []
     if report.get("calibration"):
         plot_calibration(report["calibration"], out / "calibration.png")
@@ -301,6 +301,11 @@ def write(report: dict, out: Path) -> None:
     for sc in report.get("scenes", []):
         if plot_forest(report["metrics"], out / f"verdict_{sc['name']}.png", sc["name"]):
             pngs.append((f"Each metric's interval against its margin, {sc['name']}", f"verdict_{sc['name']}.png"))
+    return pngs
+
+
+def _agreement(report: dict, out: Path) -> None:
+    """out/agreement.json: the verdict, the scenes and every metric (with looks, mutants, attribution)."""
     agreement = {"verdict": report["verdict"], "profile": report.get("profile"), "codes": report["codes"],
                  "passed": report["passed"], "scenes": report.get("scenes", []), "metrics": report["metrics"]}
     if report.get("looks"):
@@ -311,6 +316,115 @@ def write(report: dict, out: Path) -> None:
         agreement["attribution"] = report["attribution"]
     write_text_atomic(out / "agreement.json", json.dumps(agreement, indent=1, default=float) + "\n")
 
+
+def _mutant_rows(mu: dict) -> list:
+    L = []
+    L += ["", "## Mutants (one constant of one reference code's translation changed)", "",
+          "A mutant is caught when a metric says disagree under it (the baseline agreeing there). Its effect on "
+          "each statistical metric is its interval of the difference from native, against the margin.", "",
+          "| mutant | code | verdict | caught | by a physical metric | metrics that disagree (tolerances or margins "
+          "off) | effect on the statistical metrics |", "|---|---|---|---|---|---|---|"]
+    for r in mu["rows"]:
+        by = "; ".join(f"{x['scene']}: {x['metric']} ({_fmt(x['by'])})" for x in r["metrics"][:6])
+        if not r.get("applicable", True):
+            L.append(f"| {r['mutant']} | {r['code']} | | n/a: changes nothing in these scenes | | | |")
+            continue
+        eff = "; ".join(f"{e['metric']}: {_interval(dict(e, kind='statistical'))} {e['verdict']}"
+                        for e in r.get("effects", [])[:8])
+        need = r.get("proves") or []
+        got = (" (must disagree by " + ", ".join(need) + "; did by " + (", ".join(r.get("proved") or []) or "none")
+               + ")") if need else ""
+        L.append(f"| {r['mutant']} | {r['code']} | {r.get('verdict', '')} | {'yes' if r['caught'] else '**NO**'}{got} | "
+                 f"{'yes' if r['caught_physically'] else 'no'} | {by} | {eff} |")
+    return L
+
+
+def _attribution_and_collisions(report: dict) -> list:
+    L = []
+    if report.get("attribution"):
+        L += ["", "## Attribution: which law option closes a failing metric", "",
+              "| scene | native law option switched to the shared value | metrics failing before | after |",
+              "|---|---|---|---|"]
+        for a in report["attribution"]:
+            for row in a["rows"]:
+                L.append(f"| {a['scene']} | {row['option']} | {a['failing']} | {row['failing']} |")
+            L.append(f"| {a['scene']} | **verdict** | {a['verdict']} | |")
+    if report.get("calibration"):
+        codes = [c for c in ("native", "liggghts", "yade", "lammps") if c in report["codes"]]
+        L += ["", "## Collisions (Chung & Ooi's tests as scenes: compare/verdict/calibration.py)", "",
+              "Each code against the reference (**x**: outside the tolerance), and the reference codes against "
+              "the native engine.", "", calibration.table(report["calibration"], codes)]
+    return L
+
+
+def _static_rows(report: dict) -> list:
+    L = []
+    if report.get("static"):
+        L += ["", "## Static cases: wall totals (force by the discs on each wall)", ""]
+        for st in report["static"]:
+            if "results" in st:
+                L += [f"{st['case']} (frozen packing, {st['n_discs']} discs):", "",
+                      "| code | status | wall | normal | shear | wall time [s] |", "|---|---|---|---|---|---|"]
+                for c, r in st["results"].items():
+                    if r["status"] != "ok":
+                        L.append(f"| {c} | FAILED: {r['reason']} | | | | |")
+                        continue
+                    for w, t in r["totals"].items():
+                        L.append(f"| {c} | ok | {w} | {t['normal']:.9g} | {t['shear']:.9g} | {r['wall_time_s']:.1f} |")
+                L.append("")
+            else:
+                L += [f"{st['case']} ({st['members']} members per code from the scene's start; mean ± s.e. (members)):",
+                      "", "| code | " + " | ".join(k for k in st["summary"]["native"] if k != "failed") + " |",
+                      "|---|" + "---|" * (len(st["summary"]["native"]) - 1)]
+                for c, v in st["summary"].items():
+                    L.append(f"| {c} | " + " | ".join(_ms(x) for k, x in v.items() if k != "failed") + " |")
+                L.append("")
+    return L
+
+
+def _janssen_and_shear(report: dict) -> list:
+    L = []
+    for jd in report.get("janssen", []):
+        L += ["", f"## Janssen column {jd['case']}", ""] + jd.get("table", [])
+    for sd in report.get("shear", []):
+        cols = sd["keys"] + ["peak_raw", "strain_at_peak"]
+        L += ["", f"## Shear box {sd['case']} (mean ± s.e. (members); dt {sd.get('dt', float('nan')):g} s)", "",
+              "| code | at rest before the shear | " + " | ".join(label(k) for k in cols) + " |",
+              "|---|---|" + "---|" * len(cols)]
+        for c, v in sd["summary"].items():
+            L.append(f"| {c} | {sum(v['rested'])}/{len(v['rested'])} | " + " | ".join(_ms(v[k]) for k in cols) + " |")
+            for f in v["failed"]:
+                L.append(f"| {c} | FAILED {f} |" + " |" * len(cols))
+    return L
+
+
+def _discharge_rows(report: dict) -> list:
+    L = []
+    if report.get("discharge"):
+        L += ["", "## Discharge ensembles (mean ± s.e. (members))", "",
+              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jammed (Wilson 95 %) | "
+              "windowed peak side | windowed peak bottom | raw peak side, median [95 %] | side normal during flow | "
+              "side friction during flow | bottom normal during flow |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for name, s in report["discharge"].items():
+            for c, v in s.items():
+                lo, hi = wilson(v["jammed"], v["ok_members"]) if v["ok_members"] else (float("nan"),) * 2
+                pk = v["peak_ratio_side"]
+                L.append(f"| {name} | {c} | {v['members']} ({v['failed']}) | {_ms(v['discs_out'])} | "
+                         f"{_ms(v['flow_rate'])} | {v['jammed']}/{v['ok_members']} [{lo:.2f}, {hi:.2f}] | "
+                         f"{_ms(v['peak_window_side'])} | {_ms(v['peak_window_bottom'])} | "
+                         f"{_fmt(pk[0])} [{_fmt(pk[1])}, {_fmt(pk[2])}] | {_ms(v['flow_side_normal'])} | "
+                         f"{_ms(v['flow_side_shear'])} | {_ms(v['flow_bottom_normal'])} |")
+                for f in v["failures"]:
+                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | | | | | |")
+    return L
+
+
+def write(report: dict, out: Path) -> None:
+    """out/report.md, out/agreement.json and the plots."""
+    out.mkdir(parents=True, exist_ok=True)
+    pngs = _plots(report, out)
+    _agreement(report, out)
     L = [f"# Agreement report ({report.get('profile', 'quick')} profile)", ""] + headline(report)
     mu = report.get("mutants")
     if mu:
@@ -333,84 +447,8 @@ def write(report: dict, out: Path) -> None:
         L.append(f"| {m['scene']} | {m['metric']} | {_fmt(m['values'])} | {_fmt(m['tolerance'])} | {_interval(m)} | "
                  f"{_verdict(m['verdict'])} | {note} |")
     if mu:
-        L += ["", "## Mutants (one constant of one reference code's translation changed)", "",
-              "A mutant is caught when a metric says disagree under it (the baseline agreeing there). Its effect on "
-              "each statistical metric is its interval of the difference from native, against the margin.", "",
-              "| mutant | code | verdict | caught | by a physical metric | metrics that disagree (tolerances or margins "
-              "off) | effect on the statistical metrics |", "|---|---|---|---|---|---|---|"]
-        for r in mu["rows"]:
-            by = "; ".join(f"{x['scene']}: {x['metric']} ({_fmt(x['by'])})" for x in r["metrics"][:6])
-            if not r.get("applicable", True):
-                L.append(f"| {r['mutant']} | {r['code']} | | n/a: changes nothing in these scenes | | | |")
-                continue
-            eff = "; ".join(f"{e['metric']}: {_interval(dict(e, kind='statistical'))} {e['verdict']}"
-                            for e in r.get("effects", [])[:8])
-            need = r.get("proves") or []
-            got = (" (must disagree by " + ", ".join(need) + "; did by " + (", ".join(r.get("proved") or []) or "none")
-                   + ")") if need else ""
-            L.append(f"| {r['mutant']} | {r['code']} | {r.get('verdict', '')} | {'yes' if r['caught'] else '**NO**'}{got} | "
-                     f"{'yes' if r['caught_physically'] else 'no'} | {by} | {eff} |")
-    if report.get("attribution"):
-        L += ["", "## Attribution: which law option closes a failing metric", "",
-              "| scene | native law option switched to the shared value | metrics failing before | after |",
-              "|---|---|---|---|"]
-        for a in report["attribution"]:
-            for row in a["rows"]:
-                L.append(f"| {a['scene']} | {row['option']} | {a['failing']} | {row['failing']} |")
-            L.append(f"| {a['scene']} | **verdict** | {a['verdict']} | |")
-    if report.get("calibration"):
-        codes = [c for c in ("native", "liggghts", "yade", "lammps") if c in report["codes"]]
-        L += ["", "## Collisions (Chung & Ooi's tests as scenes: compare/calibration.py)", "",
-              "Each code against the reference (**x**: outside the tolerance), and the reference codes against "
-              "the native engine.", "", calibration.table(report["calibration"], codes)]
-    if report.get("static"):
-        L += ["", "## Static cases: wall totals (force by the discs on each wall)", ""]
-        for st in report["static"]:
-            if "results" in st:
-                L += [f"{st['case']} (frozen packing, {st['n_discs']} discs):", "",
-                      "| code | status | wall | normal | shear | wall time [s] |", "|---|---|---|---|---|---|"]
-                for c, r in st["results"].items():
-                    if r["status"] != "ok":
-                        L.append(f"| {c} | FAILED: {r['reason']} | | | | |")
-                        continue
-                    for w, t in r["totals"].items():
-                        L.append(f"| {c} | ok | {w} | {t['normal']:.9g} | {t['shear']:.9g} | {r['wall_time_s']:.1f} |")
-                L.append("")
-            else:
-                L += [f"{st['case']} ({st['members']} members per code from the scene's start; mean ± s.e. (members)):",
-                      "", "| code | " + " | ".join(k for k in st["summary"]["native"] if k != "failed") + " |",
-                      "|---|" + "---|" * (len(st["summary"]["native"]) - 1)]
-                for c, v in st["summary"].items():
-                    L.append(f"| {c} | " + " | ".join(_ms(x) for k, x in v.items() if k != "failed") + " |")
-                L.append("")
-    for jd in report.get("janssen", []):
-        L += ["", f"## Janssen column {jd['case']}", ""] + jd.get("table", [])
-    for sd in report.get("shear", []):
-        cols = sd["keys"] + ["peak_raw", "strain_at_peak"]
-        L += ["", f"## Shear box {sd['case']} (mean ± s.e. (members); dt {sd.get('dt', float('nan')):g} s)", "",
-              "| code | at rest before the shear | " + " | ".join(label(k) for k in cols) + " |",
-              "|---|---|" + "---|" * len(cols)]
-        for c, v in sd["summary"].items():
-            L.append(f"| {c} | {sum(v['rested'])}/{len(v['rested'])} | " + " | ".join(_ms(v[k]) for k in cols) + " |")
-            for f in v["failed"]:
-                L.append(f"| {c} | FAILED {f} |" + " |" * len(cols))
-    if report.get("discharge"):
-        L += ["", "## Discharge ensembles (mean ± s.e. (members))", "",
-              "| scene | code | members (failed) | discs out | flow rate [discs/s] | jammed (Wilson 95 %) | "
-              "windowed peak side | windowed peak bottom | raw peak side, median [95 %] | side normal during flow | "
-              "side friction during flow | bottom normal during flow |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-        for name, s in report["discharge"].items():
-            for c, v in s.items():
-                lo, hi = wilson(v["jammed"], v["ok_members"]) if v["ok_members"] else (float("nan"),) * 2
-                pk = v["peak_ratio_side"]
-                L.append(f"| {name} | {c} | {v['members']} ({v['failed']}) | {_ms(v['discs_out'])} | "
-                         f"{_ms(v['flow_rate'])} | {v['jammed']}/{v['ok_members']} [{lo:.2f}, {hi:.2f}] | "
-                         f"{_ms(v['peak_window_side'])} | {_ms(v['peak_window_bottom'])} | "
-                         f"{_fmt(pk[0])} [{_fmt(pk[1])}, {_fmt(pk[2])}] | {_ms(v['flow_side_normal'])} | "
-                         f"{_ms(v['flow_side_shear'])} | {_ms(v['flow_bottom_normal'])} |")
-                for f in v["failures"]:
-                    L.append(f"| {name} | {c} | FAILED member: {f} | | | | | | | | | |")
+        L += _mutant_rows(mu)
+    L += _attribution_and_collisions(report) + _static_rows(report) + _janssen_and_shear(report) + _discharge_rows(report)
     L += ["", "## Plots", ""] + [f"### {t}\n\n![{t}]({p})\n" for t, p in pngs]
     L += ["## What the translations cannot express exactly", "",
           "- The paper's incremental normal spring and its no-tension rule on the elastic force (eqs. 7a, 8) and "
@@ -419,5 +457,5 @@ def write(report: dict, out: Path) -> None:
           "- LIGGGHTS walls are triangle meshes: a wall's end acts as a point contact of the mesh that owns it, "
           "where the engine has explicit points.",
           "- YADE combines the two materials of a contact in series; the translation solves the wall material "
-          "for the resolved disc-wall constants (compare/yade_backend.py).", ""]
+          "for the resolved disc-wall constants (compare/codes/yade_backend.py).", ""]
     write_text_atomic(out / "report.md", "\n".join(L) + "\n")

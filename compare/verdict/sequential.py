@@ -6,7 +6,7 @@ as the first) to every scene that still has an inconclusive statistical metric, 
 agrees or disagrees, the scene reaches --max-members, or the budget ends. Earlier members are read
 back, not run again (their inputs are unchanged). The error rates hold over the looks by a split
 of the level over the planned looks (Bonferroni): with K looks, each look judges at alpha / K, so
-that the chance of a false verdict at any look is at most alpha (compare/stats.py Levels).
+that the chance of a false verdict at any look is at most alpha (compare/cases/stats.py Levels).
 """
 from __future__ import annotations
 

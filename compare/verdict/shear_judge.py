@@ -4,7 +4,7 @@ The judge (``judge``): per member, the initial normal stress sigma0 (at the star
 the windowed peak of tau/sigma (largest centred moving average over WINDOW of strain), the mean
 tau/sigma in each strain band of BANDS (the curve against shear displacement) and the dilation
 (the plate's rise from the start of the shear to its end); each an equivalence metric of the
-ensemble means against the shear margin (compare/stats.py, compare/margins.py); and, per code,
+ensemble means against the shear margin (compare/cases/stats.py, compare/cases/margins.py); and, per code,
 whether every member came to rest before the shear (a member sheared from motion is not the
 paper's test).
 

@@ -1,13 +1,12 @@
-"""The runners and the judges of the comparison (compare/pipeline.py drives them): one run of
+"""The runners and the judges of the comparison (compare/verdict/pipeline.py drives them): one run of
 one code, and the metrics of a static case (deterministic: every code rests from the same frozen
-packing) and of a discharge ensemble (statistical: compare/stats.py).
+packing) and of a discharge ensemble (statistical: compare/cases/stats.py).
 
 A failed run of any code (crash, timeout, blow-up, lost discs, missing output) makes every
 metric that needs it fail, with the code's reason: a failure is never agreement.
 """
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import tempfile
@@ -16,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from compare.codes import backends
 from compare.cases import stats
 from compare.verdict import verdict
 from compare.cases.common import ROOT, SHARED_VARIANT, Case, Result, failed, resolve
@@ -27,7 +27,7 @@ SCENES = ROOT / "reference_inputs" / "scenes"
 LATTICE_DT = {12: 2.5e-5, 13: 4e-5}  # durations must be whole numbers of steps (YADE)
 DEFAULT_DT = 5e-5
 
-# Static tolerances of a frozen-packing comparison (relative): compare/pipeline.py passes those
+# Static tolerances of a frozen-packing comparison (relative): compare/verdict/pipeline.py passes those
 # matched to the codes' agreement; these defaults are the loose ones of a first look.
 TOL_TOTAL = 0.03        # wall normal totals
 TOL_SHEAR_TOTAL = 0.10  # side-wall friction totals
@@ -44,7 +44,7 @@ FLOW_MIN_SAMPLES = 10
 
 
 def backend(code: str):
-    return importlib.import_module(f"compare.codes.{code}_backend")
+    return backends.backend(code)
 
 
 def run_code(code: str, case: Case, out: Path, timeout: float, threads: int = 1,
@@ -91,7 +91,7 @@ def same_inputs(be, case: Case, out: Path, threads: int = 1) -> bool:
 
 
 def metric(name, scene, values: dict, tol, passed, note="", unit="") -> dict:
-    """A deterministic metric: agree within its tolerance, else disagree (compare/verdict.py)."""
+    """A deterministic metric: agree within its tolerance, else disagree (compare/verdict/verdict.py)."""
     return {"metric": name, "scene": scene, "values": values, "tolerance": tol, "pass": bool(passed),
             "verdict": "agree" if passed else "disagree", "note": note, "unit": unit}
 
@@ -363,7 +363,7 @@ def ensemble_profile(members: list) -> dict:
 def profile_stat(ref: dict, other: dict, group: str, n_a: int, n_b: int) -> dict:
     """The cumulative time-averaged normal profiles of the walls of ``group`` (side or bottom) as a
     profile statistic: at each point the difference of the ensemble means (Welch), relative to its
-    wall's total in the reference (compare/stats.py judges every point against the margin)."""
+    wall's total in the reference (compare/cases/stats.py judges every point against the margin)."""
     walls = [w for w, p in ref.items() if p["group"].startswith(group)]
     base = {"type": "profile", "relative": True, "n": [n_a, n_b], "walls": walls}
     if not walls or any(w not in other or len(other[w]["normal"]) != len(ref[w]["normal"]) for w in walls):
@@ -406,7 +406,7 @@ def discharge_compare(scene_name: str, per_code: dict, options) -> tuple[list, d
     """per_code: code -> list of (Result, measures), members in the same order in every code (member
     k of every code starts from the same state: paired where that narrows the interval). Every
     kept metric kind (options.metrics, default all) is an equivalence metric with its margin
-    (compare/margins.py): the means, the cumulative profiles point by point, the jam fraction."""
+    (compare/cases/margins.py): the means, the cumulative profiles point by point, the jam fraction."""
     keep = set(options.metrics) if options.metrics else None
     summary = {c: discharge_summary(runs) for c, runs in per_code.items()}
     ref = summary.get("native")

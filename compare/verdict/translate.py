@@ -2,7 +2,7 @@
 (``python3 -m compare translate``; ``--check`` in CI fails when they are stale).
 
 YADE's folders hold only ``yade_case.json``, the case's data: its script is one template
-(compare/yade_template.py) for every case, so it is not committed ten times. ``python3 -m
+(compare/codes/yade_template.py) for every case, so it is not committed ten times. ``python3 -m
 compare translate --out DIR`` writes complete folders, each runnable there with
 ``yade -n -x yade_script.py``.
 

@@ -1,8 +1,8 @@
 """The three-valued verdict: agree, disagree or inconclusive, per metric, per scene and overall.
 
 Deterministic metrics (collisions, the frozen static silo, the translation read-back) agree or
-disagree by their tolerances. Statistical metrics carry their statistic (compare/stats.py) and
-margin (compare/margins.py) and are judged once the whole report is in, because the disagree
+disagree by their tolerances. Statistical metrics carry their statistic (compare/cases/stats.py) and
+margin (compare/cases/margins.py) and are judged once the whole report is in, because the disagree
 interval is split over all of the report's statistical metrics. A metric that could not be
 judged (a failed run, too few members, a settle that did not reach rest) is inconclusive with its
 reason, never disagree.

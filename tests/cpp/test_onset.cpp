@@ -25,7 +25,7 @@ const double kRho = 2.65, kR = 1.0;
 const double kMass = kRho * M_PI * kR * kR;
 const double kKn = 9.45e7;  // the paper's K_n (3.64e4 rho g)
 const double kZeta = 0.3;
-const double kV0 = 50.0;    // cm/s, as compare/calibration.py's collisions
+const double kV0 = 50.0;    // cm/s, as compare/verdict/calibration.py's collisions
 
 // The clamped head-on contact, exactly: overlap x(t) = v0/wd e^{-b t} sin(wd t) until the force
 // k x + c x' vanishes at t1; then the bodies fly apart at -x'(t1): e = -x'(t1) / v0.

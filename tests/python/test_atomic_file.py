@@ -1,4 +1,4 @@
-"""compare.atomic_file: a file is written whole or left as it was."""
+"""compare.io.atomic_file: a file is written whole or left as it was."""
 import pytest
 
 from compare.io import atomic_file

@@ -1,5 +1,5 @@
 """`dem run DISCHARGE.toml --engine liggghts|lammps|yade`: the native discharge outputs from a
-reference code (compare/engine_run.py, compare/engine_flow.py).
+reference code (compare/codes/reference_run.py, compare/codes/frame_measures.py).
 
 The paper's 17/18 silo (350 discs), shortened with --set (settling 0.3 s, 0.2 s of flow, dt
 5e-5 s), runs in each code; its folder must hold the files the native run of the same scene

@@ -1,4 +1,4 @@
-"""compare/engine_flow.py: the flow measures of a reference code's discharge, on hand-made frames
+"""compare/codes/frame_measures.py: the flow measures of a reference code's discharge, on hand-made frames
 whose answers follow from the definitions (docs/outputs.md); each check next to a changed input
 that must change its answer."""
 from __future__ import annotations

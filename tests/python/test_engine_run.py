@@ -1,9 +1,9 @@
 """`dem run SCENE --engine liggghts|lammps`: a scene run in the real reference code, written as the
-engine's run folder (compare/engine_run.py).
+engine's run folder (compare/codes/reference_run.py).
 
 A small silo (14 discs) rests in the engine; the rested packing is a file scene that every code
 runs for 0.05 s. The reference codes' wall totals must lie within the comparison's static
-tolerances (compare/pipeline.py) of the engine's run of the same scene, the folder must pass the
+tolerances (compare/verdict/pipeline.py) of the engine's run of the same scene, the folder must pass the
 strict reader and the figure tool, a scene the code cannot express exits 2 naming the field, and a
 blow-up and a timeout exit 3 and 4 with the program's message. Runs need the programs (skipped
 without them, except in CI, which installs them)."""
@@ -165,7 +165,7 @@ def test_a_rested_scene_in_a_reference_code_carries_the_native_wall_loads(rested
 @pytest.mark.parametrize("code", [pytest.param("lammps", marks=needs_lmp),
                                   pytest.param("liggghts", marks=needs_liggghts)])
 def test_the_wall_load_check_fails_on_a_translation_with_the_density_x1_02(rested, dem_binary, code):
-    """The mutant (DEM_ENGINE_MUTANT, compare/engine_run.py): the code is given discs 2 % heavier,
+    """The mutant (DEM_ENGINE_MUTANT, compare/codes/reference_run.py): the code is given discs 2 % heavier,
     the folder still measures against the scene; the floor carries 2 % more than the native run's,
     beyond TOL_STATIC_TOTAL, and the check above says which walls."""
     out = rested / f"{code}_mutant"

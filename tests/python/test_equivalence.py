@@ -1,4 +1,4 @@
-"""The equivalence verdict's error rates on synthetic normal data (compare/stats.py, sequential.py).
+"""The equivalence verdict's error rates on synthetic normal data (compare/cases/stats.py, sequential.py).
 
 Members are drawn from normal distributions with a known relative difference between the codes.
 The false-agree rate (true difference on the margin) and the false-disagree rate (true difference

@@ -1,4 +1,4 @@
-"""compare.geometry_probe: each code's walls, points, radii and start positions, read back from the
+"""compare.verdict.geometry_probe: each code's walls, points, radii and start positions, read back from the
 code after its setup, equal the case's to 1e-9 of the scene's length scale; a moved wall, point,
 radius or position fails naming the item. And the probes' cache key (pipeline.probe_key) is the
 bytes of the translated inputs: a translation that differs gets its own probe.

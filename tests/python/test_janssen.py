@@ -1,4 +1,4 @@
-"""The ensemble Janssen analysis (compare/janssen.py): the weighted fit recovers known parameters
+"""The ensemble Janssen analysis (compare/cases/janssen.py): the weighted fit recovers known parameters
 from synthetic noisy Janssen profiles within its 95 % intervals, at about the nominal rate; K and
 mu_w,eff follow validation.md's formulas; the r^2 gate; wrong profiles (hydrostatic, mu_w
 changed) fail the comparison; the member checks catch a broken force balance. Every expected

@@ -1,4 +1,4 @@
-"""compare.probe: each code's effective constants, read back from the code, equal the resolved
+"""compare.verdict.probe: each code's effective constants, read back from the code, equal the resolved
 scene's to 1e-9, and a wrong translation (a backend that scales one constant, or a case whose
 resolved constants were changed for the code) fails compare_constants naming the quantity.
 

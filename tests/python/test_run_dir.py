@@ -1,4 +1,4 @@
-"""compare.run_dir, the one reader of a `dem run` directory: real runs (a fill, a discharge, a
+"""compare.io.run_dir, the one reader of a `dem run` directory: real runs (a fill, a discharge, a
 shear) read with every key docs/outputs.md promises checked, the files agree with the summary,
 and a missing or malformed file is an error that names it."""
 import importlib.util
@@ -55,7 +55,7 @@ def test_the_checked_keys_are_those_docs_outputs_md_promises():
     for keys in (SUMMARY_KEYS, WALL_KEYS):
         assert set(keys) <= documented, set(keys) - documented
     discharge = DOC[DOC.index("## Discharge outputs"):DOC.index("Files:")]
-    shear = DOC[DOC.index("- summary.json: `\"status\"`: `sheared`"):DOC.index("`compare/shear_figures.py` draws")]
+    shear = DOC[DOC.index("- summary.json: `\"status\"`: `sheared`"):DOC.index("`compare/figures/shear_figures.py` draws")]
     for keys, text in ((DISCHARGE_KEYS, discharge), (SHEAR_KEYS, shear)):
         named = set(re.findall(r"`(\w+)`", text)) | set(re.findall(r"`(\w+)` \(and `_windowed`\)", text))
         named |= {k + "_windowed" for k in named}

@@ -1,4 +1,4 @@
-"""compare.scene_toml, the one TOML writer: values, documents that tomllib reads back equal
+"""compare.io.scene_toml, the one TOML writer: values, documents that tomllib reads back equal
 (every committed scene), edits that refuse keys the scene does not have, relative file paths
 rebased, and the scene generators that write through it."""
 import json

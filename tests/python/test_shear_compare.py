@@ -1,4 +1,4 @@
-"""The shear kind of `dem compare` (compare/shear.py): paper 2's shear box planned from its scene,
+"""The shear kind of `dem compare` (compare/cases/shear.py): paper 2's shear box planned from its scene,
 LIGGGHTS' refusal before any run, the one translation of each code (native scene, YADE case) for
 a jittered member, the bond-set mutant, the judge, and (with YADE) a small box end to end."""
 import dataclasses
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from compare.cases import margins, mutants, plan, shear, stats
-from compare.codes import native_backend, yade_backend
+from compare.codes import backends, native_backend, yade_backend
 from compare.verdict import shear_judge, verdict
 from compare.cases.common import SHARED_VARIANT, Result, resolve
 
@@ -75,7 +75,7 @@ def test_liggghts_refuses_the_shear_box_before_any_run(tmp_path, dem_binary):
         assert ("clusters.bonds" in p.stderr and "bond_style harmonic" in p.stderr) == has_bonds
         assert "yade cannot" not in p.stderr and not out.exists()
     p = _plan("shear_a50_clusters")
-    assert plan.refusals(p, ("native", "yade")) == []
+    assert backends.refusals(p, ("native", "yade")) == []
 
 
 def test_a_list_line_names_the_codes_it_runs(tmp_path):
@@ -176,7 +176,7 @@ def _result(code, ratio_scale=1.0, rise=0.5, seed=0, rest=True):
 
 
 def _judged(metrics):
-    """The metrics judged as a report judges them (compare/verdict.py)."""
+    """The metrics judged as a report judges them (compare/verdict/verdict.py)."""
     return verdict.finalize(metrics)
 
 
