@@ -5,6 +5,8 @@ measures of the Python comparison layer (compare/, or another package) from its 
 
     /usr/bin/python3 scripts/engine_shape.py [SRC_DIR] [--top N]
     /usr/bin/python3 scripts/engine_shape.py --compare [PACKAGE_DIR] [--top N]
+    /usr/bin/python3 scripts/engine_shape.py --markdown            # docs/architecture.md's figures
+    /usr/bin/python3 scripts/engine_shape.py --check docs/architecture.md
 
 - floors: the longest chain of #include "..." from any file (a file including nothing of the
   engine is floor 1);
@@ -245,13 +247,60 @@ def python_shape(pkg: Path, top: int):
         print(f"  {length:4d} lines  {where}  {fname}")
 
 
+BEGIN = "<!-- measured by /usr/bin/python3 scripts/engine_shape.py --markdown (checked by the tests) -->"
+END = "<!-- end of the measured shape -->"
+
+
+def markdown(root: Path) -> list[str]:
+    """docs/architecture.md's block of figures, both layers, as measured now."""
+    src = root / "engine" / "src"
+    g = graph(src)
+    n, _ = floors(g)
+    fns = functions(src)
+    over = [f for f in fns if f[0] > 100]
+    longest = ", ".join(f"`{head.split('(')[0].split()[-1]}` {length} ({where.split(':')[0]})"
+                        for length, where, head in fns[:3])
+    mods, pg, in_function, long_py = py_graph(root / "compare")
+    fg = folder_graph(mods, pg)
+    modules = sum(1 for f in mods.values() if f.name != "__init__.py")
+    over_py = [x for x in long_py if x[0] > 100]
+    longest_py = ", ".join(f"`{name}` {length} ({where.split(':')[0]})" for length, where, name in long_py[:3])
+    return [BEGIN,
+            f"- engine/src: {len(g)} files, {n} include floors, {len(circles(g))} unit circles; "
+            f"{len(over)} functions over 100 lines; the longest {longest}.",
+            f"- compare/: {modules} modules in {len(fg)} folders, {max(folder_floors(fg).values())} folder floors, "
+            f"{len(strongly_connected(pg))} circles between modules and {len(strongly_connected(fg))} between "
+            f"folders, {len(in_function)} imports inside functions; {len(over_py)} functions over 100 lines; "
+            f"the longest {longest_py}.",
+            END]
+
+
+def check(doc: Path, root: Path) -> int:
+    lines = doc.read_text().splitlines()
+    if BEGIN not in lines or END not in lines:
+        print(f"{doc}: no block between '{BEGIN}' and '{END}'")
+        return 1
+    have, want = lines[lines.index(BEGIN):lines.index(END) + 1], markdown(root)
+    if have != want:
+        print(f"{doc}: its measured figures are stale; now:\n" + "\n".join(want))
+        return 1
+    return 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("src", nargs="?", default=None)
     ap.add_argument("--top", type=int, default=5)
     ap.add_argument("--compare", action="store_true", help="measure a Python package (default compare/)")
+    ap.add_argument("--markdown", action="store_true", help="the figures docs/architecture.md quotes")
+    ap.add_argument("--check", type=Path, metavar="DOC", help="exit 1 when DOC's figures differ from the measure")
     a = ap.parse_args()
     root = Path(__file__).resolve().parents[1]
+    if a.markdown:
+        print("\n".join(markdown(root)))
+        return 0
+    if a.check:
+        return check(a.check, root)
     if a.compare:
         python_shape(Path(a.src or root / "compare").resolve(), a.top)
         return
@@ -267,4 +316,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
