@@ -61,7 +61,8 @@ void add_member_options(CLI::App& e, EnsembleArgs& a) {
   e.add_flag("--no-vtu", a.ov.no_vtu,
              "the members write no VTU files and no PVD indexes, as dem run --no-vtu (no part of\n"
              "the ensemble's identity)");
-  add_set_option(e, a.ov.sets)->description("change one value of the scene as dem run --set does (repeatable)");
+  add_set_option(e, a.ov.sets)->description("change one value of the scene as dem run --set does (repeatable; merge\n"
+                                                  "refuses members of other sets)");
   e.add_flag("--quiet", a.quiet, "no progress lines");
 }
 
