@@ -3,6 +3,7 @@
 set -euo pipefail
 PKGS=(cmake g++ make pkg-config libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev
       libgtest-dev googletest libbenchmark-dev
+      libcli11-dev   # the command line's declarations (engine/src/cli)
       python3-dev pybind11-dev python3-pybind11 python3-setuptools    # the Python module dem (engine/python)
       python3-numpy python3-scipy python3-matplotlib python3-pil python3-meshio python3-pytest
       python3-pytest-xdist   # pytest on every core (tests/CMakeLists.txt)

@@ -66,6 +66,30 @@ def test_bad_scene_is_refused(tmp_path, run_dem, case, text, expect):
     assert not out.exists(), f"{case}: output directory left behind"
 
 
+# A misspelt key is named as itself with the key it was meant to be, before any value is read:
+# never as the required key it left missing, in whichever table it is.
+MISSPELT = [
+    ("required key", edit(BASE, "scheme = ", "schem = "), "integrator.schem: unknown key; did you mean `scheme`? (line 11)"),
+    ("table", edit(BASE, "[integrator]", "[integrater]"), "integrater: unknown key; did you mean `integrator`?"),
+    ("in a later table", edit(edit(BASE, "dt = 0.0001", ""), "time = 5.0 ", "tme = 5.0 "),
+     "end.tme: unknown key; did you mean `time`?"),
+    ("array of tables", edit(BASE, "[[pairs]]", "[[pairs]]\nmuu = 0.1"), "pairs[0].muu: unknown key; did you mean `mu`?"),
+    ("far from any", edit(BASE, "[integrator]\n", "[integrator]\ncolour = 1\n"),
+     "integrator.colour: unknown key (known: scheme, dt, force_dt, threads, disc_order, thread_choice)"),
+]
+
+
+@pytest.mark.parametrize("case,text,expect", MISSPELT, ids=[c[0] for c in MISSPELT])
+def test_a_misspelt_key_is_named_before_a_missing_one(tmp_path, run_dem, case, text, expect):
+    scene = tmp_path / "bad.toml"
+    scene.write_text(text)
+    proc = run_dem("run", scene, "--out", tmp_path / "out")
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert proc.stderr.startswith(f"dem: {scene}: {expect}") and proc.stderr.count("\n") == 1, proc.stderr
+    assert "missing" not in proc.stderr
+    assert not (tmp_path / "out").exists()
+
+
 def test_dt_above_bound_runs_when_forced(tmp_path, run_dem):
     scene = tmp_path / "forced.toml"
     scene.write_text(edit(edit(BASE, "dt = 0.0001", "dt = 4e-4"), "time = 5.0 ", "time = 0.004 "))

@@ -719,6 +719,7 @@ SceneSpec load_scene_table(const toml::table& root_table, const std::string& fil
   s.file = file;
   s.sets = ov.sets;
   s.max_discs = ov.max_discs > 0 ? ov.max_discs : kMaxDiscs;
+  check_scene_keys(root_table, s.file);  // a misspelt key is named before a missing one
   Tab root(root_table, "", s.file);
   read_run_tables(s, root);
   read_materials(s, root);

@@ -8,10 +8,12 @@
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "scene/scene_error.hpp"
+#include "scene/scene_keys.hpp"
 
 namespace dem {
 
@@ -39,7 +41,7 @@ inline std::string show(double v) {
 class Tab {
  public:
   Tab(const toml::table& t, std::string path, const std::string& file)
-      : t_(t), path_(std::move(path)), file_(file) {}
+      : t_(t), path_(std::move(path)), file_(file), known_(scene_keys(path_)) {}
 
   std::string field(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
@@ -57,6 +59,9 @@ class Tab {
   bool has(const std::string& key) const { return t_.contains(key); }
 
   const toml::node* node(const std::string& key) {
+    // A key the reader asks for is one check_scene_keys lets through (scene_keys.cpp).
+    if (known_ && std::find(known_->begin(), known_->end(), key) == known_->end())
+      throw std::logic_error("scene reader: " + field(key) + " is not among the keys of scene_keys.cpp");
     used_.insert(key);
     return t_.get(key);
   }
@@ -161,11 +166,15 @@ class Tab {
     if (!a || !a->is_array_of_tables()) fail(key, show(*n), "expected an array of tables [[" + field(key) + "]]");
     return a;
   }
-  // Refuses keys that were never asked for.
+  // Refuses keys that were never asked for: unknown ones (check_scene_keys refused them first),
+  // and known ones this table does not read (fill.s of a list fill).
   void finish() const {
     for (const auto& [k, v] : t_) {
       const std::string key(k.str());
-      if (!used_.count(key)) fail(key, show(v), "unknown key");
+      if (used_.count(key)) continue;
+      if (known_ && std::find(known_->begin(), known_->end(), key) != known_->end())
+        fail(key, show(v), path_ == "fill" ? "unknown key for a fill of this type" : "unknown key");
+      fail(key, "", unknown_key_reason(path_, key));
     }
   }
   // A number with a default; `positive`: > 0, `non_negative`: >= 0; magnitude at most 1e15.
@@ -207,6 +216,7 @@ class Tab {
   const toml::table& t_;
   std::string path_;
   const std::string& file_;
+  const std::vector<std::string>* known_;  // nullptr: keys the scene names ([materials])
   std::set<std::string> used_;
 };
 
