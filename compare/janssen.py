@@ -231,6 +231,7 @@ def ensemble_fit(members: list[dict], merge: int | None = None, sigma: str = "au
                float(members[0]["g"]), float(members[0]["width"]))
     f["profile"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in prof.items()}
     f["bin_width"] = float(np.median(np.subtract(members[0]["y_hi"], members[0]["y_lo"]))) * merge
+    f["merge"] = int(merge)
     f["checks"] = member_checks(members)
     return f
 
@@ -351,7 +352,7 @@ def member_record(resolved: dict, res, code: str, member: int, end_time: float) 
     sides = [w["name"] for w in resolved["walls"] if w["group"].startswith("side")]
     lo = np.array(res.profiles[sides[0]]["s_lo"])
     hi = np.array(res.profiles[sides[0]]["s_hi"])
-    top = by_name[sides[0]]["from"][1]
+    top = moved_wall(by_name[sides[0]], end_time)["from"][1]     # the profile's bins run along the wall where it is
     normal = np.mean([np.array(res.profiles[s]["normal"]) for s in sides], axis=0)
     y_lo, y_hi = top - hi, top - lo
     upper = y_lo >= surf - UPPER * (surf - floor)
@@ -388,3 +389,66 @@ def merge_for(members: list[dict], widths: float = BIN_WIDTHS) -> int:
     m = members[0]
     dy = float(np.median(np.subtract(m["y_hi"], m["y_lo"])))
     return max(1, int(round(widths * float(m["width"]) / dy)))
+
+
+# ---------------------------------------------------------------- paired member statistics
+
+SAT_LAMBDAS = 3.0    # the saturated depth: below z0 + 3 lambda, p lies within e^-3 (5 %) of p_inf
+SAT_MIN_BINS = 2     # fitted bins the saturated depth must hold
+
+
+def _merged(m: dict, merge: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A member's bins joined ``merge`` at a time, as ensemble_profile joins them: y_lo, y_hi, p."""
+    y_lo, y_hi, p = (np.asarray(m[k], float) for k in ("y_lo", "y_hi", "p"))
+    n = (len(y_lo) // merge) * merge
+    return (y_lo[:n].reshape(-1, merge).min(axis=1), y_hi[:n].reshape(-1, merge).max(axis=1),
+            p[:n].reshape(-1, merge).mean(axis=1))
+
+
+def saturated_top(f: dict, lambdas: float = SAT_LAMBDAS) -> float:
+    """[cm] the height below which a fit's profile is saturated: surface - z0 - lambdas x lambda
+    (``f``: an ensemble fit, whose profile carries the members' mean surface)."""
+    return float(f["profile"]["surface"] - max(f["z0"], 0.0) - lambdas * f["lambda"])
+
+
+def saturated_mu(members: list, y_top: float, merge: int) -> tuple[list, int]:
+    """Each member's mu_w,eff from its saturated side-wall pressure: rho_s phi g W / (2 p_sat),
+    p_sat the mean pressure of the fitted bins (``merge`` profile bins each) wholly below
+    ``y_top`` and at least W/2 above the floor (Janssen: p_inf = rho_b g W / (2 mu_w,eff)).
+    ``members``: records, or None for a member without one (its value None). Returns the values
+    and the number of bins averaged."""
+    out, bins = [], 0
+    for m in members:
+        if not m or m.get("status", "ok") != "ok":
+            out.append(None)
+            continue
+        y_lo, y_hi, p = _merged(m, merge)
+        keep = (y_hi <= y_top) & (y_lo >= float(m["floor"]) + float(m["width"]) / 2)
+        bins = max(bins, int(keep.sum()))
+        p_sat = float(p[keep].mean()) if keep.sum() >= SAT_MIN_BINS else float("nan")
+        out.append(float(m["rho_s"]) * float(m["phi"]) * float(m["g"]) * float(m["width"]) / (2 * p_sat)
+                   if p_sat > 0 else None)
+    return out, bins
+
+
+def jackknife_fits(a: list, b: list, keys=FIT_KEYS, merge: int | None = None) -> dict:
+    """Paired delete-one jackknife of the relative difference b/a - 1 of each ensemble-fit
+    parameter: member k left out of both codes' ensembles (members k of every code share their
+    start), the fits repeated; se^2 = (n - 1)/n sum_k (R_(-k) - mean R)^2, n - 1 degrees of
+    freedom. ``a``, ``b``: the two codes' member records, paired by position (None: no record;
+    only members with a record in both codes count). Returns {key: (se, n)}; raises RuntimeError
+    when a leave-one-out fit fails."""
+    pairs = [(x, y) for x, y in zip(a, b) if x and y and x.get("status", "ok") == "ok" and y.get("status", "ok") == "ok"]
+    n = len(pairs)
+    if n < 3:
+        raise RuntimeError(f"the paired jackknife needs 3 members with a record in both codes, has {n}")
+    if merge is None:
+        merge = merge_for([pairs[0][0]])
+    R = {k: [] for k in keys}
+    for j in range(n):
+        ra = [x for i, (x, _) in enumerate(pairs) if i != j]
+        rb = [y for i, (_, y) in enumerate(pairs) if i != j]
+        fa, fb = ensemble_fit(ra, merge), ensemble_fit(rb, merge)
+        for k in keys:
+            R[k].append(fb[k] / fa[k] - 1.0)
+    return {k: (float(math.sqrt((n - 1) / n * np.sum((np.array(v) - np.mean(v)) ** 2))), n) for k, v in R.items()}

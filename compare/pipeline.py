@@ -415,7 +415,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     if "native" in fits:
         for c, f in fits.items():
             if c != "native":
-                metrics += janssen_metrics(plan, fits["native"], f, c)
+                metrics += janssen_metrics(plan, fits["native"], f, c, records["native"], records[c])
     table += ["| code | members | bin [cm] | points | r² | p_inf | lambda [cm] | K | mu_w,eff | "
               "mobilised F_t/(mu_w F_n): before lowering, after (all; top half) | balance (max) | wall time / member [s] |",
               "|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -448,28 +448,64 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
 JANSSEN_JUDGED = ("K", "lambda", "mu_w_eff")   # the fit's parameters with a margin (compare/margins.py)
 
 
-def janssen_metrics(plan: Plan, a: dict, b: dict, code: str) -> list:
-    """Each judged parameter of code's fit against the native fit: relative difference b/a - 1 with
-    the delta-method standard error of the two fits' (curve_fit) errors; a fit below r^2_min on
-    either side leaves the parameters inconclusive (the profile is not Janssen's)."""
+def janssen_metrics(plan: Plan, a: dict, b: dict, code: str, rec_a: list | None = None,
+                    rec_b: list | None = None) -> list:
+    """Each judged parameter of code's ensemble fit against the native fit, and mu_w,eff of the
+    saturated depth member by member, all paired by member (members k of every code share their
+    jittered start; ``rec_a``, ``rec_b``: the member records, None or a failed record where a
+    member has none):
+
+    - K, lambda, mu_w,eff: the relative difference b/a - 1 of the two ensemble fits, its standard
+      error from the paired delete-one jackknife (member k left out of both ensembles;
+      janssen.jackknife_fits), n - 1 degrees of freedom; a fit below r^2_min on either side leaves
+      them inconclusive (the profile is not Janssen's);
+    - mu_w,eff (saturated): every member's rho_b g W / (2 p_sat), p_sat its mean side-wall
+      pressure over the fitted bins below z0 + 3 lambda of the native fit (where Janssen's
+      pressure is within 5 % of p_inf: the wall friction alone sets it), the same bins in every
+      code; the paired relative difference of the member means (stats.difference)."""
     out = []
+    low_r2 = min(a["r2"], b["r2"]) < janssen.R2_MIN
+    why_r2 = (f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a fit counts only with "
+              f"r^2 >= {janssen.R2_MIN}")
+    jack, jack_why = {}, ""
+    if not low_r2 and rec_a is not None and rec_b is not None:
+        try:
+            jack = janssen.jackknife_fits(rec_a, rec_b, JANSSEN_JUDGED, a.get("merge"))
+        except (RuntimeError, ValueError) as e:
+            jack_why = f"paired jackknife: {e}"
     for k in JANSSEN_JUDGED:
         name = f"Janssen {k} ({code} vs native)"
-        if min(a["r2"], b["r2"]) < janssen.R2_MIN:
-            out.append(verdict.unjudged(name, plan.name, f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a "
-                                                         f"fit counts only with r^2 >= {janssen.R2_MIN}", "statistical"))
+        if low_r2 or k not in jack:
+            out.append(verdict.unjudged(name, plan.name, why_r2 if low_r2 else
+                                        (jack_why or "no member records to pair"), "statistical"))
             continue
-        ra = b[k] / a[k]
-        se = math.hypot(b["se"][k], ra * a["se"][k]) / abs(a[k])
-        st = {"type": "t", "relative": True, "n": [a.get("members", 0), b.get("members", 0)], "estimate": ra - 1,
-              "se": se, "df": FIT_DF, "design": "fit", "mean": [a[k], b[k]]}
+        se, n = jack[k]
+        st = {"type": "t", "relative": True, "n": [n, n], "estimate": b[k] / a[k] - 1, "se": se,
+              "df": float(n - 1), "design": "paired", "mean": [a[k], b[k]]}
         out.append(verdict.statistical(name, plan.name, st, "janssen", plan.options,
                                        {"native": [a[k], a["se"][k]], code: [b[k], b["se"][k]]},
-                                       "ensemble-averaged profile's fit, standard errors from its covariance"))
+                                       "ensemble-averaged profile's fit; standard error: paired jackknife "
+                                       "over the members"))
+    name = f"Janssen mu_w_eff of the saturated depth, member by member ({code} vs native)"
+    if low_r2 or rec_a is None or rec_b is None:
+        out.append(verdict.unjudged(name, plan.name, why_r2 if low_r2 else "no member records to pair",
+                                    "statistical"))
+        return out
+    y_top = janssen.saturated_top(a)
+    merge = a.get("merge") or janssen.merge_for([next(m for m in rec_a if m and m.get("status") == "ok")])
+    va, nbins = janssen.saturated_mu(rec_a, y_top, merge)
+    vb, _ = janssen.saturated_mu(rec_b, y_top, merge)
+    st = stats.difference(va, vb, relative=True, paired=True)
+    if nbins < janssen.SAT_MIN_BINS:
+        st = dict(st, reason=f"{nbins} fitted bins below z0 + {janssen.SAT_LAMBDAS:g} lambda of the native fit "
+                             f"(y < {y_top:.1f} cm): the column is not saturated")
+    out.append(verdict.statistical(name, plan.name, st, "janssen", plan.options,
+                                   {"native": list(stats.mean_se([v for v in va if v is not None])[:2]),
+                                    code: list(stats.mean_se([v for v in vb if v is not None])[:2]),
+                                    "y_top": y_top, "bins": nbins},
+                                   f"rho_b g W / (2 p_sat) per member, p_sat over {nbins} bins below "
+                                   f"y = {y_top:.1f} cm (z0 + {janssen.SAT_LAMBDAS:g} lambda of the native fit)"))
     return out
-
-
-FIT_DF = 1e6   # a fit's parameter interval is normal (curve_fit's covariance, many bins)
 
 
 def discharge_start(plan: Plan, out: Path) -> np.ndarray | None:

@@ -47,9 +47,10 @@ COMMENTS = {
 
 
 def scene(name: str, description: str, width: float, wall_height: float, n: int, end: float,
-          side_end: float = 0.0, floor_motion: dict | None = None) -> dict:
+          side_end: float = 0.0, floor_motion: dict | None = None, mu_w: float = 0.5) -> dict:
     """A Janssen bin: side walls from wall_height down to side_end, width apart, a floor (with its
-    prescribed translation floor_motion, if any), n discs from NAME_loose.csv."""
+    prescribed translation floor_motion, if any), n discs from NAME_loose.csv; mu_w the disc-wall
+    friction."""
     def wall(wname, a, b):
         return {"name": wname, "group": wname if wname == "bottom" else f"side_{wname}", "from": a, "to": b,
                 "material": "wall"}
@@ -62,7 +63,7 @@ def scene(name: str, description: str, width: float, wall_height: float, n: int,
         "pairs": [{"materials": ["sand", "sand"], "kn_rho_g": 3.64e4, "ks_rho_g": 0.91e4,
                    "eta_n_rho_g": 7.65, "eta_s_rho_g": 3.825, "mu": 0.5},
                   {"materials": ["sand", "wall"], "kn_rho_g": 7.28e4, "ks_rho_g": 1.82e4,
-                   "eta_n_rho_g": 15.3, "eta_s_rho_g": 7.65, "mu": 0.5}],
+                   "eta_n_rho_g": 15.3, "eta_s_rho_g": 7.65, "mu": mu_w}],
         "walls": [wall("left", [0.0, wall_height], [0.0, side_end]),
                   wall("right", [width, wall_height], [width, side_end]),
                   dict(wall("bottom", [0.0, 0.0], [width, 0.0]), **(floor_motion or {}))],
