@@ -393,8 +393,8 @@ def merge_for(members: list[dict], widths: float = BIN_WIDTHS) -> int:
 
 # ---------------------------------------------------------------- paired member statistics
 
-SAT_LAMBDAS = 3.0    # the saturated depth: below z0 + 3 lambda, p lies within e^-3 (5 %) of p_inf
-SAT_MIN_BINS = 2     # fitted bins the saturated depth must hold
+DEEP_FRACTION = 0.5  # the deep part: the lower half of the fitted profile (W/2 above the floor .. the surface)
+SAT_MIN_BINS = 2     # fitted bins the deep part must hold
 
 
 def _merged(m: dict, merge: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -405,16 +405,20 @@ def _merged(m: dict, merge: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             p[:n].reshape(-1, merge).mean(axis=1))
 
 
-def saturated_top(f: dict, lambdas: float = SAT_LAMBDAS) -> float:
-    """[cm] the height below which a fit's profile is saturated: surface - z0 - lambdas x lambda
-    (``f``: an ensemble fit, whose profile carries the members' mean surface)."""
-    return float(f["profile"]["surface"] - max(f["z0"], 0.0) - lambdas * f["lambda"])
+def deep_top(members: list, fraction: float = DEEP_FRACTION) -> float:
+    """[cm] the height below which the profile is its deep part: ``fraction`` of the way down from
+    the members' mean surface to W/2 above the floor (``members``: the reference code's records;
+    None or failed ones are skipped)."""
+    ok = [m for m in members if m and m.get("status", "ok") == "ok"]
+    surface = float(np.mean([m["surface"] for m in ok]))
+    low = float(ok[0]["floor"]) + float(ok[0]["width"]) / 2
+    return surface - fraction * (surface - low)
 
 
 def saturated_mu(members: list, y_top: float, merge: int) -> tuple[list, int]:
-    """Each member's mu_w,eff from its saturated side-wall pressure: rho_s phi g W / (2 p_sat),
-    p_sat the mean pressure of the fitted bins (``merge`` profile bins each) wholly below
-    ``y_top`` and at least W/2 above the floor (Janssen: p_inf = rho_b g W / (2 mu_w,eff)).
+    """Each member's mu_w,eff from its deep side-wall pressure: rho_s phi g W / (2 p_sat), p_sat
+    the mean pressure of the fitted bins (``merge`` profile bins each) wholly below ``y_top`` and
+    at least W/2 above the floor (Janssen's saturated pressure p_inf = rho_b g W / (2 mu_w,eff)).
     ``members``: records, or None for a member without one (its value None). Returns the values
     and the number of bins averaged."""
     out, bins = [], 0

@@ -451,7 +451,7 @@ JANSSEN_JUDGED = ("K", "lambda", "mu_w_eff")   # the fit's parameters with a mar
 def janssen_metrics(plan: Plan, a: dict, b: dict, code: str, rec_a: list | None = None,
                     rec_b: list | None = None) -> list:
     """Each judged parameter of code's ensemble fit against the native fit, and mu_w,eff of the
-    saturated depth member by member, all paired by member (members k of every code share their
+    deep half member by member, all paired by member (members k of every code share their
     jittered start; ``rec_a``, ``rec_b``: the member records, None or a failed record where a
     member has none):
 
@@ -459,10 +459,11 @@ def janssen_metrics(plan: Plan, a: dict, b: dict, code: str, rec_a: list | None 
       error from the paired delete-one jackknife (member k left out of both ensembles;
       janssen.jackknife_fits), n - 1 degrees of freedom; a fit below r^2_min on either side leaves
       them inconclusive (the profile is not Janssen's);
-    - mu_w,eff (saturated): every member's rho_b g W / (2 p_sat), p_sat its mean side-wall
-      pressure over the fitted bins below z0 + 3 lambda of the native fit (where Janssen's
-      pressure is within 5 % of p_inf: the wall friction alone sets it), the same bins in every
-      code; the paired relative difference of the member means (stats.difference)."""
+    - mu_w,eff of the deep half: every member's rho_b g W / (2 p_deep), p_deep its mean side-wall
+      pressure over the fitted bins of the lower half of the profile (between the native members'
+      mean surface and W/2 above the floor: the same bins in every code), where Janssen's pressure
+      nears p_inf = rho_b g W / (2 mu_w,eff); the paired relative difference of the member means
+      (stats.difference). It needs no fit, so a profile below the r^2 gate still judges it."""
     out = []
     low_r2 = min(a["r2"], b["r2"]) < janssen.R2_MIN
     why_r2 = (f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a fit counts only with "
@@ -486,25 +487,23 @@ def janssen_metrics(plan: Plan, a: dict, b: dict, code: str, rec_a: list | None 
                                        {"native": [a[k], a["se"][k]], code: [b[k], b["se"][k]]},
                                        "ensemble-averaged profile's fit; standard error: paired jackknife "
                                        "over the members"))
-    name = f"Janssen mu_w_eff of the saturated depth, member by member ({code} vs native)"
-    if low_r2 or rec_a is None or rec_b is None:
-        out.append(verdict.unjudged(name, plan.name, why_r2 if low_r2 else "no member records to pair",
-                                    "statistical"))
+    name = f"Janssen mu_w_eff of the deep half, member by member ({code} vs native)"
+    if rec_a is None or rec_b is None or not any(m and m.get("status") == "ok" for m in rec_a):
+        out.append(verdict.unjudged(name, plan.name, "no member records to pair", "statistical"))
         return out
-    y_top = janssen.saturated_top(a)
+    y_top = janssen.deep_top(rec_a)
     merge = a.get("merge") or janssen.merge_for([next(m for m in rec_a if m and m.get("status") == "ok")])
     va, nbins = janssen.saturated_mu(rec_a, y_top, merge)
     vb, _ = janssen.saturated_mu(rec_b, y_top, merge)
     st = stats.difference(va, vb, relative=True, paired=True)
     if nbins < janssen.SAT_MIN_BINS:
-        st = dict(st, reason=f"{nbins} fitted bins below z0 + {janssen.SAT_LAMBDAS:g} lambda of the native fit "
-                             f"(y < {y_top:.1f} cm): the column is not saturated")
+        st = dict(st, reason=f"{nbins} fitted bins below y = {y_top:.1f} cm: no deep part to average")
     out.append(verdict.statistical(name, plan.name, st, "janssen", plan.options,
                                    {"native": list(stats.mean_se([v for v in va if v is not None])[:2]),
                                     code: list(stats.mean_se([v for v in vb if v is not None])[:2]),
                                     "y_top": y_top, "bins": nbins},
-                                   f"rho_b g W / (2 p_sat) per member, p_sat over {nbins} bins below "
-                                   f"y = {y_top:.1f} cm (z0 + {janssen.SAT_LAMBDAS:g} lambda of the native fit)"))
+                                   f"rho_b g W / (2 p_deep) per member, p_deep the side-wall pressure over {nbins} "
+                                   f"bins below y = {y_top:.1f} cm (the lower half of the native profile)"))
     return out
 
 
