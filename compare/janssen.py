@@ -220,7 +220,7 @@ def derived_ci(f: dict, rho_b: float, rho_b_se: float, g: float, width: float, l
 def ensemble_fit(members: list[dict], merge: int | None = None, sigma: str = "auto") -> dict:
     """The fit of the ensemble-averaged profile with derived K and mu_w,eff (rho_b from the
     members' packing fractions: mean and standard error), and the per-member cross-checks.
-    ``merge``: profile bins joined per fitted bin (None: ``merge_for``, bins W/2 tall)."""
+    ``merge``: profile bins joined per fitted bin (None: ``merge_for``, bins W tall)."""
     if merge is None:
         merge = merge_for(members)
     prof = ensemble_profile(members, merge, sigma)
@@ -285,7 +285,7 @@ def band(f: dict, z, level_z: float = Z95) -> tuple[np.ndarray, np.ndarray, np.n
 # ---------------------------------------------------------------- one member's measurements
 
 UPPER = 0.5          # the upper part of the fill: its top half
-BIN_WIDTHS = 0.5     # the fitted bins are BIN_WIDTHS x W tall (W/2 = 10 cm in the column: docs/compare.md)
+BIN_WIDTHS = 1.0     # the fitted bins are BIN_WIDTHS x W tall (8 cm in the column: docs/compare.md)
 
 
 def geometry(resolved: dict, t: float) -> dict:

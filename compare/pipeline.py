@@ -380,7 +380,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     the floor is lowered slowly by the scene's prescribed translation (walls[].velocity: a
     fraction of a disc diameter), so that the column slides down along the side walls and their
     friction is mobilised upward, and the column rests. The ensemble-averaged side-wall pressure
-    of each code (bins W/2 tall) is fitted with Janssen's law (scipy curve_fit, 95 % intervals);
+    of each code (bins W tall) is fitted with Janssen's law (scipy curve_fit, 95 % intervals);
     a fit counts with r^2 >= 0.95 and at least 8 points; each code's fit is compared with the
     native one (p_inf, lambda, z0, K, mu_w,eff within the combined intervals); each member's floor
     force + wall friction = weight."""

@@ -240,14 +240,14 @@ def test_member_record_balance_and_mobilised_friction(column):
     assert math.isnan(janssen.member_record(r, good, "x", 0, t_end)["mobilised_before"])
 
 
-def test_fitted_bins_are_half_the_width_tall_and_enough_over_the_depth():
-    """The fit's bins: W/2 (10 cm in the column), at least 8 of them between W/2 above the floor
-    and the surface of a fill 6.5 W deep."""
-    ms = synthetic_members(janssen_truth(), surface=130.0)
-    assert janssen.merge_for(ms) == 5
+def test_fitted_bins_are_the_width_tall_and_enough_over_the_depth():
+    """The fit's bins: W tall (8 cm in the column), at least 8 of them between W/2 above the floor
+    and the surface of a fill 22 W deep (the column's: 21 bins)."""
+    ms = synthetic_members(janssen_truth(), surface=22 * W, top=22 * W + 20)
+    assert janssen.merge_for(ms) == 10
     f = janssen.ensemble_fit(ms)
-    assert f["bin_width"] == pytest.approx(W / 2) and f["n_points"] >= 8
-    assert np.all(np.diff(f["profile"]["z"]) == pytest.approx(W / 2))
+    assert f["bin_width"] == pytest.approx(W) and f["n_points"] >= 8
+    assert np.all(np.diff(f["profile"]["z"]) == pytest.approx(W))
 
 
 def test_the_plan_refuses_a_run_that_ends_while_the_floor_moves(dem_binary, monkeypatch):
