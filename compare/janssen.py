@@ -238,7 +238,9 @@ def ensemble_fit(members: list[dict], merge: int | None = None, sigma: str = "au
 
 def member_checks(members: list[dict], balance_tol: float = 0.01) -> dict:
     """Per member: global balance (floor force + wall friction - weight) / weight within
-    ``balance_tol``; mobilised wall friction (signed shear over normal on the side walls) in the
+    ``balance_tol`` (``balance_ok``; ``balance_mean_ok``: the members' mean within it, the check
+    of a column that ends sliding, whose members' forces each carry the inertia of its
+    stick-slip); mobilised wall friction (signed shear over normal on the side walls) in the
     upper half and overall at the end, and overall before the floor is lowered (codes with a
     wall-force series), to be read against the Coulomb coefficient mu_w."""
     bal = [m["balance"] for m in members]
@@ -247,6 +249,7 @@ def member_checks(members: list[dict], balance_tol: float = 0.01) -> dict:
     bf = np.array([m.get("mobilised_before", float("nan")) for m in members], float)
     se = lambda v: float(v.std(ddof=1) / math.sqrt(len(v))) if len(v) > 1 else float("nan")  # noqa: E731
     return {"balance": bal, "balance_ok": bool(all(abs(b) <= balance_tol for b in bal)),
+            "balance_mean": float(np.mean(bal)), "balance_mean_ok": bool(abs(float(np.mean(bal))) <= balance_tol),
             "mobilised_upper": up.tolist(), "mobilised_upper_mean": float(up.mean()),
             "mobilised_upper_se": se(up),
             "mobilised_all_mean": float(al.mean()), "mobilised_all_se": se(al),
