@@ -98,3 +98,16 @@ def test_the_jackknife_pairs_members_and_drops_failed_ones():
     assert vals[2] is None and all(v > 0 for i, v in enumerate(vals) if i != 2) and bins >= 2
     with pytest.raises(RuntimeError, match="3 members"):
         janssen.jackknife_fits(ra[:2], rb[:2])
+
+
+def test_a_sliding_column_checks_the_members_mean_balance():
+    """Each member of a column that ends sliding carries its stick-slip inertia (+-2 %); the mean
+    of the members must still carry the weight within 1 %."""
+    ms = members(n=4)
+    for m, b in zip(ms, (0.02, -0.02, 0.015, -0.012)):
+        m["balance"] = b
+    chk = janssen.member_checks(ms)
+    assert not chk["balance_ok"] and chk["balance_mean_ok"] and chk["balance_mean"] == pytest.approx(0.00075)
+    for m in ms:
+        m["balance"] = 0.03                     # a force missing in every member
+    assert not janssen.member_checks(ms)["balance_mean_ok"]
