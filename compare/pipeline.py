@@ -379,11 +379,12 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     the plan's duration (the scene's end.time unless --duration): the discs fall and settle, then
     the floor is lowered slowly by the scene's prescribed translation (walls[].velocity: a
     fraction of a disc diameter), so that the column slides down along the side walls and their
-    friction is mobilised upward, and the column rests. The ensemble-averaged side-wall pressure
-    of each code (bins W tall) is fitted with Janssen's law (scipy curve_fit, 95 % intervals);
-    a fit counts with r^2 >= 0.95 and at least 8 points; each code's fit is compared with the
-    native one (p_inf, lambda, z0, K, mu_w,eff within the combined intervals); each member's floor
-    force + wall friction = weight."""
+    friction is mobilised upward; the column then rests, or (a translation until the run's end)
+    is measured while it slides. The ensemble-averaged side-wall pressure of each code (bins W
+    tall) is fitted with Janssen's law (scipy curve_fit); a fit counts with r^2 >= 0.95 and at
+    least 8 points; janssen_metrics judges each code against the native engine, paired by
+    member; floor force + wall friction = weight, each member's (a sliding column: the members'
+    mean)."""
     from . import janssen_figure
     records = {c: [] for c in codes}
     for k, (res, case) in enumerate(member_runs(plan, codes, out, mutation, JANSSEN_SERIES)):
