@@ -106,15 +106,15 @@ def packing() -> str:
 # (the floor or piston drawn down slowly): from 1.2 s to the end, 2.0 s, the floor moves down at
 # 0.5 cm/s (0.4 cm, under half a diameter), about a hundredth of the speed of a free fall over a
 # diameter (sqrt(2 g d) = 44 cm/s), so the column follows it quasi-statically and slides down
-# along the side walls; the profile is taken while it slides. Every disc-wall contact then slides
-# at its Coulomb cap: F_t / (mu_w F_n) over the side walls is 0.96-1.0 in every member, so that
-# Janssen's mu_w,eff is mu_w itself and scales with it (mu_w x 0.8 raises the deep pressure by
-# about 23 %). Walls as rough as the discs (mu_w = 0.5) or a column at rest after the lowering
-# mobilise a fraction (0.3-0.8) that hardly depends on mu_w: the wall discs roll, or the column's
-# upper part stops sliding. With mu_w,eff = 0.1 and K about 0.7, lambda = W / (2 K mu_w,eff) is
-# about 7 W, and the fill is about 3 lambda deep: its lower half holds the pressure within 5-20 %
-# of p_inf. The side walls reach 1.15 cm below the floor's start, so the lowered floor's ends stay
-# on them.
+# along the side walls; the profile is taken while it slides. The disc-wall contacts then slide
+# at their Coulomb cap: F_t / (mu_w F_n) over the side walls is 0.86-1.0 in every member, so that
+# Janssen's mu_w,eff is mu_w itself and scales with it (mu_w x 0.8 lowers the deep half's
+# mu_w,eff by about 18 %). Walls as rough as the discs (mu_w = 0.5) or a column at rest after the
+# lowering mobilise a fraction (0.3-0.97) that hardly depends on mu_w: the wall discs roll, or the
+# column's upper part stops sliding. With mu_w,eff = 0.1 and K = 0.8-1.1, lambda = W / (2 K
+# mu_w,eff) is 4-7 W, and the fill is 3-5 lambda deep: its lower half holds the pressure near
+# p_inf. The side walls reach 1.15 cm below the floor's start, so the lowered floor's ends stay on
+# them.
 C_W = 8.0                        # cm
 C_PITCH = 1.3                    # cm
 C_N = 1400
@@ -127,7 +127,7 @@ C_END = 2.0                      # s: the profile while the column slides
 
 COLUMN_HEADER = f"""Janssen column: a 2D bin W = {C_W:g} cm (8 mean disc diameters) wide, mu = 0.5, smooth walls
 mu_w = {C_MU_W:g}, {C_N} discs (radii {R_MIN}-{R_MAX} cm) on a loose grid that fall and settle to a fill
-about 22 W (3 Janssen lengths) deep; then the floor is lowered slowly to the end of the run, so
+about 22 W (3-5 Janssen lengths) deep; then the floor is lowered slowly to the end of the run, so
 that the column slides down the side walls with their friction at its cap. Each ensemble member
 of dem compare --kind janssen jitters this start.
 {GENERATED}"""
