@@ -47,9 +47,10 @@ COMMENTS = {
 
 
 def scene(name: str, description: str, width: float, wall_height: float, n: int, end: float,
-          side_end: float = 0.0, floor_motion: dict | None = None) -> dict:
+          side_end: float = 0.0, floor_motion: dict | None = None, mu_w: float = 0.5) -> dict:
     """A Janssen bin: side walls from wall_height down to side_end, width apart, a floor (with its
-    prescribed translation floor_motion, if any), n discs from NAME_loose.csv."""
+    prescribed translation floor_motion, if any), n discs from NAME_loose.csv; mu_w the disc-wall
+    friction."""
     def wall(wname, a, b):
         return {"name": wname, "group": wname if wname == "bottom" else f"side_{wname}", "from": a, "to": b,
                 "material": "wall"}
@@ -62,7 +63,7 @@ def scene(name: str, description: str, width: float, wall_height: float, n: int,
         "pairs": [{"materials": ["sand", "sand"], "kn_rho_g": 3.64e4, "ks_rho_g": 0.91e4,
                    "eta_n_rho_g": 7.65, "eta_s_rho_g": 3.825, "mu": 0.5},
                   {"materials": ["sand", "wall"], "kn_rho_g": 7.28e4, "ks_rho_g": 1.82e4,
-                   "eta_n_rho_g": 15.3, "eta_s_rho_g": 7.65, "mu": 0.5}],
+                   "eta_n_rho_g": 15.3, "eta_s_rho_g": 7.65, "mu": mu_w}],
         "walls": [wall("left", [0.0, wall_height], [0.0, side_end]),
                   wall("right", [width, wall_height], [width, side_end]),
                   dict(wall("bottom", [0.0, 0.0], [width, 0.0]), **(floor_motion or {}))],
@@ -93,43 +94,49 @@ def packing() -> str:
     return out.getvalue()
 
 
-# The column: W = 20 cm = 20 mean diameters, 2600 discs with radii uniform in [0.4, 0.6] cm
-# (0.8-1.2 x the mean 0.5 cm), mu = mu_w = 0.5, on a square grid of pitch 1.3 cm (gaps of at
-# least 0.1 cm, so that each member's jitter of +-0.04 cm keeps every disc apart). The grid is
-# 15 columns by 174 rows (226 cm); it falls and settles into a random packing about 130 cm
-# (6.5 W) deep by 1.2 s. Same springs and dashpots as janssen_w15 (the paper's Table 2 springs),
-# dt 1.6e-5 s: 0.97 of the bound the 0.4 cm discs set (at 2e-5 s most members keep a small disc
-# rattling with a period of two steps; benchmarks/README.md, "Stability").
+# The column: W = 8 cm = 8 mean diameters, 1400 discs with radii uniform in [0.4, 0.6] cm
+# (0.8-1.2 x the mean 0.5 cm), disc-disc mu = 0.5 and smooth walls, mu_w = 0.1, on a square grid
+# of pitch 1.3 cm (gaps of at least 0.1 cm, so that each member's jitter of +-0.04 cm keeps every
+# disc apart). The grid is 6 columns by 234 rows (304 cm); it falls and settles into a random
+# packing about 178 cm (22 W) deep by 1.2 s. Same springs and dashpots as janssen_w15 (the paper's
+# Table 2 springs), dt 1.6e-5 s: 0.97 of the bound the 0.4 cm discs set (at 2e-5 s most members
+# keep a small disc rattling with a period of two steps; benchmarks/README.md, "Stability").
 #
 # The wall friction is mobilised by lowering the floor, as in the classic Janssen experiments
-# (the floor or piston drawn down slowly): from 1.2 s to 1.7 s the floor moves down 0.25 cm (a
-# quarter of the mean diameter) at 0.5 cm/s, about a thousandth of the speed of a free fall over
-# a diameter (sqrt(2 g d) = 44 cm/s), so the column follows it quasi-statically and slides down
-# along the side walls, turning their friction upward everywhere; from 1.7 s to 2.5 s it rests.
-# A filled column without the lowering keeps the friction its dynamic settling left, about a
-# fifth of mu_w and of either sign contact by contact; dropping the floor suddenly by the same
-# distance gives about 0.3 mu_w (the impact's rebound turns part of it back). The side walls
-# reach 1 cm below the floor's start, so the lowered floor's ends stay on them.
-C_W, C_H_WALL = 20.0, 240.0      # cm
+# (the floor or piston drawn down slowly): from 1.2 s to the end, 2.0 s, the floor moves down at
+# 0.5 cm/s (0.4 cm, under half a diameter), about a hundredth of the speed of a free fall over a
+# diameter (sqrt(2 g d) = 44 cm/s), so the column follows it quasi-statically and slides down
+# along the side walls; the profile is taken while it slides. The disc-wall contacts then slide
+# at their Coulomb cap: F_t / (mu_w F_n) over the side walls is 0.86-1.0 in every member, so that
+# Janssen's mu_w,eff is mu_w itself and scales with it (mu_w x 0.8 lowers the deep half's
+# mu_w,eff by about 18 %). Walls as rough as the discs (mu_w = 0.5) or a column at rest after the
+# lowering mobilise a fraction (0.3-0.97) that hardly depends on mu_w: the wall discs roll, or the
+# column's upper part stops sliding. With mu_w,eff = 0.1 and K = 0.8-1.1, lambda = W / (2 K
+# mu_w,eff) is 4-7 W, and the fill is 3-5 lambda deep: its lower half holds the pressure near
+# p_inf. The side walls reach 1.15 cm below the floor's start, so the lowered floor's ends stay on
+# them.
+C_W = 8.0                        # cm
 C_PITCH = 1.3                    # cm
-C_N = 2600
+C_N = 1400
+C_MU_W = 0.1                     # the disc-wall friction: the walls slide at their cap
 C_SEED = 20261125
-C_SIDE_END = -1.0                # cm: the side walls' lower ends, below the lowered floor
-C_LOWER_FROM, C_LOWER_UNTIL = 1.2, 1.7   # s
-C_LOWER_SPEED = 0.5              # cm/s: 0.25 cm in 0.5 s
-C_END = 2.5                      # s
+C_SIDE_END = -1.15               # cm: the side walls' lower ends, below the lowered floor
+C_LOWER_FROM, C_LOWER_UNTIL = 1.2, 2.0   # s
+C_LOWER_SPEED = 0.5              # cm/s: 0.4 cm in 0.8 s
+C_END = 2.0                      # s: the profile while the column slides
 
-COLUMN_HEADER = f"""Janssen column: a 2D bin W = {C_W} cm (20 mean disc diameters) wide, mu = mu_w = 0.5, {C_N}
-discs (radii {R_MIN}-{R_MAX} cm) on a loose grid that fall and settle to a fill about 6.5 W deep;
-then the floor is lowered slowly by a quarter of a diameter, so that the column slides down the
-side walls and mobilises their friction, and the column rests. Each ensemble member of
-dem compare --kind janssen jitters this start.
+COLUMN_HEADER = f"""Janssen column: a 2D bin W = {C_W:g} cm (8 mean disc diameters) wide, mu = 0.5, smooth walls
+mu_w = {C_MU_W:g}, {C_N} discs (radii {R_MIN}-{R_MAX} cm) on a loose grid that fall and settle to a fill
+about 22 W (3-5 Janssen lengths) deep; then the floor is lowered slowly to the end of the run, so
+that the column slides down the side walls with their friction at its cap. Each ensemble member
+of dem compare --kind janssen jitters this start.
 {GENERATED}"""
 COLUMN_COMMENTS = dict(COMMENTS, **{
+    "pairs[1]": "the wall: twice the stiffness and damping, smooth: mu_w = 0.1",
     "walls[2].velocity": f"cm/s: the floor is lowered {C_LOWER_SPEED * (C_LOWER_UNTIL - C_LOWER_FROM):g} cm ...",
     "walls[2].move_from": "s: ... after the fill has settled ...",
-    "walls[2].move_until": "s: ... then rests until end.time",
-    "end.time": "s: the fall and the settling, the lowering, the rest",
+    "walls[2].move_until": "s: ... until the run ends: the profile while the column slides",
+    "end.time": "s: the fall and the settling, the lowering",
 })
 
 
@@ -153,12 +160,12 @@ def files() -> dict:
     assert top + R_MAX < H_WALL, "the loose packing must start inside the walls"
     col = column_packing()
     ctop = max(float(l.split(",")[1]) for l in col.splitlines()[1:])
-    assert ctop + R_MAX + 0.1 < C_H_WALL, "the column's loose start must lie inside the walls"
+    c_h_wall = float(np.ceil(ctop + R_MAX + 4.0))       # cm: the side walls' top, above the loose start
     w15 = scene("janssen_w15", "Janssen bin W = 15 cm, random packing, mu = mu_w = 0.5", W, H_WALL, N, 3.5)
-    column = scene("janssen_column", "Janssen column W = 20 cm, fill about 6 W, random packing, mu = mu_w = 0.5",
-                   C_W, C_H_WALL, C_N, C_END, side_end=C_SIDE_END,
+    column = scene("janssen_column", "Janssen column W = 8 cm, fill about 22 W, random packing, mu = 0.5, mu_w = 0.1",
+                   C_W, c_h_wall, C_N, C_END, side_end=C_SIDE_END,
                    floor_motion={"velocity": [0.0, -C_LOWER_SPEED], "move_from": C_LOWER_FROM,
-                                 "move_until": C_LOWER_UNTIL})
+                                 "move_until": C_LOWER_UNTIL}, mu_w=C_MU_W)
     return {OUT / "janssen_w15.toml": scene_toml.dumps(w15, header=HEADER, comments=COMMENTS),
             OUT / "janssen_w15_loose.csv": text,
             OUT / "janssen_column.toml": scene_toml.dumps(column, header=COLUMN_HEADER, comments=COLUMN_COMMENTS),

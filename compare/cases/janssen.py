@@ -221,7 +221,7 @@ def derived_ci(f: dict, rho_b: float, rho_b_se: float, g: float, width: float, l
 def ensemble_fit(members: list[dict], merge: int | None = None, sigma: str = "auto") -> dict:
     """The fit of the ensemble-averaged profile with derived K and mu_w,eff (rho_b from the
     members' packing fractions: mean and standard error), and the per-member cross-checks.
-    ``merge``: profile bins joined per fitted bin (None: ``merge_for``, bins W/2 tall)."""
+    ``merge``: profile bins joined per fitted bin (None: ``merge_for``, bins W tall)."""
     if merge is None:
         merge = merge_for(members)
     prof = ensemble_profile(members, merge, sigma)
@@ -232,13 +232,16 @@ def ensemble_fit(members: list[dict], merge: int | None = None, sigma: str = "au
                float(members[0]["g"]), float(members[0]["width"]))
     f["profile"] = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in prof.items()}
     f["bin_width"] = float(np.median(np.subtract(members[0]["y_hi"], members[0]["y_lo"]))) * merge
+    f["merge"] = int(merge)
     f["checks"] = member_checks(members)
     return f
 
 
 def member_checks(members: list[dict], balance_tol: float = 0.01) -> dict:
     """Per member: global balance (floor force + wall friction - weight) / weight within
-    ``balance_tol``; mobilised wall friction (signed shear over normal on the side walls) in the
+    ``balance_tol`` (``balance_ok``; ``balance_mean_ok``: the members' mean within it, the check
+    of a column that ends sliding, whose members' forces each carry the inertia of its
+    stick-slip); mobilised wall friction (signed shear over normal on the side walls) in the
     upper half and overall at the end, and overall before the floor is lowered (codes with a
     wall-force series), to be read against the Coulomb coefficient mu_w."""
     bal = [m["balance"] for m in members]
@@ -247,6 +250,7 @@ def member_checks(members: list[dict], balance_tol: float = 0.01) -> dict:
     bf = np.array([m.get("mobilised_before", float("nan")) for m in members], float)
     se = lambda v: float(v.std(ddof=1) / math.sqrt(len(v))) if len(v) > 1 else float("nan")  # noqa: E731
     return {"balance": bal, "balance_ok": bool(all(abs(b) <= balance_tol for b in bal)),
+            "balance_mean": float(np.mean(bal)), "balance_mean_ok": bool(abs(float(np.mean(bal))) <= balance_tol),
             "mobilised_upper": up.tolist(), "mobilised_upper_mean": float(up.mean()),
             "mobilised_upper_se": se(up),
             "mobilised_all_mean": float(al.mean()), "mobilised_all_se": se(al),
@@ -285,7 +289,7 @@ def band(f: dict, z, level_z: float = Z95) -> tuple[np.ndarray, np.ndarray, np.n
 # ---------------------------------------------------------------- one member's measurements
 
 UPPER = 0.5          # the upper part of the fill: its top half
-BIN_WIDTHS = 0.5     # the fitted bins are BIN_WIDTHS x W tall (W/2 = 10 cm in the column: docs/compare.md)
+BIN_WIDTHS = 1.0     # the fitted bins are BIN_WIDTHS x W tall (8 cm in the column: docs/compare.md)
 
 
 def geometry(resolved: dict, t: float) -> dict:
@@ -351,7 +355,7 @@ def member_record(resolved: dict, res, code: str, member: int, end_time: float) 
     sides = [w["name"] for w in resolved["walls"] if w["group"].startswith("side")]
     lo = np.array(res.profiles[sides[0]]["s_lo"])
     hi = np.array(res.profiles[sides[0]]["s_hi"])
-    top = by_name[sides[0]]["from"][1]
+    top = moved_wall(by_name[sides[0]], end_time)["from"][1]     # the profile's bins run along the wall where it is
     normal = np.mean([np.array(res.profiles[s]["normal"]) for s in sides], axis=0)
     y_lo, y_hi = top - hi, top - lo
     upper = y_lo >= surf - UPPER * (surf - floor)
@@ -388,3 +392,70 @@ def merge_for(members: list[dict], widths: float = BIN_WIDTHS) -> int:
     m = members[0]
     dy = float(np.median(np.subtract(m["y_hi"], m["y_lo"])))
     return max(1, int(round(widths * float(m["width"]) / dy)))
+
+
+# ---------------------------------------------------------------- paired member statistics
+
+DEEP_FRACTION = 0.5  # the deep part: the lower half of the fitted profile (W/2 above the floor .. the surface)
+SAT_MIN_BINS = 2     # fitted bins the deep part must hold
+
+
+def _merged(m: dict, merge: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A member's bins joined ``merge`` at a time, as ensemble_profile joins them: y_lo, y_hi, p."""
+    y_lo, y_hi, p = (np.asarray(m[k], float) for k in ("y_lo", "y_hi", "p"))
+    n = (len(y_lo) // merge) * merge
+    return (y_lo[:n].reshape(-1, merge).min(axis=1), y_hi[:n].reshape(-1, merge).max(axis=1),
+            p[:n].reshape(-1, merge).mean(axis=1))
+
+
+def deep_top(members: list, fraction: float = DEEP_FRACTION) -> float:
+    """[cm] the height below which the profile is its deep part: ``fraction`` of the way down from
+    the members' mean surface to W/2 above the floor (``members``: the reference code's records;
+    None or failed ones are skipped)."""
+    ok = [m for m in members if m and m.get("status", "ok") == "ok"]
+    surface = float(np.mean([m["surface"] for m in ok]))
+    low = float(ok[0]["floor"]) + float(ok[0]["width"]) / 2
+    return surface - fraction * (surface - low)
+
+
+def saturated_mu(members: list, y_top: float, merge: int) -> tuple[list, int]:
+    """Each member's mu_w,eff from its deep side-wall pressure: rho_s phi g W / (2 p_sat), p_sat
+    the mean pressure of the fitted bins (``merge`` profile bins each) wholly below ``y_top`` and
+    at least W/2 above the floor (Janssen's saturated pressure p_inf = rho_b g W / (2 mu_w,eff)).
+    ``members``: records, or None for a member without one (its value None). Returns the values
+    and the number of bins averaged."""
+    out, bins = [], 0
+    for m in members:
+        if not m or m.get("status", "ok") != "ok":
+            out.append(None)
+            continue
+        y_lo, y_hi, p = _merged(m, merge)
+        keep = (y_hi <= y_top) & (y_lo >= float(m["floor"]) + float(m["width"]) / 2)
+        bins = max(bins, int(keep.sum()))
+        p_sat = float(p[keep].mean()) if keep.sum() >= SAT_MIN_BINS else float("nan")
+        out.append(float(m["rho_s"]) * float(m["phi"]) * float(m["g"]) * float(m["width"]) / (2 * p_sat)
+                   if p_sat > 0 else None)
+    return out, bins
+
+
+def jackknife_fits(a: list, b: list, keys=FIT_KEYS, merge: int | None = None) -> dict:
+    """Paired delete-one jackknife of the relative difference b/a - 1 of each ensemble-fit
+    parameter: member k left out of both codes' ensembles (members k of every code share their
+    start), the fits repeated; se^2 = (n - 1)/n sum_k (R_(-k) - mean R)^2, n - 1 degrees of
+    freedom. ``a``, ``b``: the two codes' member records, paired by position (None: no record;
+    only members with a record in both codes count). Returns {key: (se, n)}; raises RuntimeError
+    when a leave-one-out fit fails."""
+    pairs = [(x, y) for x, y in zip(a, b) if x and y and x.get("status", "ok") == "ok" and y.get("status", "ok") == "ok"]
+    n = len(pairs)
+    if n < 3:
+        raise RuntimeError(f"the paired jackknife needs 3 members with a record in both codes, has {n}")
+    if merge is None:
+        merge = merge_for([pairs[0][0]])
+    R = {k: [] for k in keys}
+    for j in range(n):
+        ra = [x for i, (x, _) in enumerate(pairs) if i != j]
+        rb = [y for i, (_, y) in enumerate(pairs) if i != j]
+        fa, fb = ensemble_fit(ra, merge), ensemble_fit(rb, merge)
+        for k in keys:
+            R[k].append(fb[k] / fa[k] - 1.0)
+    return {k: (float(math.sqrt((n - 1) / n * np.sum((np.array(v) - np.mean(v)) ** 2))), n) for k, v in R.items()}

@@ -34,8 +34,9 @@ MARGINS = {
     "peak": Margin(0.10, 0.10, True, "windowed peak wall load / its value at the opening"),
     # A jam is all or nothing a member: 0.2 is one member in five jamming differently.
     "jam_fraction": Margin(0.20, 0.20, False, "fraction of members that jam (absolute)"),
-    # Janssen's K, lambda and mu_w,eff from the ensemble-averaged profile's fit.
-    "janssen": Margin(0.10, 0.10, True, "Janssen fit parameter (K, lambda, mu_w,eff)"),
+    # Janssen's K, lambda and mu_w,eff from the ensemble-averaged profile's fit; mu_w,eff of the
+    # deep half of the profile, member by member.
+    "janssen": Margin(0.10, 0.10, True, "Janssen fit parameter (K, lambda, mu_w,eff); mu_w,eff of the deep half"),
     # The shear box's sigma0, peak and band means of tau/sigma, dilation.
     "shear": Margin(0.10, 0.10, True, "shear-box ensemble mean"),
 }

@@ -391,11 +391,12 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     the plan's duration (the scene's end.time unless --duration): the discs fall and settle, then
     the floor is lowered slowly by the scene's prescribed translation (walls[].velocity: a
     fraction of a disc diameter), so that the column slides down along the side walls and their
-    friction is mobilised upward, and the column rests. The ensemble-averaged side-wall pressure
-    of each code (bins W/2 tall) is fitted with Janssen's law (scipy curve_fit, 95 % intervals);
-    a fit counts with r^2 >= 0.95 and at least 8 points; each code's fit is compared with the
-    native one (p_inf, lambda, z0, K, mu_w,eff within the combined intervals); each member's floor
-    force + wall friction = weight."""
+    friction is mobilised upward; the column then rests, or (a translation until the run's end)
+    is measured while it slides. The ensemble-averaged side-wall pressure of each code (bins W
+    tall) is fitted with Janssen's law (scipy curve_fit); a fit counts with r^2 >= 0.95 and at
+    least 8 points; janssen_metrics judges each code against the native engine, paired by
+    member; floor force + wall friction = weight, each member's (a sliding column: the members'
+    mean)."""
     records = {c: [] for c in codes}
     for k, (res, case) in enumerate(member_runs(plan, codes, out, mutation, JANSSEN_SERIES)):
         for c in codes:
@@ -403,6 +404,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
             records[c].append(janssen.member_record(plan.shared, r, c, k, case.end_time) if r.ok else
                               {"status": "failed", "reason": r.reason})
     fits, metrics, table = {}, [], []
+    sliding = any(w.get("motion") and float(w["motion"]["until"]) >= plan.duration - 1e-9 for w in plan.shared["walls"])
     for c in codes:
         ok = [m for m in records[c] if m.get("status") == "ok"]
         fails = [m["reason"] for m in records[c] if m.get("status") != "ok"]
@@ -414,19 +416,27 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
         f["members"] = len(ok)
         chk = f["checks"]
         bal = max(abs(b) for b in chk["balance"])
-        metrics.append(_metric(f"Janssen column: floor force + wall friction = weight, every member ({c})",
-                               plan.name, {"max_rel": bal}, 0.01, chk["balance_ok"]))
+        if sliding:      # the run ends while the column slides: each member's forces carry its stick-slip inertia
+            metrics.append(_metric(f"Janssen column sliding: floor force + wall friction = weight, mean of the "
+                                   f"members ({c})", plan.name, {"mean_rel": chk["balance_mean"], "max_rel": bal},
+                                   0.01, chk["balance_mean_ok"]))
+        else:
+            metrics.append(_metric(f"Janssen column: floor force + wall friction = weight, every member ({c})",
+                                   plan.name, {"max_rel": bal}, 0.01, chk["balance_ok"]))
         good = f["r2"] >= janssen.R2_MIN and f["n_points"] >= JANSSEN_MIN_POINTS
-        metrics.append(_metric(f"Janssen fit of the {len(ok)}-member mean profile: r^2 >= {janssen.R2_MIN} with "
-                               f">= {JANSSEN_MIN_POINTS} points ({c})", plan.name,
-                               {"r2": f["r2"], "n_points": f["n_points"], "bin_width": f["bin_width"]},
-                               f"r^2 >= {janssen.R2_MIN}", good,
-                               "" if good else f"r^2 {f['r2']:.3f} with {f['n_points']} points of "
-                                               f"{f['bin_width']:g} cm"))
+        gate = _metric(f"Janssen fit of the {len(ok)}-member mean profile: r^2 >= {janssen.R2_MIN} with "
+                       f">= {JANSSEN_MIN_POINTS} points ({c})", plan.name,
+                       {"r2": f["r2"], "n_points": f["n_points"], "bin_width": f["bin_width"]},
+                       f"r^2 >= {janssen.R2_MIN}", good,
+                       "" if good else f"r^2 {f['r2']:.3f} with {f['n_points']} points of "
+                                       f"{f['bin_width']:g} cm: the fit cannot be judged")
+        if not good:     # a fit below its r^2 cannot be judged: inconclusive, never disagree (docs/compare.md)
+            gate["verdict"] = verdict.INCONCLUSIVE
+        metrics.append(gate)
     if "native" in fits:
         for c, f in fits.items():
             if c != "native":
-                metrics += janssen_metrics(plan, fits["native"], f, c)
+                metrics += janssen_metrics(plan, fits["native"], f, c, records["native"], records[c])
     table += ["| code | members | bin [cm] | points | r² | p_inf | lambda [cm] | K | mu_w,eff | "
               "mobilised F_t/(mu_w F_n): before lowering, after (all; top half) | balance (max) | wall time / member [s] |",
               "|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -459,28 +469,63 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
 JANSSEN_JUDGED = ("K", "lambda", "mu_w_eff")   # the fit's parameters with a margin (compare/cases/margins.py)
 
 
-def janssen_metrics(plan: Plan, a: dict, b: dict, code: str) -> list:
-    """Each judged parameter of code's fit against the native fit: relative difference b/a - 1 with
-    the delta-method standard error of the two fits' (curve_fit) errors; a fit below r^2_min on
-    either side leaves the parameters inconclusive (the profile is not Janssen's)."""
+def janssen_metrics(plan: Plan, a: dict, b: dict, code: str, rec_a: list | None = None,
+                    rec_b: list | None = None) -> list:
+    """Each judged parameter of code's ensemble fit against the native fit, and mu_w,eff of the
+    deep half member by member, all paired by member (members k of every code share their
+    jittered start; ``rec_a``, ``rec_b``: the member records, None or a failed record where a
+    member has none):
+
+    - K, lambda, mu_w,eff: the relative difference b/a - 1 of the two ensemble fits, its standard
+      error from the paired delete-one jackknife (member k left out of both ensembles;
+      janssen.jackknife_fits), n - 1 degrees of freedom; a fit below r^2_min on either side leaves
+      them inconclusive (the profile is not Janssen's);
+    - mu_w,eff of the deep half: every member's rho_b g W / (2 p_deep), p_deep its mean side-wall
+      pressure over the fitted bins of the lower half of the profile (between the native members'
+      mean surface and W/2 above the floor: the same bins in every code), where Janssen's pressure
+      nears p_inf = rho_b g W / (2 mu_w,eff); the paired relative difference of the member means
+      (stats.difference). It needs no fit, so a profile below the r^2 gate still judges it."""
     out = []
+    low_r2 = min(a["r2"], b["r2"]) < janssen.R2_MIN
+    why_r2 = (f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a fit counts only with "
+              f"r^2 >= {janssen.R2_MIN}")
+    jack, jack_why = {}, ""
+    if not low_r2 and rec_a is not None and rec_b is not None:
+        try:
+            jack = janssen.jackknife_fits(rec_a, rec_b, JANSSEN_JUDGED, a.get("merge"))
+        except (RuntimeError, ValueError) as e:
+            jack_why = f"paired jackknife: {e}"
     for k in JANSSEN_JUDGED:
         name = f"Janssen {k} ({code} vs native)"
-        if min(a["r2"], b["r2"]) < janssen.R2_MIN:
-            out.append(verdict.unjudged(name, plan.name, f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a "
-                                                         f"fit counts only with r^2 >= {janssen.R2_MIN}", "statistical"))
+        if low_r2 or k not in jack:
+            out.append(verdict.unjudged(name, plan.name, why_r2 if low_r2 else
+                                        (jack_why or "no member records to pair"), "statistical"))
             continue
-        ra = b[k] / a[k]
-        se = math.hypot(b["se"][k], ra * a["se"][k]) / abs(a[k])
-        st = {"type": "t", "relative": True, "n": [a.get("members", 0), b.get("members", 0)], "estimate": ra - 1,
-              "se": se, "df": FIT_DF, "design": "fit", "mean": [a[k], b[k]]}
+        se, n = jack[k]
+        st = {"type": "t", "relative": True, "n": [n, n], "estimate": b[k] / a[k] - 1, "se": se,
+              "df": float(n - 1), "design": "paired", "mean": [a[k], b[k]]}
         out.append(verdict.statistical(name, plan.name, st, "janssen", plan.options,
                                        {"native": [a[k], a["se"][k]], code: [b[k], b["se"][k]]},
-                                       "ensemble-averaged profile's fit, standard errors from its covariance"))
+                                       "ensemble-averaged profile's fit; standard error: paired jackknife "
+                                       "over the members"))
+    name = f"Janssen mu_w_eff of the deep half, member by member ({code} vs native)"
+    if rec_a is None or rec_b is None or not any(m and m.get("status") == "ok" for m in rec_a):
+        out.append(verdict.unjudged(name, plan.name, "no member records to pair", "statistical"))
+        return out
+    y_top = janssen.deep_top(rec_a)
+    merge = a.get("merge") or janssen.merge_for([next(m for m in rec_a if m and m.get("status") == "ok")])
+    va, nbins = janssen.saturated_mu(rec_a, y_top, merge)
+    vb, _ = janssen.saturated_mu(rec_b, y_top, merge)
+    st = stats.difference(va, vb, relative=True, paired=True)
+    if nbins < janssen.SAT_MIN_BINS:
+        st = dict(st, reason=f"{nbins} fitted bins below y = {y_top:.1f} cm: no deep part to average")
+    out.append(verdict.statistical(name, plan.name, st, "janssen", plan.options,
+                                   {"native": list(stats.mean_se([v for v in va if v is not None])[:2]),
+                                    code: list(stats.mean_se([v for v in vb if v is not None])[:2]),
+                                    "y_top": y_top, "bins": nbins},
+                                   f"rho_b g W / (2 p_deep) per member, p_deep the side-wall pressure over {nbins} "
+                                   f"bins below y = {y_top:.1f} cm (the lower half of the native profile)"))
     return out
-
-
-FIT_DF = 1e6   # a fit's parameter interval is normal (curve_fit's covariance, many bins)
 
 
 def discharge_start(plan: Plan, out: Path) -> np.ndarray | None:

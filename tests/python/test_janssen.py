@@ -146,9 +146,10 @@ def test_scene_generator_is_up_to_date():
     d = np.array([[float(v) for v in line.split(",")] for line in text])
     r = d[:, 2]
     assert r.min() >= 0.4 and r.max() <= 0.6                   # 0.8-1.2 x the mean radius 0.5 cm
-    assert abs(r.mean() - 0.5) < 0.01 and W >= 20 * 2 * 0.5       # W >= 20 mean diameters
-    # the packed fill (about 0.8 of the area) is at least 6 W deep
-    assert np.sum(math.pi * r ** 2) / (0.84 * W) >= 6 * W
+    assert abs(r.mean() - 0.5) < 0.01
+    # the column: 8 mean diameters wide, its packed fill (about 0.78 of the area) at least 20 W
+    # deep: 3 Janssen lengths at mu_w,eff = 0.1 and K = 0.7
+    assert np.sum(math.pi * r ** 2) / (0.8 * C_W) >= 20 * C_W
 
 
 def test_small_ensembles_use_the_pooled_scatter_and_still_cover_the_truth():
@@ -167,6 +168,7 @@ def test_small_ensembles_use_the_pooled_scatter_and_still_cover_the_truth():
 # ------------------------------------------------------------------ the column's members
 
 SCENE = ROOT / "reference_inputs" / "scenes" / "janssen_column.toml"
+C_W, C_MU_W = 8.0, 0.1       # the column's width [cm] and its smooth walls' friction
 
 
 @pytest.fixture
@@ -180,18 +182,20 @@ def column(dem_binary, monkeypatch):
 
 def test_the_column_lowers_its_floor_slowly_by_a_fraction_of_a_diameter(column):
     """The scene mobilises the wall friction by lowering the floor after the fill has settled:
-    by a fraction of the mean diameter, slowly against a free fall over a diameter, then it rests."""
+    by a fraction of the mean diameter, slowly against a free fall over a diameter, until the run
+    ends (the profile while the column slides along its smooth walls)."""
     floor = next(w for w in column["walls"] if w["group"] == "bottom")
     m = floor["motion"]
     d_mean = 2 * np.mean(np.array(column["discs"])[:, 2])
     depth = -m["velocity"][1] * (m["until"] - m["from"])
     assert m["velocity"][0] == 0 and 0.1 * d_mean <= depth <= 0.5 * d_mean
     assert -m["velocity"][1] < 0.02 * math.sqrt(2 * G * d_mean)
-    assert m["from"] >= 1.0 and column["end"]["time"] - m["until"] >= 0.25
+    assert m["from"] >= 1.0 and m["until"] == column["end"]["time"]
     # the side walls reach below the lowered floor: its ends stay on them
     assert all(min(w["from"][1], w["to"][1]) < -depth for w in column["walls"] if w["group"].startswith("side"))
     geo = janssen.geometry(column, column["end"]["time"])
-    assert geo["floor"] == pytest.approx(-depth, abs=1e-12) and geo["width"] == W and geo["mu_w"] == 0.5
+    assert geo["floor"] == pytest.approx(-depth, abs=1e-12) and geo["width"] == C_W and geo["mu_w"] == C_MU_W
+    assert next(p["mu"] for p in column["pairs"] if p["materials"] == ["sand", "sand"]) == 0.5
     assert janssen.geometry(column, 0.0)["floor"] == 0.0
 
 
@@ -208,9 +212,9 @@ def test_member_record_balance_and_mobilised_friction(column):
     r = column
     t_end = r["end"]["time"]
     geo = janssen.geometry(r, t_end)
-    discs = np.array([[10.0, 50.0 + k, 0.5, 0, 0, 0] for k in range(40)])
+    discs = np.array([[4.0, 50.0 + k, 0.5, 0, 0, 0] for k in range(40)])
     weight = float(np.sum(geo["rho_s"] * math.pi * discs[:, 2] ** 2) * geo["g"])
-    n_bins = 121                                           # 241 cm of side wall in 2 cm bins
+    n_bins = 121                                           # 241 cm of profile in 2 cm bins, the last 1 cm
     edges = np.minimum(np.arange(n_bins + 1) * 2.0, 241.0)
     prof = lambda normal, shear: {"s_lo": list(edges[:-1]), "s_hi": list(edges[1:]),  # noqa: E731
                                   "normal": list(normal), "shear": list(shear)}
@@ -223,12 +227,12 @@ def test_member_record_balance_and_mobilised_friction(column):
                                                                     list(shear)]} for w in ("left", "right")}}
     good = Result(code="x", case="c", discs_end=discs.tolist(), series=series,
                   profiles={"left": prof(normal, shear), "right": prof(normal, shear),
-                            "bottom": {"s_lo": [0.0], "s_hi": [20.0], "normal": [weight - friction], "shear": [0.0]}})
+                            "bottom": {"s_lo": [0.0], "s_hi": [C_W], "normal": [weight - friction], "shear": [0.0]}})
     rec = janssen.member_record(r, good, "x", 0, t_end)
     assert rec["balance"] == pytest.approx(0.0, abs=1e-12)
     assert rec["mobilised_upper"] == pytest.approx(0.3) and rec["mobilised_all"] == pytest.approx(0.3)
     assert rec["mobilised_before"] == pytest.approx(0.1)
-    assert rec["floor"] == pytest.approx(-0.25) and rec["p"][0] == pytest.approx(500.0)   # per cm of wall
+    assert rec["floor"] == pytest.approx(-0.4) and rec["p"][0] == pytest.approx(500.0)    # per cm of wall
     assert rec["p"][-1] == pytest.approx(1000.0)           # the last bin is 1 cm long
     good.profiles["bottom"]["normal"] = [weight - 0.5 * friction]   # half the friction missing
     assert janssen.member_record(r, good, "x", 0, t_end)["balance"] == pytest.approx(0.5 * friction / weight)
@@ -236,14 +240,14 @@ def test_member_record_balance_and_mobilised_friction(column):
     assert math.isnan(janssen.member_record(r, good, "x", 0, t_end)["mobilised_before"])
 
 
-def test_fitted_bins_are_half_the_width_tall_and_enough_over_the_depth():
-    """The fit's bins: W/2 (10 cm in the column), at least 8 of them between W/2 above the floor
-    and the surface of a fill 6.5 W deep."""
-    ms = synthetic_members(janssen_truth(), surface=130.0)
-    assert janssen.merge_for(ms) == 5
+def test_fitted_bins_are_the_width_tall_and_enough_over_the_depth():
+    """The fit's bins: W tall (8 cm in the column), at least 8 of them between W/2 above the floor
+    and the surface of a fill 22 W deep (the column's: 21 bins)."""
+    ms = synthetic_members(janssen_truth(), surface=22 * W, top=22 * W + 20)
+    assert janssen.merge_for(ms) == 10
     f = janssen.ensemble_fit(ms)
-    assert f["bin_width"] == pytest.approx(W / 2) and f["n_points"] >= 8
-    assert np.all(np.diff(f["profile"]["z"]) == pytest.approx(W / 2))
+    assert f["bin_width"] == pytest.approx(W) and f["n_points"] >= 8
+    assert np.all(np.diff(f["profile"]["z"]) == pytest.approx(W))
 
 
 def test_the_plan_refuses_a_run_that_ends_while_the_floor_moves(dem_binary, monkeypatch):
