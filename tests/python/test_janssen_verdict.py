@@ -1,4 +1,4 @@
-"""The Janssen column's judged statistics (compare/pipeline.py janssen_metrics, compare/janssen.py
+"""The Janssen column's judged statistics (compare/verdict/pipeline.py janssen_metrics, compare/cases/janssen.py
 saturated_mu, deep_top and jackknife_fits), on synthetic members (no simulation, seconds): two
 codes of the same physics agree on K, lambda, mu_w,eff and the deep half's mu_w,eff with paired
 intervals inside the 10 % margin; a disc-wall friction x 0.8 in one code (p_inf x 1.25, lambda x
@@ -10,8 +10,9 @@ import types
 import numpy as np
 import pytest
 
-from compare import janssen, pipeline, verdict
-from compare.plan import Options
+from compare.cases import janssen
+from compare.verdict import pipeline, verdict
+from compare.cases.plan import Options
 
 # A column like scripts/make_janssen_scene.py's (W = 8 cm, a fill 3 lambda deep), mu_w,eff = 0.1.
 W, RHO_S, PHI, G = 8.0, 2.65, 0.78, 980.0
