@@ -95,6 +95,11 @@ inline void onset_contact(const PairProps& p, double overlap, double du_n, doubl
   }
 }
 
+// The predicted velocity of disc i at t + dt (v the half step's, v0 the step start's), times h.
+inline double predicted(const std::vector<double>& v, const std::vector<double>& v0, std::size_t i, double h) {
+  return (2 * v[i] - v0[i]) * h;
+}
+
 }  // namespace
 
 void World::step_onset() {
@@ -148,7 +153,6 @@ template <NoTension NT, FrictionCap FC, LeverArm LA>
 void World::onset_forces_law(bool start) {
   Discs& d = discs;
   const std::size_t n = d.size();
-  const double h = dt;
   const double hs = start ? 0.0 : dt;  // the springs' increments v dt: none at the start
   onset_jx_.assign(n, 0.0);
   onset_jy_.assign(n, 0.0);
@@ -158,12 +162,22 @@ void World::onset_forces_law(bool start) {
     d.fy[i] = d.mass(i) * gy;
     d.torque[i] = 0;
   }
-  // The predicted velocity of disc i at t + dt, times dt.
-  const auto pred = [&](const std::vector<double>& v, const std::vector<double>& v0, std::size_t i) {
-    return (2 * v[i] - v0[i]) * h;
-  };
   double worst = 0;
-  // Disc pairs, in list order (the sums of (15) in the order of the other schemes' serial pass).
+  onset_pairs<NT, FC, LA>(hs, worst);
+  onset_walls<NT, FC, LA>(hs, worst);
+  max_overlap = worst;
+  if (record_pair_forces) pair_forces_step = steps + 1;
+}
+
+// Disc pairs, in list order (the sums of (15) in the order of the other schemes' serial pass).
+// hs: the springs' increments' factor (dt, or 0 at the start); worst: the largest overlap so far.
+template <NoTension NT, FrictionCap FC, LeverArm LA>
+void World::onset_pairs(double hs, double& worst) {
+  Discs& d = discs;
+  const double h = dt;
+  const auto pred = [&](const std::vector<double>& v, const std::vector<double>& v0, std::size_t i) {
+    return predicted(v, v0, i, h);
+  };
   auto& pairs = neighbors.pairs;
   const bool record = record_pair_forces;
   PairTotals::Force* rec = nullptr;
@@ -244,8 +258,17 @@ void World::onset_forces_law(bool start) {
     }
   }
   if constexpr (kTotalCap) onset_normals.end_pass(kept);
-  // Discs on walls and points (fixed: prepare() refuses moving ones), as wall_contacts: geometry
-  // first, a new contact inheriting the history of a lost neighbour (a wall and its end point).
+}
+
+// Discs on walls and points (fixed: prepare() refuses moving ones), as wall_contacts: geometry
+// first, a new contact inheriting the history of a lost neighbour (a wall and its end point).
+template <NoTension NT, FrictionCap FC, LeverArm LA>
+void World::onset_walls(double hs, double& worst) {
+  Discs& d = discs;
+  const double h = dt;
+  const auto pred = [&](const std::vector<double>& v, const std::vector<double>& v0, std::size_t i) {
+    return predicted(v, v0, i, h);
+  };
   auto& wl = neighbors.walls;
   const int n_walls = static_cast<int>(geometry.walls.size());
   char* now = touch_scratch_[0].data();
@@ -303,8 +326,6 @@ void World::onset_forces_law(bool start) {
     }
     b = e;
   }
-  max_overlap = worst;
-  if (record) pair_forces_step = steps + 1;
 }
 
 }  // namespace dem

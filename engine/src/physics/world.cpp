@@ -657,6 +657,142 @@ struct TotalsWriter {
 };
 }  // namespace
 
+// A pair stage's arrays (World::pair_contacts) and its two sub-steps around the law: gather a
+// block of touching pairs from the list, add the block's forces to the discs. Inlined into the
+// stage: one loop, as if written there.
+template <LeverArm LA, bool SHEAR, bool RECORD, bool ONE_KIND, bool CROSS>
+struct World::PairPass {
+  ForceBlock& blk;
+  const std::size_t* cross;  // CROSS: the block's cross pairs (cross_in_), and their results
+  CrossForce* cross_f;
+  std::size_t p0, p1;
+  PairContact* pc;
+  const Discs& d;
+  const double *x, *y;
+  // Radius and material by kind: a small table, read through each disc's kind.
+  const int* kd;
+  const double* kr;
+  const int* kmat;
+  Increments u;
+  double *fxa, *fya, *tq;
+  int n_mat;
+  double sum1;  // r_i + r_j of every pair, one kind of disc
+  double lim1;  // apart() of one kind of disc: R^2 > lim1, its square taken once
+
+  PairPass(World& w, ForceBlock& b)
+      : blk(b),
+        cross(CROSS ? w.cross_in_[b.t].value.data() : nullptr),
+        cross_f(CROSS ? w.cross_forces_[b.t].value.data() : nullptr),
+        p0(CROSS ? 0 : b.p0),
+        p1(CROSS ? w.cross_in_[b.t].value.size() : b.p1),
+        pc(w.neighbors.pairs.data()),
+        d(w.discs),
+        x(d.x.data()),
+        y(d.y.data()),
+        kd(d.kind.data()),
+        kr(d.kinds.r.data()),
+        kmat(d.kinds.material.data()),
+        u(w.increments()),
+        fxa(w.discs.fx.data()),
+        fya(w.discs.fy.data()),
+        tq(w.discs.torque.data()),
+        n_mat(w.n_materials),
+        sum1(ONE_KIND ? kr[0] + kr[0] : 0.0),
+        lim1(sum1 * sum1) {}
+
+  PairContact& contact(std::size_t p) const { return pc[CROSS ? cross[p] : p]; }
+
+  // Pairs from p on into the block b (n of them so far), up to the next cross pair `stop` or a
+  // full block. A pair found apart loses its history here (3).
+  __attribute__((always_inline)) void gather(PairBlock& b, int& n, std::size_t& p, std::size_t stop) const {
+    PairContact* __restrict pcr = pc;
+    const double* __restrict xr = x; const double* __restrict yr = y;
+    const int* __restrict kdr = kd; const double* __restrict krr = kr; const int* __restrict kmr = kmat;
+    const double* __restrict ux = u.x; const double* __restrict uy = u.y; const double* __restrict uphi = u.phi;
+    // One bound, so that the loop tests one index.
+    const std::size_t end = std::min(stop, p + static_cast<std::size_t>(PairBlock::kSize - n));
+    for (; p < end; ++p) {
+      PairContact& c = pcr[CROSS ? cross[p] : p];
+      const int i = c.i, j = c.j;
+      const int ki = ONE_KIND ? 0 : kdr[i], kj = ONE_KIND ? 0 : kdr[j];
+      const double ri = krr[ki], rj = krr[kj];
+      const double dx = xr[j] - xr[i], dy = yr[j] - yr[i];
+      const double R2 = dx * dx + dy * dy, sum = ri + rj;
+      if (ONE_KIND ? R2 > lim1 : apart(R2, sum)) {  // (3): apart; the contact and its history end
+        c.en = c.es = 0;
+        if constexpr (CROSS) cross_f[p].touching = false;
+        continue;
+      }
+      b.pair[n] = static_cast<int>(p - p0);
+      b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
+      if constexpr (!ONE_KIND) b.sum[n] = sum;
+      b.dui[n] = ux[i]; b.duj[n] = ux[j];  // (5), times uf in the law
+      b.dvi[n] = uy[i]; b.dvj[n] = uy[j];
+      if constexpr (SHEAR) {  // r dphi of (5b) in the law (the contact point's arms need the overlap)
+        b.rot_i[n] = uphi[i];
+        b.rot_j[n] = uphi[j];
+        if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
+      }
+      if constexpr (!ONE_KIND) b.prop[n] = kmr[ki] * n_mat + kmr[kj];
+      b.en[n] = c.en; b.es[n] = c.es;
+      ++n;
+    }
+  }
+
+  // The law's results of the block's n pairs to the discs, in list order, the sums of (15); the
+  // history back to the list. RECORD: the totals (and the places of the touching cross pairs
+  // before offset `below`, b.gap[0, gaps)). CROSS: the force on j added, the one on i kept for
+  // i's block (add_cross_forces).
+  __attribute__((always_inline)) void add(const PairBlock& b, int n, int gaps, std::size_t below, TotalsWriter& totals,
+                                          double& worst) const {
+    const int* __restrict kdr = kd; const double* __restrict krr = kr;
+    double* __restrict fx_ = fxa; double* __restrict fy_ = fya; double* __restrict tq_ = tq;
+    // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
+    // is never the current i): the same additions in the same order, without a store and a
+    // reload of fx[i], fy[i], torque[i] between two pairs of one disc.
+    int cur = -1;
+    double ax = 0, ay = 0, at = 0;
+    const auto put_back = [&] {  // the current disc's sums to its arrays
+      if (cur < 0) return;
+      fx_[cur] = ax; fy_[cur] = ay;
+      if constexpr (SHEAR) tq_[cur] = at;
+    };
+    int g = 0;  // RECORD: the next cross pair's place to keep
+    for (int k = 0; k < n; ++k) {
+      PairContact& c = pc[CROSS ? cross[b.pair[k]] : p0 + static_cast<std::size_t>(b.pair[k])];
+      const int i = c.i, j = c.j;
+      c.en = b.en[k]; c.es = b.es[k];
+      worst = std::max(worst, b.overlap[k]);
+      const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
+      constexpr bool CP = LA == LeverArm::contact_point;
+      const double rj = CP ? b.arm_j[k] : krr[ONE_KIND ? 0 : kdr[j]];
+      if constexpr (CROSS) {  // j is this block's; i's forces go to its block
+        const double ri = CP ? b.arm_i[k] : krr[ONE_KIND ? 0 : kdr[i]];
+        cross_f[b.pair[k]] = CrossForce{fx, fy, SHEAR ? contact_moment(ri, fs) : 0.0, b.fn[k], fs, true};
+        fx_[j] -= fx; fy_[j] -= fy;
+        if constexpr (SHEAR) tq_[j] -= contact_moment(rj, fs);
+        continue;
+      }
+      if constexpr (RECORD) {
+        totals.keep(b.gap, gaps, g, p0, static_cast<std::size_t>(b.pair[k]), blk.gaps);
+        totals.put(p0 + static_cast<std::size_t>(b.pair[k]), b.fn[k], fs);
+      }
+      if (i != cur) {
+        put_back();
+        cur = i;
+        ax = fx_[i]; ay = fy_[i];
+        if constexpr (SHEAR) at = tq_[i];
+      }
+      ax += fx; ay += fy;
+      if constexpr (SHEAR) at -= contact_moment(CP ? b.arm_i[k] : krr[ONE_KIND ? 0 : kdr[i]], fs);  // (15c)
+      fx_[j] -= fx; fy_[j] -= fy;
+      if constexpr (SHEAR) tq_[j] -= contact_moment(rj, fs);
+    }
+    put_back();
+    if constexpr (RECORD) totals.keep(b.gap, gaps, g, p0, below, blk.gaps);
+  }
+};
+
 // The stage of the disc pairs: the block's pairs [p0, p1) of the sorted list, a block of touching
 // pairs at a time. The geometry of each pair is gathered (a pair found apart loses its history
 // there), the law runs on the block's arrays (pair_block_law: (4), (5), (6)-(14), (15a, b)), and
@@ -669,27 +805,12 @@ template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR
           bool CROSS>
 void World::pair_contacts(ForceBlock& blk) {
   static_assert(!(CROSS && RECORD), "the cross pass hands its totals to i's block");
-  const std::size_t* cross = CROSS ? cross_in_[blk.t].value.data() : nullptr;
-  CrossForce* cross_f = CROSS ? cross_forces_[blk.t].value.data() : nullptr;
-  const std::size_t p0 = CROSS ? 0 : blk.p0, p1 = CROSS ? cross_in_[blk.t].value.size() : blk.p1;
+  const PairPass<LA, SHEAR, RECORD, ONE_KIND, CROSS> pass(*this, blk);
+  const std::size_t p0 = pass.p0, p1 = pass.p1;
   const PairLaw law = kernel_->pair_law[width_index()][ONE_KIND];
-  Discs& d = discs;
   const double inv_dt = 1.0 / dt;
-  PairContact* __restrict pc = neighbors.pairs.data();
-  const Increments u = increments();
-  // Distinct arrays: restrict lets the compiler keep values in registers across the stores.
-  const double* __restrict x = d.x.data(); const double* __restrict y = d.y.data();
-  // Radius and material by kind: a small table, read through each disc's kind.
-  const int* __restrict kd = d.kind.data();
-  const double* __restrict kr = d.kinds.r.data(); const int* __restrict kmat = d.kinds.material.data();
-  const double* __restrict ux = u.x; const double* __restrict uy = u.y; const double* __restrict uphi = u.phi;
-  const double uf = u.factor;
-  double* __restrict fxa = d.fx.data(); double* __restrict fya = d.fy.data(); double* __restrict tq = d.torque.data();
-  const int n_mat = n_materials;
   // One kind of disc: one pair of materials, its constants fetched once.
-  const PairProps* law_props = ONE_KIND ? &props[kmat[0] * n_mat + kmat[0]] : props.data();
-  const double sum1 = ONE_KIND ? kr[0] + kr[0] : 0.0;  // r_i + r_j of every pair, one kind of disc
-  const double lim1 = sum1 * sum1;  // apart() of one kind of disc: R^2 > lim1, its square taken once
+  const PairProps* law_props = ONE_KIND ? &props[pass.kmat[0] * n_materials + pass.kmat[0]] : props.data();
   PairBlock b;  // on this thread's stack (20 kB), hot in its cache
   double worst = 0;
   TotalsWriter totals{blk.record, RECORD ? pair_totals.bits() : nullptr};  // RECORD only
@@ -703,87 +824,18 @@ void World::pair_contacts(ForceBlock& blk) {
     while (p < p1 && n < PairBlock::kSize && gaps < PairBlock::kSize) {
       if (p == stop) {  // a cross pair
         if constexpr (RECORD) {
-          const int i = pc[p].i, j = pc[p].j;
-          const double dx = x[j] - x[i], dy = y[j] - y[i];
-          if (!apart(dx * dx + dy * dy, d.r(i) + d.r(j))) b.gap[gaps++] = static_cast<int>(p - p0);
+          const PairContact& c = pass.contact(p);
+          const double dx = pass.x[c.j] - pass.x[c.i], dy = pass.y[c.j] - pass.y[c.i];
+          if (!apart(dx * dx + dy * dy, discs.r(c.i) + discs.r(c.j))) b.gap[gaps++] = static_cast<int>(p - p0);
         }
         ++p;
         stop = ++next_cross != cross_end ? next_cross->q : p1;
         continue;
       }
-      // To the next cross pair or a full block: one bound, so that the loop tests one index.
-      const std::size_t end = std::min(stop, p + static_cast<std::size_t>(PairBlock::kSize - n));
-      for (; p < end; ++p) {
-        PairContact& c = pc[CROSS ? cross[p] : p];
-        const int i = c.i, j = c.j;
-        const int ki = ONE_KIND ? 0 : kd[i], kj = ONE_KIND ? 0 : kd[j];
-        const double ri = kr[ki], rj = kr[kj];
-        const double dx = x[j] - x[i], dy = y[j] - y[i];
-        const double R2 = dx * dx + dy * dy, sum = ri + rj;
-        if (ONE_KIND ? R2 > lim1 : apart(R2, sum)) {  // (3): apart; the contact and its history end
-          c.en = c.es = 0;
-          if constexpr (CROSS) cross_f[p].touching = false;
-          continue;
-        }
-        b.pair[n] = static_cast<int>(p - p0);
-        b.dx[n] = dx; b.dy[n] = dy; b.R2[n] = R2;
-        if constexpr (!ONE_KIND) b.sum[n] = sum;
-        b.dui[n] = ux[i]; b.duj[n] = ux[j];  // (5), times uf in the law
-        b.dvi[n] = uy[i]; b.dvj[n] = uy[j];
-        if constexpr (SHEAR) {  // r dphi of (5b) in the law (the contact point's arms need the overlap)
-          b.rot_i[n] = uphi[i];
-          b.rot_j[n] = uphi[j];
-          if constexpr (!ONE_KIND) { b.arm_i[n] = ri; b.arm_j[n] = rj; }
-        }
-        if constexpr (!ONE_KIND) b.prop[n] = kmat[ki] * n_mat + kmat[kj];
-        b.en[n] = c.en; b.es[n] = c.es;
-        ++n;
-      }
+      pass.gather(b, n, p, stop);
     }
-    law(b, n, law_props, inv_dt, sum1, uf);
-    // Disc i's sums in registers while its pairs follow one another (the list is sorted by i; a j
-    // is never the current i): the same additions in the same order, without a store and a
-    // reload of fx[i], fy[i], torque[i] between two pairs of one disc.
-    int cur = -1;
-    double ax = 0, ay = 0, at = 0;
-    const auto put_back = [&] {  // the current disc's sums to its arrays
-      if (cur < 0) return;
-      fxa[cur] = ax; fya[cur] = ay;
-      if constexpr (SHEAR) tq[cur] = at;
-    };
-    int g = 0;  // RECORD: the next cross pair's place to keep
-    for (int k = 0; k < n; ++k) {
-      PairContact& c = pc[CROSS ? cross[b.pair[k]] : p0 + static_cast<std::size_t>(b.pair[k])];
-      const int i = c.i, j = c.j;
-      c.en = b.en[k]; c.es = b.es[k];
-      worst = std::max(worst, b.overlap[k]);
-      const double fx = b.fx[k], fy = b.fy[k], fs = b.fs[k];
-      constexpr bool CP = LA == LeverArm::contact_point;
-      const double rj = CP ? b.arm_j[k] : kr[ONE_KIND ? 0 : kd[j]];
-      if constexpr (CROSS) {  // j is this block's; i's forces go to its block
-        const double ri = CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]];
-        cross_f[b.pair[k]] = CrossForce{fx, fy, SHEAR ? contact_moment(ri, fs) : 0.0, b.fn[k], fs, true};
-        fxa[j] -= fx; fya[j] -= fy;
-        if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
-        continue;
-      }
-      if constexpr (RECORD) {
-        totals.keep(b.gap, gaps, g, p0, static_cast<std::size_t>(b.pair[k]), blk.gaps);
-        totals.put(p0 + static_cast<std::size_t>(b.pair[k]), b.fn[k], fs);
-      }
-      if (i != cur) {
-        put_back();
-        cur = i;
-        ax = fxa[i]; ay = fya[i];
-        if constexpr (SHEAR) at = tq[i];
-      }
-      ax += fx; ay += fy;
-      if constexpr (SHEAR) at -= contact_moment(CP ? b.arm_i[k] : kr[ONE_KIND ? 0 : kd[i]], fs);  // (15c)
-      fxa[j] -= fx; fya[j] -= fy;
-      if constexpr (SHEAR) tq[j] -= contact_moment(rj, fs);
-    }
-    put_back();
-    if constexpr (RECORD) totals.keep(b.gap, gaps, g, p0, p - p0, blk.gaps);
+    law(b, n, law_props, inv_dt, pass.sum1, pass.u.factor);
+    pass.add(b, n, gaps, p - p0, totals, worst);
   }
   if constexpr (RECORD) totals.flush();
   blk.pair_overlap = std::max(blk.pair_overlap, worst);

@@ -244,6 +244,8 @@ class World {
   template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND,
             bool CROSS = false>
   void pair_contacts(ForceBlock& b);
+  template <LeverArm LA, bool SHEAR, bool RECORD, bool ONE_KIND, bool CROSS>
+  struct PairPass;  // a pair stage's arrays and sub-steps
   template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
   void wall_contacts(ForceBlock& b);      // discs on walls and points: (3)-(15)
   template <NormalSpring NS>
@@ -265,6 +267,10 @@ class World {
   void onset_forces(bool start = false);
   template <NoTension NT, FrictionCap FC, LeverArm LA>
   void onset_forces_law(bool start);
+  template <NoTension NT, FrictionCap FC, LeverArm LA>
+  void onset_pairs(double hs, double& worst);  // its disc pairs; worst: the largest overlap
+  template <NoTension NT, FrictionCap FC, LeverArm LA>
+  void onset_walls(double hs, double& worst);  // its discs on walls and points
   std::vector<double> onset_vx_, onset_vy_, onset_om_;  // v(t) of the step's start (not state: set each step)
   std::vector<double> onset_jx_, onset_jy_, onset_jt_;  // the step's missed impulses (x, y, moment)
   void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (world_walls.cpp)
