@@ -92,7 +92,7 @@ def functions(src: Path):
         for k, line in enumerate(lines):
             if start is None and line.endswith("{") and re.match(r"^[A-Za-z].*\)\s*(const\s*)?(override\s*)?\{$", line):
                 start = k
-            elif start is not None and line == "}":
+            elif start is not None and line in ("}", "};"):  # a function, or a lambda at namespace scope
                 out.append((k - start + 1, f"{f.relative_to(src)}:{start + 1}", lines[start][:90]))
                 start = None
     return sorted(out, reverse=True)
@@ -258,8 +258,9 @@ def markdown(root: Path) -> list[str]:
     n, _ = floors(g)
     fns = functions(src)
     over = [f for f in fns if f[0] > 100]
-    longest = ", ".join(f"`{head.split('(')[0].split()[-1]}` {length} ({where.split(':')[0]})"
-                        for length, where, head in fns[:3])
+    def name(head):  # a function's name, or a lambda's (`auto f = [](...) {`)
+        return (head.split("=")[0] if "= [" in head else head.split("(")[0]).split()[-1]
+    longest = ", ".join(f"`{name(head)}` {length} ({where.split(':')[0]})" for length, where, head in fns[:3])
     mods, pg, in_function, long_py = py_graph(root / "compare")
     fg = folder_graph(mods, pg)
     modules = sum(1 for f in mods.values() if f.name != "__init__.py")

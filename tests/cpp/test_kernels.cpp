@@ -1,14 +1,17 @@
-// The kernel table (physics/kernels.hpp): the kernels compiled are exactly the rows it declares
-// (each law with each feature set, in its order, each once), and a world runs the row of its
-// law and of what it uses: a feature it does not use (shear, dashpots, bonds, moving walls) is
-// absent from its kernel.
+// The kernel list (physics/kernels.hpp): the kernels compiled are exactly the rows it declares
+// (each law with each feature set, then the moves, in its order, each once), row_of finds each,
+// and a world runs the row of its law and of what it uses: a feature it does not use (shear,
+// dashpots, bonds, moving walls) is absent from its kernel.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "helpers.hpp"
+#include "physics/contact_law.hpp"
 #include "physics/kernels.hpp"
 #include "physics/world.hpp"
 
@@ -30,13 +33,17 @@ bool has(const std::string& name, const std::string& word) {
   return (" " + name + " ").find(" " + word + " ") != std::string::npos;
 }
 
-TEST(Kernels, TheCompiledTableIsTheDeclaredOne) {
+TEST(Kernels, TheCompiledListIsTheDeclaredOne) {
   const std::vector<std::string> names = World::kernel_names();
-  ASSERT_EQ(names.size(), kKernelCount);
+  ASSERT_EQ(names.size(), kKernelCount + kMoveCount);
   EXPECT_EQ(kKernelCount, kLawCount * kFeatureCount);
   for (std::size_t k = 0; k < kKernelCount; ++k) EXPECT_EQ(names[k], kernel_name(kernel_key(k))) << k;
+  for (std::size_t m = 0; m < kMoveCount; ++m) EXPECT_EQ(names[kKernelCount + m], kernel_name(kMoves[m])) << m;
   EXPECT_EQ(std::set<std::string>(names.begin(), names.end()).size(), names.size()) << "a row compiled twice";
-  std::printf("%zu force kernels (%zu laws x %zu feature sets):\n", names.size(), kLawCount, kFeatureCount);
+  for (std::size_t k = 0; k < kKernelCount; ++k) EXPECT_EQ(row_of(kKernels, kernel_key(k)), k);
+  for (std::size_t m = 0; m < kMoveCount; ++m) EXPECT_EQ(row_of(kMoves, kMoves[m]), m);
+  std::printf("%zu force rows (%zu laws x %zu feature sets), %zu move rows:\n", kKernelCount, kLawCount, kFeatureCount,
+              kMoveCount);
   for (const std::string& n : names) std::printf("  %s\n", n.c_str());
 }
 
@@ -47,6 +54,46 @@ TEST(Kernels, EveryLawAndArmSelectsItsRow) {
       w.init();
       EXPECT_EQ(w.kernel_name(), kernel_name({law, {arm, true, true, false, false}}));
     }
+}
+
+// Under the overlap spring no touching contact (overlap >= 0) has e_n < 0: the no-tension rule on
+// the overlap gives the elastic rule's bits, and such a scene runs the elastic rule's row.
+TEST(Kernels, TheOverlapRuleOfTheOverlapSpringIsTheElasticRow) {
+  const PairProps p = full_props();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  for (int k = 0; k < 20000; ++k) {
+    const double overlap = k % 10 == 0 ? 0.0 : std::abs(u(rng)) * 0.05, du_n = u(rng) * 0.01, du_s = u(rng) * 0.01;
+    const double en0 = u(rng) * 1e6, es0 = u(rng) * 1e6;
+    double ea = en0, sa = es0, fna, fsa, eb = en0, sb = es0, fnb, fsb;
+    contact_law<NormalSpring::overlap, NoTension::overlap, FrictionCap::total>(p, overlap, du_n, du_s, 1e4, ea, sa, fna, fsa);
+    contact_law<NormalSpring::overlap, NoTension::elastic, FrictionCap::total>(p, overlap, du_n, du_s, 1e4, eb, sb, fnb, fsb);
+    ASSERT_TRUE(same(ea, eb) && same(sa, sb) && same(fna, fnb) && same(fsa, fsb)) << k;
+    ea = eb = en0; sa = sb = es0;
+    contact_law<NormalSpring::overlap, NoTension::overlap, FrictionCap::elastic>(p, overlap, du_n, du_s, 1e4, ea, sa, fna, fsa);
+    contact_law<NormalSpring::overlap, NoTension::elastic, FrictionCap::elastic>(p, overlap, du_n, du_s, 1e4, eb, sb, fnb, fsb);
+    ASSERT_TRUE(same(ea, eb) && same(sa, sb) && same(fna, fnb) && same(fsa, fsb)) << k;
+  }
+  for (FrictionCap cap : {FrictionCap::elastic, FrictionCap::total}) {
+    World a = two_discs(p, {NormalSpring::overlap, NoTension::overlap, cap, LeverArm::radius});
+    a.init();
+    EXPECT_EQ(a.kernel_name(), kernel_name({{NormalSpring::overlap, NoTension::elastic, cap}, {LeverArm::radius, true, true, false, false}}));
+  }
+}
+
+// velocity_verlet_onset's pass is its row's: the overlap spring's rows have it, the others not.
+TEST(Kernels, TheOnsetSchemeRunsItsRow) {
+  ContactOptions o;
+  o.normal_spring = NormalSpring::overlap;
+  World w = two_discs(full_props(), o);
+  w.scheme = Scheme::velocity_verlet_onset;
+  w.init();
+  for (int s = 0; s < 10; ++s) w.step();
+  EXPECT_TRUE(w.all_finite());
+  World v = two_discs(full_props());
+  v.scheme = Scheme::velocity_verlet_onset;
+  EXPECT_THROW(v.init(), std::invalid_argument);  // the incremental spring: no onset row
 }
 
 TEST(Kernels, AnUnusedFeatureIsNotInTheKernel) {

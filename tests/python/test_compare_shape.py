@@ -36,3 +36,14 @@ def test_the_measure_sees_a_circle_and_an_import_in_a_function(tmp_path):
     assert shape.strongly_connected(g) == [["pkg.a.x", "pkg.b.y"]]
     assert shape.strongly_connected(shape.folder_graph(mods, g)) == [["pkg.a", "pkg.b"]]
     assert [m for _, m in in_function] == ["pkg.a.x"]
+
+
+def test_architecture_doc_quotes_the_measured_shape_and_no_engine_function_passes_100_lines(tmp_path, capsys):
+    """docs/architecture.md's figures are engine_shape.py's, measured now; a changed figure is
+    found; engine/src has no function over 100 lines."""
+    doc = REPO / "docs" / "architecture.md"
+    assert shape.check(doc, REPO) == 0, capsys.readouterr().out
+    assert [f for f in shape.functions(REPO / "engine" / "src") if f[0] > 100] == []
+    stale = tmp_path / "architecture.md"
+    stale.write_text(doc.read_text().replace(" 9 include floors", " 8 include floors"))
+    assert shape.check(stale, REPO) == 1 and "stale" in capsys.readouterr().out

@@ -113,41 +113,22 @@ class NthKept {
   std::size_t k_ = 0, at_ = 0;
 };
 
-}  // namespace
+// The contacts of the contact files, in this order: the touching disc-disc pairs (list order),
+// the bonds between distinct places, the touching obstacle contacts. Counted first, then read in
+// order. Every contact is written where its forces were computed: eqs. (18) and (19) compute the
+// forces and then move the discs in the same pass, so their discs are taken back by the step's
+// increment (World::increments); Verlet computes the forces after its move.
+class ContactRows {
+ public:
+  explicit ContactRows(const World& w)
+      : w_(w), d_(w.discs), moved_after_forces_(!verlet_family(w.scheme) && w.steps > 0), inc_(w.increments()),
+        recorded_(w.pair_forces_current()), nw_(static_cast<int>(w.geometry.walls.size())) {
+    for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) np_ += touching(p);
+    for (std::size_t p = 0; p < w.bonds.size(); ++p) nb_ += bonded(p);
+    for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) nwc_ += wall_touching(p);
+  }
+  std::size_t size() const { return np_ + nb_ + nwc_; }
 
-void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary, bool vtu) {
-  const Discs& d = w.discs;
-  // Every contact is written where its forces were computed. Eqs. (18) and (19) compute the
-  // forces and then move the discs in the same pass, so their discs are taken back by the
-  // step's increment (World::increments); Verlet computes the forces after its move.
-  const bool moved_after_forces = !verlet_family(w.scheme) && w.steps > 0;
-  const World::Increments inc = w.increments();
-  const auto px = [&](int i) { return moved_after_forces ? d.x[i] - inc.x[i] * inc.factor : d.x[i]; };
-  const auto py = [&](int i) { return moved_after_forces ? d.y[i] - inc.y[i] * inc.factor : d.y[i]; };
-  // The contacts written, in this order: the touching disc-disc pairs (list order), the bonds
-  // between distinct places, the touching obstacle contacts. Counted first, then read in order.
-  const auto dist = [&](int i, int j) { return std::hypot(px(j) - px(i), py(j) - py(i)); };
-  const auto touching = [&](std::size_t p) {
-    const PairContact& c = w.neighbors.pairs[p];
-    const double R = dist(c.i, c.j);
-    return R <= d.r(c.i) + d.r(c.j) && R != 0;
-  };
-  const auto bonded = [&](std::size_t p) { return dist(w.bonds[p].i, w.bonds[p].j) != 0; };
-  const auto wall_touching = [&](std::size_t p) { return w.neighbors.walls[p].touching; };
-  std::size_t np = 0, nb = 0, nwc = 0;
-  for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) np += touching(p);
-  for (std::size_t p = 0; p < w.bonds.size(); ++p) nb += bonded(p);
-  for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) nwc += wall_touching(p);
-  const std::size_t n = np + nb + nwc;
-  // A pair's totals: its entry in the recorded totals of this step, found by a cursor walking
-  // them beside the pairs (PairTotals::at); (0, 0) for a pair that pass found apart, NaN when this
-  // step's forces were not recorded (the run loops record them).
-  const bool recorded = w.pair_forces_current();
-  const auto totals = [&](std::size_t p, PairTotals::Cursor& r, double& fn, double& fs) {
-    const PairTotals::Force* f = recorded ? w.pair_totals.at(w.neighbors.pairs, p, r) : nullptr;
-    fn = !recorded ? NAN : f ? f->fn : 0.0;
-    fs = !recorded ? NAN : f ? f->fs : 0.0;
-  };
   // Contact c of the VTU: its forces, its disc i and its other end (disc j, or the obstacle point).
   struct Entry {
     double en, es, fn, fs;
@@ -155,38 +136,66 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     int i, j;  // j < 0: the other end is (px, py)
     double px, py;
   };
-  const int nw = static_cast<int>(w.geometry.walls.size());
-  NthKept pair_at, bond_at, wall_at;
-  PairTotals::Cursor rec_at;  // the record cursor (a section read from its start again restarts it)
-  const auto entry = [&](std::size_t c) -> Entry {
-    if (c < np) {
-      const std::size_t p = pair_at.find(c, touching);
-      const PairContact& q = w.neighbors.pairs[p];
+  Entry entry(std::size_t c) {
+    if (c < np_) {
+      const std::size_t p = pair_at_.find(c, [this](std::size_t q) { return touching(q); });
+      const PairContact& q = w_.neighbors.pairs[p];
       double fn, fs;
-      totals(p, rec_at, fn, fs);
+      totals(p, rec_at_, fn, fs);
       return {q.en, q.es, fn, fs, 0, q.i, q.j, 0, 0};
     }
-    if (c < np + nb) {
-      const Bond& q = w.bonds[bond_at.find(c - np, bonded)];
+    if (c < np_ + nb_) {
+      const Bond& q = w_.bonds[bond_at_.find(c - np_, [this](std::size_t b) { return bonded(b); })];
       return {q.en, q.es, q.fn, q.fs, 3, q.i, q.j, 0, 0};
     }
-    const WallContact& q = w.neighbors.walls[wall_at.find(c - np - nb, wall_touching)];
-    return {q.en, q.es, q.fn, q.fs, q.k < nw ? 1 : 2, q.i, -1, q.px, q.py};
-  };
-  const auto point = [&](std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
+    const WallContact& q = w_.neighbors.walls[wall_at_.find(c - np_ - nb_, [this](std::size_t a) { return wall_touching(a); })];
+    return {q.en, q.es, q.fn, q.fs, q.k < nw_ ? 1 : 2, q.i, -1, q.px, q.py};
+  }
+  void point(std::size_t k, double& x, double& y) {  // point k: end k % 2 of contact k / 2
     const Entry e = entry(k / 2);
     const int i = k % 2 ? e.j : e.i;
     x = i >= 0 ? px(i) : e.px;
     y = i >= 0 ? py(i) : e.py;
-  };
+  }
 
-  std::ofstream o;  // NAME.csv.tmp, renamed when complete
-  const std::string csv = dir + "/" + stem + ".csv";
-  o.open(csv + ".tmp", std::ios::binary);
-  o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
-  PairTotals::Cursor r;
-  const auto write_pair = [&](std::size_t p, double fn, double fs) {
-    const PairContact& c = w.neighbors.pairs[p];
+  // The CSV's rows in the lists' order: the discs are in the user's order.
+  void write_list_order(std::ostream& o) const {
+    PairTotals::Cursor r;
+    for (std::size_t p = 0; p < w_.neighbors.pairs.size(); ++p) {
+      if (!touching(p)) continue;
+      double fn, fs;
+      totals(p, r, fn, fs);
+      write_pair(o, p, fn, fs);
+    }
+    for (std::size_t p = 0; p < w_.bonds.size(); ++p)
+      if (bonded(p)) write_bond(o, p);
+    for (std::size_t p = 0; p < w_.neighbors.walls.size(); ++p)
+      if (wall_touching(p)) write_wall(o, p);
+  }
+  void write_id_order(std::ostream& o) const;
+
+ private:
+  double px(int i) const { return moved_after_forces_ ? d_.x[i] - inc_.x[i] * inc_.factor : d_.x[i]; }
+  double py(int i) const { return moved_after_forces_ ? d_.y[i] - inc_.y[i] * inc_.factor : d_.y[i]; }
+  double dist(int i, int j) const { return std::hypot(px(j) - px(i), py(j) - py(i)); }
+  bool touching(std::size_t p) const {
+    const PairContact& c = w_.neighbors.pairs[p];
+    const double R = dist(c.i, c.j);
+    return R <= d_.r(c.i) + d_.r(c.j) && R != 0;
+  }
+  bool bonded(std::size_t p) const { return dist(w_.bonds[p].i, w_.bonds[p].j) != 0; }
+  bool wall_touching(std::size_t p) const { return w_.neighbors.walls[p].touching; }
+  // A pair's totals: its entry in the recorded totals of this step, found by a cursor walking
+  // them beside the pairs (PairTotals::at); (0, 0) for a pair that pass found apart, NaN when this
+  // step's forces were not recorded (the run loops record them).
+  void totals(std::size_t p, PairTotals::Cursor& r, double& fn, double& fs) const {
+    const PairTotals::Force* f = recorded_ ? w_.pair_totals.at(w_.neighbors.pairs, p, r) : nullptr;
+    fn = !recorded_ ? NAN : f ? f->fn : 0.0;
+    fs = !recorded_ ? NAN : f ? f->fs : 0.0;
+  }
+  void write_pair(std::ostream& o, std::size_t p, double fn, double fs) const {
+    const Discs& d = d_;
+    const PairContact& c = w_.neighbors.pairs[p];
     const bool flip = d.id_at(c.i) > d.id_at(c.j);  // a pair seen from its other disc: the normal reversed
     const int i = flip ? c.j : c.i, j = flip ? c.i : c.j;
     const double dx = px(j) - px(i), dy = py(j) - py(i);
@@ -195,9 +204,10 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     const double cx = px(i) + nx * (d.r(i) - 0.5 * ov), cy = py(i) + ny * (d.r(i) - 0.5 * ov);
     o << "dd," << d.id_at(i) << ',' << d.id_at(j) << ',' << fmt(cx) << ',' << fmt(cy) << ',' << fmt(nx) << ','
       << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(fn) << ',' << fmt(fs) << '\n';
-  };
-  const auto write_bond = [&](std::size_t p) {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
-    const Bond& c = w.bonds[p];
+  }
+  void write_bond(std::ostream& o, std::size_t p) const {  // cluster bonds (paper 2), at their bond point; e_n < 0 is tension
+    const Discs& d = d_;
+    const Bond& c = w_.bonds[p];
     const bool flip = d.id_at(c.i) > d.id_at(c.j);
     const int i = flip ? c.j : c.i, j = flip ? c.i : c.j;
     const double ai = flip ? c.aj : c.ai, aj = flip ? c.ai : c.aj;
@@ -207,84 +217,100 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
     o << "db," << d.id_at(i) << ',' << d.id_at(j) << ',' << fmt(px(i) + nx * at) << ',' << fmt(py(i) + ny * at)
       << ',' << fmt(nx) << ',' << fmt(ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
-  };
-  const auto write_wall = [&](std::size_t p) {
-    const WallContact& c = w.neighbors.walls[p];
-    const bool is_wall = c.k < nw;
-    const std::string& name = is_wall ? w.geometry.walls[c.k].name : w.geometry.points[c.k - nw].name;
-    o << (is_wall ? "dw," : "dp,") << d.id_at(c.i) << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
+  }
+  void write_wall(std::ostream& o, std::size_t p) const {
+    const WallContact& c = w_.neighbors.walls[p];
+    const bool is_wall = c.k < nw_;
+    const std::string& name = is_wall ? w_.geometry.walls[c.k].name : w_.geometry.points[c.k - nw_].name;
+    o << (is_wall ? "dw," : "dp,") << d_.id_at(c.i) << ',' << name << ',' << fmt(c.px) << ',' << fmt(c.py) << ','
       << fmt(c.nx) << ',' << fmt(c.ny) << ',' << fmt(c.en) << ',' << fmt(c.es) << ',' << fmt(c.fn) << ','
       << fmt(c.fs) << '\n';
-  };
-  if (d.by_id().empty()) {  // the discs in the user's order: the lists' order is the user's
-    for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
-      if (!touching(p)) continue;
-      double fn, fs;
-      totals(p, r, fn, fs);
-      write_pair(p, fn, fs);
-    }
-    for (std::size_t p = 0; p < w.bonds.size(); ++p)
-      if (bonded(p)) write_bond(p);
-    for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p)
-      if (wall_touching(p)) write_wall(p);
-  } else {
-    // Discs in cell order (World::resort_discs): the rows in the user's order, as the lists would
-    // have them over discs in id order: pairs by (id_i, id_j) with id_i < id_j, then bonds, then
-    // obstacle contacts by (id, obstacle). Sorted as packed keys (group, a, b: 2 + 31 + 31 bits)
-    // with the row's source, 16 B a row, and the pairs' totals read in list order (16 B a pair):
-    // the rows' text gathered and sorted was 35 MB at 100k discs, some 350 MB at 1M.
-    struct Row {
-      std::uint64_t key;
-      std::uint32_t at;  // pairs: the index in `pair_rows`; bonds and walls: their list index
-    };
-    const auto key = [](std::uint64_t group, long long a, long long b) {
-      return group << 62 | static_cast<std::uint64_t>(a) << 31 | static_cast<std::uint64_t>(b);
-    };
-    struct PairRow {
-      std::size_t p;
-      double fn, fs;
-    };
-    std::vector<PairRow> pair_rows;
-    pair_rows.reserve(np);
-    std::vector<Row> rows;
-    rows.reserve(n);
-    for (std::size_t p = 0; p < w.neighbors.pairs.size(); ++p) {
-      if (!touching(p)) continue;
-      const PairContact& c = w.neighbors.pairs[p];
-      PairRow pr{p, 0, 0};
-      totals(p, r, pr.fn, pr.fs);
-      const long long a = d.id_at(c.i), b = d.id_at(c.j);
-      rows.push_back({key(0, std::min(a, b), std::max(a, b)), static_cast<std::uint32_t>(pair_rows.size())});
-      pair_rows.push_back(pr);
-    }
-    for (std::size_t p = 0; p < w.bonds.size(); ++p) {
-      if (!bonded(p)) continue;
-      const long long a = d.id_at(w.bonds[p].i), b = d.id_at(w.bonds[p].j);
-      rows.push_back({key(1, std::min(a, b), std::max(a, b)), static_cast<std::uint32_t>(p)});
-    }
-    for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p)
-      if (wall_touching(p))
-        rows.push_back({key(2, d.id_at(w.neighbors.walls[p].i), w.neighbors.walls[p].k), static_cast<std::uint32_t>(p)});
-    std::sort(rows.begin(), rows.end(), [](const Row& x, const Row& y) { return x.key < y.key; });
-    for (const Row& row : rows) {
-      const std::uint64_t group = row.key >> 62;
-      if (group == 0) write_pair(pair_rows[row.at].p, pair_rows[row.at].fn, pair_rows[row.at].fs);
-      else if (group == 1) write_bond(row.at);
-      else write_wall(row.at);
-    }
   }
+
+  const World& w_;
+  const Discs& d_;
+  const bool moved_after_forces_;
+  const World::Increments inc_;
+  const bool recorded_;
+  const int nw_;
+  std::size_t np_ = 0, nb_ = 0, nwc_ = 0;
+  NthKept pair_at_, bond_at_, wall_at_;
+  PairTotals::Cursor rec_at_;  // the record cursor (a section read from its start again restarts it)
+};
+
+// Discs in cell order (World::resort_discs): the rows in the user's order, as the lists would
+// have them over discs in id order: pairs by (id_i, id_j) with id_i < id_j, then bonds, then
+// obstacle contacts by (id, obstacle). Sorted as packed keys (group, a, b: 2 + 31 + 31 bits)
+// with the row's source, 16 B a row, and the pairs' totals read in list order (16 B a pair):
+// the rows' text gathered and sorted was 35 MB at 100k discs, some 350 MB at 1M.
+void ContactRows::write_id_order(std::ostream& o) const {
+  const Discs& d = d_;
+  struct Row {
+    std::uint64_t key;
+    std::uint32_t at;  // pairs: the index in `pair_rows`; bonds and walls: their list index
+  };
+  const auto key = [](std::uint64_t group, long long a, long long b) {
+    return group << 62 | static_cast<std::uint64_t>(a) << 31 | static_cast<std::uint64_t>(b);
+  };
+  struct PairRow {
+    std::size_t p;
+    double fn, fs;
+  };
+  std::vector<PairRow> pair_rows;
+  pair_rows.reserve(np_);
+  std::vector<Row> rows;
+  rows.reserve(size());
+  PairTotals::Cursor r;
+  for (std::size_t p = 0; p < w_.neighbors.pairs.size(); ++p) {
+    if (!touching(p)) continue;
+    const PairContact& c = w_.neighbors.pairs[p];
+    PairRow pr{p, 0, 0};
+    totals(p, r, pr.fn, pr.fs);
+    const long long a = d.id_at(c.i), b = d.id_at(c.j);
+    rows.push_back({key(0, std::min(a, b), std::max(a, b)), static_cast<std::uint32_t>(pair_rows.size())});
+    pair_rows.push_back(pr);
+  }
+  for (std::size_t p = 0; p < w_.bonds.size(); ++p) {
+    if (!bonded(p)) continue;
+    const long long a = d.id_at(w_.bonds[p].i), b = d.id_at(w_.bonds[p].j);
+    rows.push_back({key(1, std::min(a, b), std::max(a, b)), static_cast<std::uint32_t>(p)});
+  }
+  for (std::size_t p = 0; p < w_.neighbors.walls.size(); ++p)
+    if (wall_touching(p))
+      rows.push_back({key(2, d.id_at(w_.neighbors.walls[p].i), w_.neighbors.walls[p].k), static_cast<std::uint32_t>(p)});
+  std::sort(rows.begin(), rows.end(), [](const Row& x, const Row& y) { return x.key < y.key; });
+  for (const Row& row : rows) {
+    const std::uint64_t group = row.key >> 62;
+    if (group == 0) write_pair(o, pair_rows[row.at].p, pair_rows[row.at].fn, pair_rows[row.at].fs);
+    else if (group == 1) write_bond(o, row.at);
+    else write_wall(o, row.at);
+  }
+}
+
+}  // namespace
+
+void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary, bool vtu) {
+  ContactRows contacts(w);
+  std::ofstream o;  // NAME.csv.tmp, renamed when complete
+  const std::string csv = dir + "/" + stem + ".csv";
+  o.open(csv + ".tmp", std::ios::binary);
+  o << "kind,i,j,x,y,nx,ny,e_n,e_s,f_n,f_s\n";
+  if (w.discs.by_id().empty()) contacts.write_list_order(o);
+  else contacts.write_id_order(o);
   o.close();
   if (!o) throw std::runtime_error("cannot write " + csv + ".tmp");
   std::filesystem::rename(csv + ".tmp", csv);
   if (!vtu) return;
   VtuGrid g;
-  g.np = 2 * n;
-  g.point = point;
+  g.np = 2 * contacts.size();
+  g.point = [&](std::size_t k, double& x, double& y) { contacts.point(k, x, y); };
   g.points_per_cell = 2;
   g.vtk_type = 3;  // VTK_LINE
-  g.scalars = {{"f_n", [&](std::size_t c) { return entry(c).fn; }}, {"f_s", [&](std::size_t c) { return entry(c).fs; }},
-               {"e_n", [&](std::size_t c) { return entry(c).en; }}, {"e_s", [&](std::size_t c) { return entry(c).es; }}};
-  g.ints = {{"kind", [&](std::size_t c) { return static_cast<long long>(entry(c).kind); }}};
+  g.scalars = {{"f_n", [&](std::size_t c) { return contacts.entry(c).fn; }},
+               {"f_s", [&](std::size_t c) { return contacts.entry(c).fs; }},
+               {"e_n", [&](std::size_t c) { return contacts.entry(c).en; }},
+               {"e_s", [&](std::size_t c) { return contacts.entry(c).es; }}};
+  g.ints = {{"kind", [&](std::size_t c) { return static_cast<long long>(contacts.entry(c).kind); }}};
   g.cell_data = true;
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) { write_vtu(out, g, binary); });
 }

@@ -115,33 +115,38 @@ void put_value(const Put& put, T v) {
   put(&v, sizeof v);
 }
 
-void binary(std::ostream& o, const VtuGrid& g) {
-  const bool z = vtu_compressed();
-  const std::size_t np = g.np, nc = np / g.points_per_cell, nv = g.cell_data ? nc : np;
+// The grid's arrays, in the file's order: the points, the cells, the data.
+struct Arrays {
   std::vector<Array> points, cells, data;
-  points.push_back({"Float64", "", 3, 24ull * np, [&](const Put& put) {
+};
+
+Arrays grid_arrays(const VtuGrid& g) {
+  const std::size_t np = g.np, nc = np / g.points_per_cell, nv = g.cell_data ? nc : np;
+  Arrays out;
+  std::vector<Array>&points = out.points, &cells = out.cells, &data = out.data;
+  points.push_back({"Float64", "", 3, 24ull * np, [&g, np](const Put& put) {
                       for (std::size_t i = 0; i < np; ++i) {
                         double v[3] = {0, 0, 0};
                         g.point(i, v[0], v[1]);
                         put(v, sizeof v);
                       }
                     }});
-  cells.push_back({"Int64", "connectivity", 1, 8ull * np, [&](const Put& put) {
+  cells.push_back({"Int64", "connectivity", 1, 8ull * np, [np](const Put& put) {
                      for (std::size_t i = 0; i < np; ++i) put_value<std::int64_t>(put, static_cast<std::int64_t>(i));
                    }});
-  cells.push_back({"Int64", "offsets", 1, 8ull * nc, [&](const Put& put) {
+  cells.push_back({"Int64", "offsets", 1, 8ull * nc, [&g, nc](const Put& put) {
                      for (std::size_t c = 0; c < nc; ++c)
                        put_value<std::int64_t>(put, static_cast<std::int64_t>((c + 1) * g.points_per_cell));
                    }});
-  cells.push_back({"UInt8", "types", 1, nc, [&](const Put& put) {
+  cells.push_back({"UInt8", "types", 1, nc, [&g, nc](const Put& put) {
                      for (std::size_t c = 0; c < nc; ++c) put_value<std::uint8_t>(put, static_cast<std::uint8_t>(g.vtk_type));
                    }});
   for (const VtuColumn& c : g.scalars)
-    data.push_back({"Float64", c.name, 1, 8ull * nv, [&](const Put& put) {
+    data.push_back({"Float64", c.name, 1, 8ull * nv, [&c, nv](const Put& put) {
                       for (std::size_t i = 0; i < nv; ++i) put_value<double>(put, c.at(i));
                     }});
   for (const VtuVector& c : g.vectors)
-    data.push_back({"Float64", c.name, 3, 24ull * nv, [&](const Put& put) {
+    data.push_back({"Float64", c.name, 3, 24ull * nv, [&c, nv](const Put& put) {
                       for (std::size_t i = 0; i < nv; ++i) {
                         double v[3] = {0, 0, 0};
                         c.at(i, v[0], v[1]);
@@ -149,9 +154,46 @@ void binary(std::ostream& o, const VtuGrid& g) {
                       }
                     }});
   for (const VtuIntColumn& c : g.ints)
-    data.push_back({"Int32", c.name, 1, 4ull * nv, [&](const Put& put) {
+    data.push_back({"Int32", c.name, 1, 4ull * nv, [&c, nv](const Put& put) {
                       for (std::size_t i = 0; i < nv; ++i) put_value<std::int32_t>(put, static_cast<std::int32_t>(c.at(i)));
                     }});
+  return out;
+}
+
+// The appended data: each array's size (its blocks' compressed sizes, `sizes`, with zlib) and bytes.
+void write_appended(std::ostream& o, const Arrays& arrays, const std::vector<std::vector<std::uint64_t>>& sizes, bool z) {
+  std::size_t n_array = 0;
+  const auto raw = [&](const void* p, std::size_t n) { o.write(static_cast<const char*>(p), static_cast<std::streamsize>(n)); };
+  for (auto* group : {&arrays.points, &arrays.cells, &arrays.data})
+    for (const Array& a : *group) {
+      if (!z) {
+        put_value<std::uint64_t>(raw, a.bytes);
+        a.emit(raw);
+        continue;
+      }
+      const std::vector<std::uint64_t>& s = sizes[n_array++];
+      const std::uint64_t last = a.bytes % kBlock;
+      // VTK's compressed header: blocks, block size, size of a partial last block (0: none), then
+      // each block's compressed size.
+      put_value<std::uint64_t>(raw, s.size());
+      put_value<std::uint64_t>(raw, kBlock);
+      put_value<std::uint64_t>(raw, last);
+      for (std::uint64_t n : s) put_value<std::uint64_t>(raw, n);
+      std::size_t block = 0;
+      Blocks b(true, [&](const char* p, std::size_t n) {
+        if (block >= s.size() || s[block++] != n) throw std::runtime_error("a VTU block compressed to another size");
+        raw(p, n);
+      });
+      a.emit([&](const void* p, std::size_t n) { b.put(p, n); });
+      b.finish();
+    }
+}
+
+void binary(std::ostream& o, const VtuGrid& g) {
+  const bool z = vtu_compressed();
+  const std::size_t np = g.np, nc = np / g.points_per_cell;
+  const Arrays arrays = grid_arrays(g);
+  const std::vector<Array>&points = arrays.points, &cells = arrays.cells, &data = arrays.data;
 
   // The header gives every array's offset in the appended data, so compressed sizes are measured
   // by a first pass (block sizes only are kept), then the blocks are compressed again and written.
@@ -193,31 +235,7 @@ void binary(std::ostream& o, const VtuGrid& g) {
   for (const Array& a : data) element(a);
   o << (g.cell_data ? "</CellData>\n" : "</PointData>\n")
     << "</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_";
-  std::size_t n_array = 0;
-  const auto raw = [&](const void* p, std::size_t n) { o.write(static_cast<const char*>(p), static_cast<std::streamsize>(n)); };
-  for (auto* group : {&points, &cells, &data})
-    for (const Array& a : *group) {
-      if (!z) {
-        put_value<std::uint64_t>(raw, a.bytes);
-        a.emit(raw);
-        continue;
-      }
-      const std::vector<std::uint64_t>& s = sizes[n_array++];
-      const std::uint64_t last = a.bytes % kBlock;
-      // VTK's compressed header: blocks, block size, size of a partial last block (0: none), then
-      // each block's compressed size.
-      put_value<std::uint64_t>(raw, s.size());
-      put_value<std::uint64_t>(raw, kBlock);
-      put_value<std::uint64_t>(raw, last);
-      for (std::uint64_t n : s) put_value<std::uint64_t>(raw, n);
-      std::size_t block = 0;
-      Blocks b(true, [&](const char* p, std::size_t n) {
-        if (block >= s.size() || s[block++] != n) throw std::runtime_error("a VTU block compressed to another size");
-        raw(p, n);
-      });
-      a.emit([&](const void* p, std::size_t n) { b.put(p, n); });
-      b.finish();
-    }
+  write_appended(o, arrays, sizes, z);
   o << "\n</AppendedData>\n</VTKFile>\n";
 }
 

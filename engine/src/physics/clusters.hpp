@@ -4,7 +4,7 @@
 //
 // A bonded pair is not a neighbour-list contact: it lives in its own fixed list (World::bonds)
 // with its own history, and stays there when the discs separate. Its law is contact_law.hpp's
-// bond_law. Bonds are a feature of the kernel table (kernels.hpp): a scene without clusters runs
+// bond_law. Bonds are a feature of the kernel list (kernels.hpp): a scene without clusters runs
 // a kernel without bond code.
 #pragma once
 

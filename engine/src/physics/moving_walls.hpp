@@ -3,7 +3,7 @@
 // scheme, and walls translating at a prescribed velocity during a time window (a scene's
 // walls[].velocity: a floor lowered under a column). A wall's motion over the last step enters
 // the contact increments (5a), (5b) through the displacement of the wall's material point at the
-// contact. The kernel table has a feature for moving walls (kernels.hpp): a scene whose walls
+// contact. The kernel list has a feature for moving walls (kernels.hpp): a scene whose walls
 // stay put runs a kernel without it.
 #pragma once
 

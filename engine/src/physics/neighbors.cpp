@@ -210,6 +210,40 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
   cell_start_[0] = 0;
 }
 
+namespace {
+// The room for a new list: the old one's length and a 1/16 margin. The first build has no old
+// list to size from: it counts first (count(i0, i1): the pairs of discs [i0, i1)), so that even
+// then the list is allocated once at its length.
+template <class Count>
+std::size_t list_room(std::size_t old_n, int n, int nt, Count&& count) {
+  if (old_n != 0) return old_n + old_n / 16 + 64;
+  std::size_t c = 0;
+  if (nt <= 1) {
+    c = count(0, n);
+  } else {
+#pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : c)
+    for (int t = 0; t < nt; ++t) c += count(block_start(n, nt, t), block_start(n, nt, t + 1));
+  }
+  return c + c / 16 + 64;
+}
+
+// The buffer of cap entries: a larger one (first build, or the list grew) with the old list's
+// old_n entries at its tail, or the old one with its margin behind them. Where the old entries
+// start.
+std::size_t old_to_tail(std::vector<PairContact>& pairs, std::size_t cap, std::size_t old_n) {
+  if (pairs.capacity() >= cap) {
+    pairs.resize(cap);
+    return 0;
+  }
+  std::vector<PairContact> v;
+  v.reserve(cap);
+  v.resize(cap);
+  std::copy(pairs.begin(), pairs.end(), v.end() - static_cast<std::ptrdiff_t>(old_n));
+  pairs.swap(v);
+  return cap - old_n;
+}
+}  // namespace
+
 // The pair list is the engine's largest array (about 3 pairs a disc, 24 bytes each). A new list
 // built beside the old one would need both at once: twice the largest array, the peak memory of
 // a million-disc run. Instead the new list is written over the old one in its own buffer (sized
@@ -226,32 +260,10 @@ void Neighbors::sort_by_cell(const Discs& d, long ncell, int nt) {
 void Neighbors::build_pairs(const Discs& d, int nt) {
   const int n = static_cast<int>(d.size());
   const std::size_t old_n = pairs.size();
-  // The first build has no old list to size from: it counts first, so that even then the list
-  // is allocated once at its length.
-  std::size_t want = old_n + old_n / 16 + 64;
-  if (old_n == 0) {
-    std::size_t c = 0;
-    if (nt <= 1) {
-      c = count_pairs(d, 0, n);
-    } else {
-#pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : c)
-      for (int t = 0; t < nt; ++t) c += count_pairs(d, block_start(n, nt, t), block_start(n, nt, t + 1));
-    }
-    want = c + c / 16 + 64;
-  }
-  std::size_t cap = std::max(want, pairs.capacity());
-  std::size_t r = 0, old_end = old_n;  // the old entries not yet read: [r, old_end)
-  if (pairs.capacity() < cap) {  // a larger buffer (first build, or the list grew): old at its tail
-    std::vector<PairContact> v;
-    v.reserve(cap);
-    v.resize(cap);
-    std::copy(pairs.begin(), pairs.end(), v.end() - static_cast<std::ptrdiff_t>(old_n));
-    pairs.swap(v);
-    r = cap - old_n;
-    old_end = cap;
-  } else {
-    pairs.resize(cap);  // the old entries stay at the front, the margin behind them
-  }
+  std::size_t cap = std::max(list_room(old_n, n, nt, [&](int i0, int i1) { return count_pairs(d, i0, i1); }),
+                             pairs.capacity());
+  // the old entries not yet read: [r, old_end)
+  std::size_t r = old_to_tail(pairs, cap, old_n), old_end = r == 0 ? old_n : cap;
   std::size_t w = 0;  // next new entry
   const auto old_from = [&](std::size_t from, int i) {  // first old entry at or after from with disc >= i
     return static_cast<std::size_t>(

@@ -140,13 +140,16 @@ double system_dt_bound(Scheme scheme, const ClusterSystem& s) {
 }
 }  // namespace
 
-ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch) {
-  ClusterBound out;
-  out.dt = std::numeric_limits<double>::infinity();
-  if (w.bonds.empty()) return out;
-  const Discs& d = w.discs;
-  const int n = static_cast<int>(d.size());
-  // Clusters: the connected discs of the bonds (union-find), numbered in order of their first disc.
+namespace {
+// The clusters: the connected discs of the bonds (union-find), numbered in order of their first
+// disc; each disc's cluster (-1: none) and its place in it.
+struct Clusters {
+  std::vector<int> cluster, local;
+  std::vector<std::vector<int>> members;
+};
+
+Clusters find_clusters(const World& w) {
+  const int n = static_cast<int>(w.discs.size());
   std::vector<int> root(n);
   for (int i = 0; i < n; ++i) root[i] = i;
   const auto find = [&](int i) {
@@ -154,32 +157,37 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch) {
     return i;
   };
   for (const Bond& b : w.bonds) root[find(b.i)] = find(b.j);
-  std::vector<int> cluster(n, -1), local(n, -1);  // a disc's cluster and its place in it
-  std::vector<std::vector<int>> members;
-  {
-    std::vector<int> number(n, -1);  // by root: -1 no bond, -2 a cluster not numbered yet
-    for (const Bond& b : w.bonds) number[find(b.i)] = -2;
-    for (int i = 0; i < n; ++i) {
-      int& c = number[find(i)];
-      if (c == -1) continue;
-      if (c == -2) {
-        c = static_cast<int>(members.size());
-        members.emplace_back();
-      }
-      cluster[i] = c;
-      local[i] = static_cast<int>(members[c].size());
-      members[c].push_back(i);
+  Clusters c{std::vector<int>(n, -1), std::vector<int>(n, -1), {}};
+  std::vector<int> number(n, -1);  // by root: -1 no bond, -2 a cluster not numbered yet
+  for (const Bond& b : w.bonds) number[find(b.i)] = -2;
+  for (int i = 0; i < n; ++i) {
+    int& k = number[find(i)];
+    if (k == -1) continue;
+    if (k == -2) {
+      k = static_cast<int>(c.members.size());
+      c.members.emplace_back();
     }
+    c.cluster[i] = k;
+    c.local[i] = static_cast<int>(c.members[k].size());
+    c.members[k].push_back(i);
   }
-  // The sticking contacts of each cluster: bonds, and the partners the engine's own lists find
-  // within `touch` of touching (a build with that skin), discs and obstacles.
-  struct Link {
-    int a, b;         // places in the cluster (b < 0: a fixed partner)
-    double nx, ny;    // unit normal from a to b
-    double la, lb;    // lever arms
-    const PairProps* p;
-  };
-  std::vector<std::vector<Link>> links(members.size());
+  return c;
+}
+
+// A sticking contact of a cluster.
+struct Link {
+  int a, b;         // places in the cluster (b < 0: a fixed partner)
+  double nx, ny;    // unit normal from a to b
+  double la, lb;    // lever arms
+  const PairProps* p;
+};
+
+// The sticking contacts of each cluster: bonds, and the partners the engine's own lists find
+// within `touch` of touching (a build with that skin), discs and obstacles.
+std::vector<std::vector<Link>> cluster_links(const World& w, const Clusters& cl, double touch) {
+  const Discs& d = w.discs;
+  const std::vector<int>&cluster = cl.cluster, &local = cl.local;
+  std::vector<std::vector<Link>> links(cl.members.size());
   for (const Bond& b : w.bonds) {
     const double dx = d.x[b.j] - d.x[b.i], dy = d.y[b.j] - d.y[b.i], R = std::hypot(dx, dy);
     if (!(R > 0)) continue;  // coincident discs (refused by the scene check): no direction
@@ -212,33 +220,49 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch) {
     links[cluster[c.i]].push_back({local[c.i], -1, (h.px - d.x[c.i]) / h.dist, (h.py - d.y[c.i]) / h.dist,
                                    d.r(c.i), 0, &w.pair(d.material(c.i), mat)});
   }
+  return links;
+}
+
+// A cluster's system, identified by its shape: stiffness and damping relative to their largest
+// entries, to 9 digits, and the masses (clusters of one shape have one bound).
+std::vector<long long> system_shape(const ClusterSystem& s, int m) {
+  std::vector<long long> shape;
+  const double kmax = std::max(1.0, s.K.cwiseAbs().maxCoeff()), cmax = std::max(1.0, s.C.cwiseAbs().maxCoeff());
+  shape.push_back(m);
+  for (Eigen::Index a = 0; a < s.K.size(); ++a) {
+    shape.push_back(std::llround(s.K.data()[a] / kmax * 1e9));
+    shape.push_back(std::llround(s.C.data()[a] / cmax * 1e9));
+  }
+  shape.push_back(std::llround(kmax));
+  shape.push_back(std::llround(cmax));
+  for (Eigen::Index a = 0; a < s.minv.size(); ++a) shape.push_back(std::llround(s.minv[a] * 1e12));
+  return shape;
+}
+}  // namespace
+
+ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch) {
+  ClusterBound out;
+  out.dt = std::numeric_limits<double>::infinity();
+  if (w.bonds.empty()) return out;
+  const Discs& d = w.discs;
+  const Clusters cl = find_clusters(w);
+  const std::vector<std::vector<Link>> links = cluster_links(w, cl, touch);
   std::map<std::vector<long long>, std::size_t> seen;  // shape -> index in systems
   std::vector<ClusterSystem> systems;
   std::vector<int> sizes;
-  for (std::size_t k = 0; k < members.size(); ++k) {
-    const int m = static_cast<int>(members[k].size());
+  for (std::size_t k = 0; k < cl.members.size(); ++k) {
+    const int m = static_cast<int>(cl.members[k].size());
     if (m > kClusterMaxDiscs) {  // a step matrix of 9 m rows: too large to examine
       ++out.skipped;
       continue;
     }
     ClusterSystem s{Eigen::MatrixXd::Zero(3 * m, 3 * m), Eigen::MatrixXd::Zero(3 * m, 3 * m), Eigen::VectorXd(3 * m)};
     for (int a = 0; a < m; ++a) {
-      const int i = members[k][a];
+      const int i = cl.members[k][a];
       s.minv.segment(3 * a, 3) << 1 / d.mass(i), 1 / d.mass(i), d.inv_inertia(i);
     }
     for (const Link& l : links[k]) add_contact(s, l.a, l.b, l.nx, l.ny, l.la, l.lb, *l.p);
-    // The shape: stiffness and damping relative to their largest entries, to 9 digits, and the masses.
-    std::vector<long long> shape;
-    const double kmax = std::max(1.0, s.K.cwiseAbs().maxCoeff()), cmax = std::max(1.0, s.C.cwiseAbs().maxCoeff());
-    shape.push_back(m);
-    for (Eigen::Index a = 0; a < s.K.size(); ++a) {
-      shape.push_back(std::llround(s.K.data()[a] / kmax * 1e9));
-      shape.push_back(std::llround(s.C.data()[a] / cmax * 1e9));
-    }
-    shape.push_back(std::llround(kmax));
-    shape.push_back(std::llround(cmax));
-    for (Eigen::Index a = 0; a < s.minv.size(); ++a) shape.push_back(std::llround(s.minv[a] * 1e12));
-    if (seen.emplace(std::move(shape), systems.size()).second) {
+    if (seen.emplace(system_shape(s, m), systems.size()).second) {
       systems.push_back(std::move(s));
       sizes.push_back(m);
     }
@@ -253,6 +277,50 @@ ClusterBound cluster_dt_bound(const World& w, Scheme scheme, double touch) {
   }
   return out;
 }
+
+namespace {
+// The pair of materials a, b (a disc-disc pair, or a disc on an obstacle of b): its one-contact
+// frequencies and the schemes' bounds, for discs of masses ma, mb.
+PairReport pair_report(const World& w, const std::vector<std::string>& names, int a, int b, bool disc_disc, double ma,
+                       double mb) {
+  PairReport r;
+  r.disc_disc = disc_disc;
+  r.name = names[a] + (disc_disc ? "-" : "|") + names[b];
+  r.p = w.pair(a, b);
+  if (r.disc_disc) {
+    r.m_eff = ma * mb / (ma + mb);
+    r.m_t = 1.0 / (3.0 / ma + 3.0 / mb);  // 1/m + r^2/I = 3/m per disc
+  } else {
+    r.m_eff = ma;
+    r.m_t = ma / 3.0;
+  }
+  r.omega0 = std::sqrt(r.p.kn / r.m_eff);
+  r.zeta_n = r.p.eta_n / (2 * std::sqrt(r.m_eff * r.p.kn));
+  if (r.zeta_n < 1) {
+    const double wd = r.omega0 * std::sqrt(1 - r.zeta_n * r.zeta_n);
+    r.t_contact = M_PI / wd;
+    r.restitution = std::exp(-M_PI * r.zeta_n / std::sqrt(1 - r.zeta_n * r.zeta_n));
+  } else {
+    r.t_contact = std::numeric_limits<double>::infinity();
+    r.restitution = 0;
+  }
+  r.omega_t = r.p.ks > 0 ? std::sqrt(r.p.ks / r.m_t) : 0;
+  r.zeta_t = r.p.ks > 0 ? r.p.eta_s / (2 * std::sqrt(r.m_t * r.p.ks)) : 0;
+  r.dt_normal = scheme_dt_bound(w.scheme, r.m_eff, r.p.kn, r.p.eta_n);
+  r.dt_tangential = r.p.ks > 0 ? scheme_dt_bound(w.scheme, r.m_t, r.p.ks, r.p.eta_s)
+                               : std::numeric_limits<double>::infinity();
+  r.dt_eq26 = r.p.eta_n / r.p.kn;
+  r.dt_eq21 = 2 * std::sqrt(r.m_eff / r.p.kn);
+  // Rotation I phi'' = -z r^2 (K_s phi + eta_s phi'): mass I / r^2 = m / 2.
+  if (r.p.ks > 0) {
+    r.dt_rot_z4 = scheme_dt_bound(w.scheme, ma / 2, 4 * r.p.ks, 4 * r.p.eta_s);
+    r.dt_rot_z6 = scheme_dt_bound(w.scheme, ma / 2, 6 * r.p.ks, 6 * r.p.eta_s);
+  } else {
+    r.dt_rot_z4 = r.dt_rot_z6 = std::numeric_limits<double>::infinity();
+  }
+  return r;
+}
+}  // namespace
 
 StabilityReport stability_report(const World& w, const std::vector<std::string>& names, double cluster_touch) {
   StabilityReport rep;
@@ -280,42 +348,7 @@ StabilityReport stability_report(const World& w, const std::vector<std::string>&
       for (int kind = 0; kind < 2; ++kind) {  // 0: disc-disc, 1: disc-obstacle
         if (kind == 0 && !disc_b) continue;
         if (kind == 1 && !obstacle_mat[b]) continue;
-        PairReport r;
-        r.disc_disc = kind == 0;
-        r.name = names[a] + (kind == 0 ? "-" : "|") + names[b];
-        r.p = w.pair(a, b);
-        if (r.disc_disc) {
-          const double mb = mmin[b];
-          r.m_eff = ma * mb / (ma + mb);
-          r.m_t = 1.0 / (3.0 / ma + 3.0 / mb);  // 1/m + r^2/I = 3/m per disc
-        } else {
-          r.m_eff = ma;
-          r.m_t = ma / 3.0;
-        }
-        r.omega0 = std::sqrt(r.p.kn / r.m_eff);
-        r.zeta_n = r.p.eta_n / (2 * std::sqrt(r.m_eff * r.p.kn));
-        if (r.zeta_n < 1) {
-          const double wd = r.omega0 * std::sqrt(1 - r.zeta_n * r.zeta_n);
-          r.t_contact = M_PI / wd;
-          r.restitution = std::exp(-M_PI * r.zeta_n / std::sqrt(1 - r.zeta_n * r.zeta_n));
-        } else {
-          r.t_contact = std::numeric_limits<double>::infinity();
-          r.restitution = 0;
-        }
-        r.omega_t = r.p.ks > 0 ? std::sqrt(r.p.ks / r.m_t) : 0;
-        r.zeta_t = r.p.ks > 0 ? r.p.eta_s / (2 * std::sqrt(r.m_t * r.p.ks)) : 0;
-        r.dt_normal = scheme_dt_bound(w.scheme, r.m_eff, r.p.kn, r.p.eta_n);
-        r.dt_tangential = r.p.ks > 0 ? scheme_dt_bound(w.scheme, r.m_t, r.p.ks, r.p.eta_s)
-                                     : std::numeric_limits<double>::infinity();
-        r.dt_eq26 = r.p.eta_n / r.p.kn;
-        r.dt_eq21 = 2 * std::sqrt(r.m_eff / r.p.kn);
-        // Rotation I phi'' = -z r^2 (K_s phi + eta_s phi'): mass I / r^2 = m / 2.
-        if (r.p.ks > 0) {
-          r.dt_rot_z4 = scheme_dt_bound(w.scheme, ma / 2, 4 * r.p.ks, 4 * r.p.eta_s);
-          r.dt_rot_z6 = scheme_dt_bound(w.scheme, ma / 2, 6 * r.p.ks, 6 * r.p.eta_s);
-        } else {
-          r.dt_rot_z4 = r.dt_rot_z6 = std::numeric_limits<double>::infinity();
-        }
+        PairReport r = pair_report(w, names, a, b, kind == 0, ma, mmin[b]);
         const double bound = std::min(r.dt_normal, r.dt_tangential);
         if (bound < rep.dt_bound) {
           rep.dt_bound = bound;

@@ -134,8 +134,8 @@ class World {
   std::vector<PairForce> recorded_pairs() const { return pair_totals.records(neighbors.pairs); }  // (tests)
 
   const PairProps& pair(int a, int b) const { return props[a * n_materials + b]; }
-  // The force kernels compiled (kernels.hpp), by name in the table's order; and the one this
-  // world runs (select_kernel, at prepare()).
+  // The kernel list (kernels.hpp) by name: its force rows, then its move rows, in its order; and
+  // the force row this world runs (select_kernel, at prepare()).
   static std::vector<std::string> kernel_names();
   const std::string& kernel_name() const;
   // What the selected kernel computes (for the header and the skip benchmark).
@@ -148,7 +148,7 @@ class World {
   // Puts the moving walls where their restored angles and plate displacements say (state files),
   // and the translating walls where the clock (steps dt) says.
   void place_moving_walls();
-  // One time step: the algorithm as a list of stages (world.cpp).
+  // One time step: the algorithm as a list of stages (step.cpp).
   void step();
   // Velocity Verlet's closing half kick (17) of the discs, left owed by a step: the next step's
   // first sweep gives it with its own half kick, in one pass over the arrays instead of two, the
@@ -198,7 +198,14 @@ class World {
  private:
   // A thread's share of a force pass (serial: one block of everything): its discs [i0, i1)
   // (force_blocks), their pairs [p0, p1) and wall entries [w0, w1) of the lists.
-  struct ForceBlock;
+  struct ForceBlock {
+    int t = 0, threads = 1;  // this block's thread, of `threads`
+    int i0 = 0, i1 = 0;
+    std::size_t p0 = 0, p1 = 0, w0 = 0, w1 = 0;
+    PairTotals::Force* record = nullptr;     // a recorded pass: this block's first pair total
+    std::vector<PairTotals::Force*>* gaps = nullptr;  // a recorded pass with threads: cross pairs' totals (CrossPair)
+    double pair_overlap = 0, wall_overlap = 0;  // the largest overlaps (max_overlap)
+  };
   // A cross pair: a pair of a block's part of the list whose j is in a later block `to`; j's
   // block computes it (its cross pass), at `at` in its list of cross pairs.
   struct CrossPair {
@@ -213,7 +220,10 @@ class World {
   // A stage of a force pass on one block, and the pair law on a block of pairs (PairBlock).
   using Stage = void (World::*)(ForceBlock&);
   using PairLaw = void (*)(PairBlock&, int n, const PairProps* props, double inv_dt, double sum1, double uf);
-  // A row of the kernel table: the stages compiled for one law and feature set (kernels.hpp).
+  // The law on one contact, (6)-(14) (contact_law.hpp), as the wall stage calls it.
+  using ContactLaw = void (*)(const PairProps& p, double overlap, double du_n, double du_s, double inv_dt, double& en,
+                              double& es, double& fn, double& fs);
+  // A force row of the kernel list: the stages compiled for one law and feature set (kernels.hpp).
   struct Kernel {
     KernelKey key;
     std::string name;
@@ -222,8 +232,10 @@ class World {
     Stage walls = nullptr;
     Stage bonds = nullptr;        // none without bonds
     PairLaw pair_law[3][2] = {};  // [vector width 2, 4, 8][one kind of disc]: what pairs runs
+    ContactLaw contact_law = nullptr;  // what walls runs
+    void (World::*onset)(bool start) = nullptr;  // velocity_verlet_onset's pass (overlap spring, no bonds or moving walls)
   };
-  static const std::vector<Kernel>& kernels();  // the table, kKernelCount rows in kernels.hpp's order
+  static const std::vector<Kernel>& kernels();  // the force rows, kKernelCount in kernels.hpp's order
   template <std::size_t K>
   static Kernel make_kernel();
   const Kernel* kernel_ = nullptr;  // this world's row (select_kernel)
@@ -231,7 +243,7 @@ class World {
   int width_index() const { return width_ == 8 ? 2 : width_ == 4 ? 1 : 0; }
   void select_kernel();
 
-  // The stages of a step (world.cpp shows them in order).
+  // The stages of a step (step.cpp shows them in order).
   void refresh_lists(bool far);  // the lists rebuilt where stale or where something moved skin/2
   // The force stages and the move, fused per block; `started`: the resultants already hold m_i g
   // and a zero torque (the move before wrote them: move_discs' reset).
@@ -240,12 +252,14 @@ class World {
   bool each_block(int nt, F&& stages);  // stages(block) for each thread's block; whether some disc is far
   void start_resultants(int i0, int i1);  // the m_i g of (15) and a zero torque
   void start_recording(ForceBlock& b);    // where a recorded pass puts the block's pair totals
-  // Disc pairs: (3)-(15). CROSS: the pairs of earlier blocks whose j is in this block (cross_in_).
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool SHEAR, bool DASH, bool RECORD, bool ONE_KIND,
-            bool CROSS = false>
+  // Disc pairs: (3)-(15), the law the row's (Kernel::pair_law). CROSS: the pairs of earlier
+  // blocks whose j is in this block (cross_in_).
+  template <LeverArm LA, bool SHEAR, bool RECORD, bool ONE_KIND, bool CROSS = false>
   void pair_contacts(ForceBlock& b);
-  template <NormalSpring NS, NoTension NT, FrictionCap FC, LeverArm LA, bool MOVING, bool SHEAR, bool DASH>
-  void wall_contacts(ForceBlock& b);      // discs on walls and points: (3)-(15)
+  template <LeverArm LA, bool SHEAR, bool RECORD, bool ONE_KIND, bool CROSS>
+  struct PairPass;  // a pair stage's arrays and sub-steps
+  template <LeverArm LA, bool MOVING, bool SHEAR>
+  void wall_contacts(ForceBlock& b);      // discs on walls and points: (3)-(15), the row's contact_law
   template <NormalSpring NS>
   void bond_contacts(ForceBlock& b);      // paper 2's bonds: (4), (5), the bond law, (15)
   void map_cross_pairs(ForceBlock& b);    // cross_out_, cross_in_ for the blocks and lists as they are
@@ -265,6 +279,10 @@ class World {
   void onset_forces(bool start = false);
   template <NoTension NT, FrictionCap FC, LeverArm LA>
   void onset_forces_law(bool start);
+  template <NoTension NT, FrictionCap FC, LeverArm LA>
+  void onset_pairs(double hs, double& worst);  // its disc pairs; worst: the largest overlap
+  template <NoTension NT, FrictionCap FC, LeverArm LA>
+  void onset_walls(double hs, double& worst);  // its discs on walls and points
   std::vector<double> onset_vx_, onset_vy_, onset_om_;  // v(t) of the step's start (not state: set each step)
   std::vector<double> onset_jx_, onset_jy_, onset_jt_;  // the step's missed impulses (x, y, moment)
   void move_walls(Move move, double h);   // (16)-(19) for the plates, the prescribed turns (world_walls.cpp)

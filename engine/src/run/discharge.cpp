@@ -584,6 +584,52 @@ double DischargePhase::fraction(const World&) const {
   return steps_total_ > 0 ? double(st.next_s) / steps_total_ : 1.0;
 }
 
+namespace {
+// Each wall's ratios of peak to static: the raw maximum and the maximum of a moving average, the
+// wall's and its bins'; best_bottom, best_side: the largest bin ratios (raw, windowed) of the
+// bottom and side walls, the gate left out.
+json wall_peaks(const DischargeState& st, const std::string& gate, double best_bottom[2], double best_side[2]) {
+  const std::vector<WallLoad>& static_walls = st.static_walls;
+  json walls_json = json::array();
+  for (std::size_t k = 0; k < static_walls.size(); ++k) {
+    const WallLoad& S = static_walls[k];
+    const double raw = st.total_peaks[k].raw, wnd = st.total_peaks[k].windowed;
+    json bins = json::array();
+    double smax = 0;
+    for (double v : S.bin_normal) smax = std::max(smax, v);
+    for (std::size_t b = 0; b < S.bin_normal.size(); ++b) {
+      const double br = st.bin_peaks[k][b].raw, bw = st.bin_peaks[k][b].windowed;
+      // Bins that carried little at rest have no meaningful ratio (one contact of 1 disc weight).
+      const bool ok = S.bin_normal[b] >= 0.25 * smax && smax > 0;
+      const double rr = ok ? br / S.bin_normal[b] : NAN, rw = ok ? bw / S.bin_normal[b] : NAN;
+      bins.push_back({{"bin", b}, {"static", S.bin_normal[b]}, {"peak", br}, {"peak_windowed", bw},
+                      {"ratio", num_or_null(rr)}, {"ratio_windowed", num_or_null(rw)}});
+      if (ok && S.name != gate) {
+        double* best = S.group == "bottom" ? best_bottom : (S.group.rfind("side", 0) == 0 ? best_side : nullptr);
+        if (best) {
+          best[0] = std::max(best[0], rr);
+          best[1] = std::max(best[1], rw);
+        }
+      }
+    }
+    walls_json.push_back({{"name", S.name}, {"group", S.group}, {"static_normal", S.normal}, {"peak_normal", raw},
+                          {"peak_normal_windowed", wnd},
+                          {"ratio", S.normal > 0 ? json(raw / S.normal) : json(nullptr)},
+                          {"ratio_windowed", S.normal > 0 ? json(wnd / S.normal) : json(nullptr)}, {"bins", bins}});
+  }
+  return walls_json;
+}
+
+// The flow pattern (docs/outputs.md): where the top surface first sank.
+std::string flow_pattern(const double* sink_time) {
+  const double t_walls = std::isnan(sink_time[0]) ? sink_time[2]
+                         : std::isnan(sink_time[2]) ? sink_time[0] : std::min(sink_time[0], sink_time[2]);
+  if (!std::isnan(t_walls) && (std::isnan(sink_time[1]) || t_walls < sink_time[1])) return "funnel";
+  if (!std::isnan(sink_time[1]) && (std::isnan(t_walls) || sink_time[1] <= t_walls)) return "piping";
+  return "undetermined";
+}
+}  // namespace
+
 void DischargePhase::finish(World& w, Status status) {
   namespace fs = std::filesystem;
   const DischargeSpec& ds = spec_.discharge;
@@ -608,44 +654,10 @@ void DischargePhase::finish(World& w, Status status) {
       write_file_atomic(out_ + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
                                                body + "  </Collection>\n</VTKFile>\n");
 
-  // Ratios of peak to static: raw maximum and the maximum of a moving average.
-  const std::vector<WallLoad>& static_walls = st.static_walls;
-  const double* sink_time = st.sink_time;
-  json walls_json = json::array();
   double best_bottom[2] = {0, 0}, best_side[2] = {0, 0};
-  for (std::size_t k = 0; k < static_walls.size(); ++k) {
-    const WallLoad& S = static_walls[k];
-    const double raw = st.total_peaks[k].raw, wnd = st.total_peaks[k].windowed;
-    json bins = json::array();
-    double smax = 0;
-    for (double v : S.bin_normal) smax = std::max(smax, v);
-    for (std::size_t b = 0; b < S.bin_normal.size(); ++b) {
-      const double br = st.bin_peaks[k][b].raw, bw = st.bin_peaks[k][b].windowed;
-      // Bins that carried little at rest have no meaningful ratio (one contact of 1 disc weight).
-      const bool ok = S.bin_normal[b] >= 0.25 * smax && smax > 0;
-      const double rr = ok ? br / S.bin_normal[b] : NAN, rw = ok ? bw / S.bin_normal[b] : NAN;
-      bins.push_back({{"bin", b}, {"static", S.bin_normal[b]}, {"peak", br}, {"peak_windowed", bw},
-                      {"ratio", num_or_null(rr)}, {"ratio_windowed", num_or_null(rw)}});
-      if (ok && S.name != ds.gate) {
-        double* best = S.group == "bottom" ? best_bottom : (S.group.rfind("side", 0) == 0 ? best_side : nullptr);
-        if (best) {
-          best[0] = std::max(best[0], rr);
-          best[1] = std::max(best[1], rw);
-        }
-      }
-    }
-    walls_json.push_back({{"name", S.name}, {"group", S.group}, {"static_normal", S.normal}, {"peak_normal", raw},
-                          {"peak_normal_windowed", wnd},
-                          {"ratio", S.normal > 0 ? json(raw / S.normal) : json(nullptr)},
-                          {"ratio_windowed", S.normal > 0 ? json(wnd / S.normal) : json(nullptr)}, {"bins", bins}});
-  }
-
-  // Flow pattern (documented in docs/outputs.md).
-  const double t_walls = std::isnan(sink_time[0]) ? sink_time[2]
-                         : std::isnan(sink_time[2]) ? sink_time[0] : std::min(sink_time[0], sink_time[2]);
-  std::string pattern = "undetermined";
-  if (!std::isnan(t_walls) && (std::isnan(sink_time[1]) || t_walls < sink_time[1])) pattern = "funnel";
-  else if (!std::isnan(sink_time[1]) && (std::isnan(t_walls) || sink_time[1] <= t_walls)) pattern = "piping";
+  const json walls_json = wall_peaks(st, ds.gate, best_bottom, best_side);
+  const double* sink_time = st.sink_time;
+  const std::string pattern = flow_pattern(sink_time);
   const std::vector<Removal>& removals = st.removals;
   int out_1s = 0;
   for (const Removal& r : removals)
