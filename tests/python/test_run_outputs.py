@@ -86,6 +86,28 @@ def test_vtu_files_read_with_meshio(run_dir):
     assert contacts.cell_data["f_n"][0].shape == (n_csv,)
 
 
+def test_final_vtu_files_carry_forces_materials_contacts_and_walls(run_dir):
+    """discs.vtu holds each disc's force (eq. 15's resultant, gravity in it), torque, material and
+    contact count: at rest the forces are near zero beside the weight, every contact of
+    contacts.csv counts for both its discs (one for a wall's); walls.vtu holds the scene's walls."""
+    s = json.loads((run_dir / "summary.json").read_text())
+    discs = meshio.read(run_dir / "discs.vtu")
+    pd = discs.point_data
+    weight = s["disc_weight"]
+    assert pd["force"].shape == (s["n_discs"], 3) and np.abs(pd["force"][:, :2]).max() < 1e-2 * weight
+    assert pd["torque"].shape == (s["n_discs"],) and set(np.unique(pd["material"])) == {0}
+    rows = read_csv(run_dir / "contacts.csv")
+    count = np.zeros(s["n_discs"], int)
+    for r in rows:
+        count[int(r["i"])] += 1
+        if r["kind"] in ("dd", "db"):
+            count[int(r["j"])] += 1
+    ids = pd["id"].astype(int)
+    assert np.array_equal(pd["contacts"][np.argsort(ids)], count)
+    walls = meshio.read(run_dir / "walls.vtu")
+    assert len(walls.cells_dict["line"]) == sum(1 for w in s["walls"] if w.get("active", True))
+
+
 def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
     """output.rotation_angle adds a phi column (CSV and VTU) and changes nothing else."""
     import subprocess

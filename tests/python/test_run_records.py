@@ -164,7 +164,7 @@ def test_a_fresh_run_clears_an_earlier_runs_files(tmp_path, dem_binary, scenes):
     assert "files of an earlier run from" in p.stdout
     left = sorted(str(f.relative_to(out)) for f in out.rglob("*") if f.is_file())
     assert left == sorted(["summary.json", "run.log", "thermo.csv", "discs.csv", "discs.vtu", "contacts.csv",
-                           "contacts.vtu", "wall_profiles.csv", "notes.txt", "snapshots/mine.txt"])
+                           "contacts.vtu", "walls.vtu", "wall_profiles.csv", "notes.txt", "snapshots/mine.txt"])
     assert RunDir(out, strict=True).status == "end_time"
 
 

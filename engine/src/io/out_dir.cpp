@@ -11,7 +11,7 @@ namespace {
 // Every file a run writes into its folder (docs/outputs.md), and the pictures drawn from them.
 const char* const kRunFiles[] = {
     "summary.json", "run.log", "thermo.csv", "snapshots.pvd", "discs.csv", "discs.vtu", "contacts.csv",
-    "contacts.vtu", "wall_profiles.csv", "removals.csv", "flow_series.csv", "wall_series.csv",
+    "contacts.vtu", "walls.vtu", "wall_profiles.csv", "removals.csv", "flow_series.csv", "wall_series.csv",
     "wall_totals_series.csv", "discharge_discs.pvd", "discharge_contacts.pvd", "discharge_snapshots.csv",
     "shear_series.csv", "shear_planes.csv", "checkpoint.dem", "last_good.bin", "opening_positions.bin", "member.json",
     "network.png", "side_walls.png", "frames.png", "wall_ratios.png", "flow.png"};

@@ -128,6 +128,17 @@ class ContactRows {
     for (std::size_t p = 0; p < w.neighbors.walls.size(); ++p) nwc_ += wall_touching(p);
   }
   std::size_t size() const { return np_ + nb_ + nwc_; }
+  // The contacts each disc has (by array index): its touching pairs, bonds and obstacles.
+  std::vector<int> per_disc() const {
+    std::vector<int> n(d_.size(), 0);
+    for (std::size_t p = 0; p < w_.neighbors.pairs.size(); ++p)
+      if (touching(p)) ++n[w_.neighbors.pairs[p].i], ++n[w_.neighbors.pairs[p].j];
+    for (std::size_t p = 0; p < w_.bonds.size(); ++p)
+      if (bonded(p)) ++n[w_.bonds[p].i], ++n[w_.bonds[p].j];
+    for (std::size_t p = 0; p < w_.neighbors.walls.size(); ++p)
+      if (wall_touching(p)) ++n[w_.neighbors.walls[p].i];
+    return n;
+  }
 
   // Contact c of the VTU: its forces, its disc i and its other end (disc j, or the obstacle point).
   struct Entry {
@@ -316,7 +327,7 @@ void write_contact_files(const std::string& dir, const std::string& stem, const 
 }
 
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
-                      const OpeningPositions* at_open) {
+                      const OpeningPositions* at_open, const World* world) {
   const bool disp = at_open != nullptr;
   // Row k is the disc of the k-th smallest id: the user's order, whatever the arrays' (cell order
   // after a re-sort, World::resort_discs).
@@ -354,16 +365,25 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   if (!spec.vtu_files()) return;
   std::vector<VtuVector> vec;
   vec.push_back({"velocity", [&](std::size_t k, double& vx, double& vy) { vx = d.vx[disc(k)]; vy = d.vy[disc(k)]; }});
+  // The resultant of eq. (15) on each disc (gravity included) and its moment.
+  vec.push_back({"force", [&](std::size_t k, double& fx, double& fy) { fx = d.fx[disc(k)]; fy = d.fy[disc(k)]; }});
   if (disp) vec.push_back({"displacement", [&](std::size_t k, double& dx, double& dy) { displacement(disc(k), dx, dy); }});
   std::vector<VtuColumn> scalars = {{"radius", [&](std::size_t k) { return d.r(disc(k)); }},
-                                 {"omega", [&](std::size_t k) { return d.omega[disc(k)]; }}};
+                                 {"omega", [&](std::size_t k) { return d.omega[disc(k)]; }},
+                                 {"torque", [&](std::size_t k) { return d.torque[disc(k)]; }}};
   if (angle) scalars.push_back({"phi", [&](std::size_t k) { return d.phi[disc(k)]; }});
   VtuGrid g;
   g.np = d.size();
   g.point = [&](std::size_t k, double& x, double& y) { x = d.x[disc(k)]; y = d.y[disc(k)]; };
   g.scalars = std::move(scalars);
   g.vectors = std::move(vec);
-  g.ints = {{"id", [&](std::size_t k) { return static_cast<long long>(d.id_at(disc(k))); }}};
+  g.ints = {{"id", [&](std::size_t k) { return static_cast<long long>(d.id_at(disc(k))); }},
+            {"material", [&](std::size_t k) { return static_cast<long long>(d.material(disc(k))); }}};
+  std::vector<int> contacts;  // of the world's discs only (not of a last good state)
+  if (world && &world->discs == &d) {
+    contacts = ContactRows(*world).per_disc();
+    g.ints.push_back({"contacts", [&](std::size_t k) { return static_cast<long long>(contacts[disc(k)]); }});
+  }
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) { write_vtu(out, g, spec.vtu_binary(d.size())); });
 }
 
@@ -490,7 +510,8 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   if (extra)
     for (auto& [k, v] : extra->items()) js[k] = std::move(v);
   if (!unstable) write_contact_files(dir, "contacts", w, spec.vtu_binary(d.size()), spec.vtu_files());
-  write_disc_files(dir, "discs", spec, d, nullptr);
+  write_disc_files(dir, "discs", spec, d, nullptr, &w);
+  if (spec.vtu_files()) write_walls_vtu(dir + "/walls.vtu", w.geometry, spec.vtu_binary(d.size()));
   // Serialised straight to the file (some 1.3 MB of text at a million discs, which a string
   // built first held twice over as it grew, at the run's peak): the bytes of js.dump(2).
   write_stream_atomic(dir + "/summary.json", [&](std::ostream& out) { out << std::setw(2) << js << '\n'; });

@@ -58,9 +58,10 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
 // (SceneSpec::vtu_files). `binary`: the VTU file binary (SceneSpec::vtu_binary), else ASCII.
 void write_contact_files(const std::string& dir, const std::string& stem, const World& w, bool binary, bool vtu);
 // STEM.csv and STEM.vtu of the discs (STEM.vtu unless output.vtu = "none"); with displacement
-// columns from the positions at opening when given.
+// columns from the positions at opening when given. The VTU carries each disc's velocity, force,
+// omega, torque, radius, id and material, and, when `world` holds d, its number of contacts.
 void write_disc_files(const std::string& dir, const std::string& stem, const SceneSpec& spec, const Discs& d,
-                      const OpeningPositions* at_open);
+                      const OpeningPositions* at_open, const World* world = nullptr);
 
 
 }  // namespace dem

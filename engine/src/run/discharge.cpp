@@ -553,7 +553,7 @@ void DischargePhase::snapshots(World& w, double t) {
     w.pay_kick();  // the snapshot's velocities
     char stem[32];
     std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
-    write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open);
+    write_disc_files(snapdir, std::string("discs_") + stem, spec_, w.discs, &st.at_open, &w);
     write_contact_files(snapdir, std::string("contacts_") + stem, w, spec_.vtu_binary(w.discs.size()), spec_.vtu_files());
     if (spec_.vtu_files()) {
       st.pvd_d << "    <DataSet timestep=\"" << time_text(on_step_grid(t, w.dt)) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";

@@ -62,7 +62,7 @@ void Recorder::snapshot(const World& w) {
   std::snprintf(stem, sizeof stem, "step_%09ld", w.steps);
   const std::string dir = out_ + "/snapshots", s = stem;
   const bool binary = spec_->vtu_binary(w.discs.size());
-  write_disc_files(dir, s + "_discs", *spec_, w.discs, nullptr);
+  write_disc_files(dir, s + "_discs", *spec_, w.discs, nullptr, &w);
   write_contact_files(dir, s + "_contacts", w, binary, spec_->vtu_files());
   if (spec_->vtu_files()) write_walls_vtu(dir + "/" + s + "_walls.vtu", w.geometry, binary);
   snapshots.add(on_step_grid(w.time, w.dt), w.steps, "snapshots/" + s + "_discs.vtu", "snapshots/" + s + "_walls.vtu",
