@@ -440,7 +440,7 @@ def discharge_compare(scene_name: str, per_code: dict, options) -> tuple[list, d
             st = stats.proportions(ref["jammed"], ref["ok_members"], s["jammed"], s["ok_members"])
             metrics.append(verdict.statistical(
                 f"discharge jam fraction ({c} vs native)", scene_name, st, "jam_fraction", options,
-                {"native": [ref["jammed"], ref["ok_members"]], c: [s["jammed"], s["ok_members"]]},
+                {"native": f"{ref['jammed']}/{ref['ok_members']} jammed", c: f"{s['jammed']}/{s['ok_members']} jammed"},
                 "Newcombe's interval of the difference of the fractions"))
     return metrics, summary
 
