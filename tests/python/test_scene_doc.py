@@ -3,6 +3,8 @@ tables (`Tab t(..., "NAME", ...)` up to its `t.finish()`) are read from the engi
 import re
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / "engine" / "src" / "scene" / n for n in ("scene.cpp", "shear_scene.cpp")]
 READ = re.compile(r'\bt\.(?:num|positive|non_negative|integer|boolean|str|choice|vec2|bounded|numbers|node|table|'
@@ -35,6 +37,7 @@ def test_every_scene_key_has_a_row():
     assert not missing, f"docs/scene.md has no row for {missing}"
 
 
+@pytest.mark.release_only  # Python's side: the sanitized engine's runs are the other tests'
 def test_the_example_scene_is_the_one_documented_and_it_discharges(tmp_path):
     """docs/scene.md opens with examples/flat_silo.toml verbatim; the engine settles it to rest and
     discharges it without a jam (its slit is five diameters wide), and --pictures draws its five

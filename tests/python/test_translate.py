@@ -3,6 +3,8 @@ no copy of the one script template; `compare translate --out DIR` writes folders
 they are (the template beside each case)."""
 from pathlib import Path
 
+import pytest
+
 from compare.codes import yade_backend
 from compare.verdict import translate
 
@@ -16,6 +18,7 @@ def test_committed_yade_inputs_have_no_script_copies():
         assert sorted(p.name for p in f.iterdir()) == ["yade_case.json"], f
 
 
+@pytest.mark.release_only  # Python's side: the sanitized engine's runs are the other tests'
 def test_translate_out_writes_runnable_folders(tmp_path, dem_binary):
     assert translate.main(False, tmp_path) == 0
     for case in ("silo_17_18", "discharge_11_12"):

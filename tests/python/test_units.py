@@ -117,6 +117,7 @@ def test_resolve_names_the_units_of_its_numbers(tmp_path, dem_binary):
     assert cgs["acceleration"] == "cm/s^2" and si["time"] == cgs["time"] == "s"
 
 
+@pytest.mark.release_only  # Python's side: the sanitized engine's runs are the other tests'
 def test_pictures_and_jitter_carry_the_scenes_units(tmp_path, dem_binary, monkeypatch):
     """An SI scene's pictures label lengths in m and masses in kg, and dem compare's default
     jitter is the cgs scenes' 1e-3 cm expressed in m (1e-5); a given --perturb is taken as it is."""

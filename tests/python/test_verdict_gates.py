@@ -69,6 +69,7 @@ def test_a_fill_that_does_not_rest_is_inconclusive_and_names_the_settle(dem_bina
     assert not list((out / "static").rglob("native/result.json"))     # the codes never started
 
 
+@pytest.mark.release_only  # Python's side: the sanitized engine's runs are the other tests'
 def test_a_discharge_whose_members_open_before_rest_is_inconclusive(dem_binary, tmp_path):
     """--start scene with 0.05 s of settling: each member would open the gate on a falling lattice.
     The native fill of that --settle is tried first; no member runs, the verdict is inconclusive
