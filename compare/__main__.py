@@ -218,12 +218,16 @@ def _users_words(msg: str, generated: Path) -> str:
 def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dict:
     rows = []
     for mu in mutants.mutations(codes, names):
-        if not any(mu.applies(mu.code, plan.member_case(p, 0)) for p in plans if mu.code in plan.codes_of(p, codes)):
+        on = mutant_plans(mu, plans)
+        if not any(mu.applies(mu.code, plan.member_case(p, 0)) for p in on if mu.code in plan.codes_of(p, codes)):
             rows.append({"mutant": mu.name, "code": mu.code, "applicable": False, "caught": False,
                          "caught_physically": False, "metrics": []})
             log(f"mutant {mu.label}: changes nothing in these scenes (left out)")
             continue
-        rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=plans,
+        if len(on) < len(plans):
+            log(f"mutant {mu.label}: a power check of {', '.join(mu.proves)}, run on the scenes that judge them: "
+                + ", ".join(p.name for p in on))
+        rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=on,
                            looks=baseline.get("looks", {}).get("planned", 1))
         c = mutants.caught(baseline, rep, mu.proves)
         rows.append({"mutant": mu.name, "code": mu.code, "applicable": True, **c})
@@ -235,6 +239,14 @@ def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dic
            "all_caught": bool(live) and n == len(live) and baseline["passed"]}
     (out / "mutants.json").write_text(json.dumps(res, indent=1, default=float))
     return res
+
+
+def mutant_plans(mu, plans) -> list:
+    """The plans a mutant runs on: a power-check mutant (one that must make statistical metrics
+    of its kinds disagree) on the scenes that judge those kinds where there are any, since a
+    deterministic scene catching it proves nothing about the statistics; any other on all."""
+    power = [p for p in plans if mu.proves and plan.judges_any(p, mu.proves)]
+    return power or list(plans)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ PKGS=(cmake g++ make pkg-config libeigen3-dev libtomlplusplus-dev nlohmann-json3
       python3-numpy python3-scipy python3-matplotlib python3-pil python3-meshio python3-pytest
       python3-pytest-xdist   # pytest on every core (tests/CMakeLists.txt)
       liggghts yade lammps   # the reference codes of the comparison layer (compare/); lammps gives lmp
+      procps           # pgrep: scripts/test.sh stops its studies' process trees when a test phase fails
       time)            # GNU time: benchmarks/speed.py measures each run's peak memory with it
 missing=()
 for p in "${PKGS[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done

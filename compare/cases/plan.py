@@ -285,6 +285,18 @@ def make_plan(entry: Entry) -> Plan:
     return Plan(entry, name, kind, r, shared, dt, duration, settle, members)
 
 
+def statistical(plan: Plan) -> bool:
+    """Whether the plan is judged by statistical metrics (members, intervals and margins): the
+    discharge, the static members, the Janssen column and the shear box."""
+    return plan.kind in ("discharge", "janssen", "shear") or (plan.kind == "static" and plan.options.start == "scene")
+
+
+def judges_any(plan: Plan, kinds) -> bool:
+    """Whether a statistical plan may judge a metric of one of these margin kinds (its --metrics,
+    or every metric of its kind when it names none)."""
+    return statistical(plan) and (not plan.options.metrics or any(k in plan.options.metrics for k in kinds))
+
+
 def codes_of(plan: Plan, codes) -> tuple:
     """The codes a plan runs: the command's, narrowed to its list line's --codes when it has them."""
     return tuple(c for c in codes if not plan.options.codes or c in plan.options.codes)

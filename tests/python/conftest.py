@@ -53,8 +53,9 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "reference_codes: runs LIGGGHTS, YADE or LAMMPS; their runs are most of "
                             "its time, and the sanitizer build's run leaves it out")
     config.addinivalue_line("markers", "release_only: checks what the release build gives (a study's figures, an "
-                            "installed copy), which a sanitized engine would only give more slowly; the sanitizer "
-                            "build's run leaves it out")
+                            "installed copy, Python's pools and drawing, scenes of 100k discs and more) through "
+                            "engine runs whose code paths shorter tests also step; the sanitizer build's run "
+                            "leaves it out")
 
 
 def pytest_collection_modifyitems(config, items):

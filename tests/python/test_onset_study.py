@@ -13,6 +13,10 @@ sys.path.insert(0, str(REPO_ROOT / "benchmarks"))
 import common_study as cs  # noqa: E402
 import work_precision as wp  # noqa: E402
 
+# A study's sweep of many runs, judged in Python; the engine paths it steps are the shorter tests'
+# (sanitizer: release only).
+pytestmark = pytest.mark.release_only
+
 DTS = [2e-6, 4e-6, 8e-6]     # dt / t_c = 0.003 ... 0.012
 
 

@@ -6,10 +6,14 @@ import json
 import subprocess
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from compare.papers import paper_discharge
 from compare.io.run_dir import RunDir
+
+# The pool is Python's; the engine runs it starts are the release build's (sanitizer: release only).
+pytestmark = pytest.mark.release_only
 
 
 def test_pooled_members_give_the_ensemble_of_one_process(tmp_path, dem_binary, monkeypatch):

@@ -2,7 +2,12 @@
 the PNGs are those compare.figures draws in this process from the same runs, byte for byte, and
 the report shows them."""
 from compare.figures import runs as figures
+import pytest
+
 from compare.papers import paper_static
+
+# The pool is Python's; the engine runs it starts are the release build's (sanitizer: release only).
+pytestmark = pytest.mark.release_only
 
 
 def test_figures_of_the_pool_are_those_drawn_here(tmp_path, dem_binary, monkeypatch):

@@ -55,6 +55,7 @@ def test_five_pictures_written_and_decoded(run, tmp_path):
     assert not list(out.glob("*.tmp"))
 
 
+@pytest.mark.release_only  # Python's drawing, the engine's run shared with the tests below
 def test_wait_draws_on_draw_and_nothing_otherwise(run, tmp_path):
     """--wait: the process reads one line on stdin; "draw" draws (--quiet: nothing listed), any
     other line or the end of stdin draws nothing and exits 0."""
@@ -66,6 +67,7 @@ def test_wait_draws_on_draw_and_nothing_otherwise(run, tmp_path):
         assert sorted(x.name for x in out.glob("*.png")) == (sorted(PICTURES) if drawn else []), line
 
 
+@pytest.mark.release_only  # the picture process also runs in the unstable run's test below
 def test_dem_run_pictures_draws_the_same_files_after_the_run(run, tmp_path, dem_binary):
     """`dem run SCENE --out DIR --pictures`: the run's outputs, then the five pictures of
     `python3 -m compare.figures run DIR`, byte for byte (the run is deterministic), the files named on

@@ -36,7 +36,9 @@ def scene(tmp_path_factory):
                       "series_interval": 0.02, "peak_window": 0.02, "snapshots": [0.05]}})
 
 
-@pytest.mark.parametrize("scheme", [[], ["--scheme", "velocity_verlet", "--dt", "2.5e-5", "--force-dt"]],
+# velocity_verlet's threaded moves run in the unit tests too; its run here (twice the steps) is release only.
+@pytest.mark.parametrize("scheme", [[], pytest.param(["--scheme", "velocity_verlet", "--dt", "2.5e-5", "--force-dt"],
+                                                     marks=pytest.mark.release_only)],
                          ids=["paper_eq19", "velocity_verlet"])
 def test_one_two_three_threads_same_bytes(scene, scheme, run_dem, tmp_path):
     runs = {}
@@ -65,6 +67,7 @@ def test_header_says_how_threads_wait(dem_binary, tmp_path, env, shown):
     assert f"threads 2 (barriers: {shown}; or 1, whichever is faster now" in p.stdout, p.stdout[:600]
 
 
+@pytest.mark.release_only  # a choice by measured speed, which a sanitizer skews
 def test_thread_choice_in_summary(dem_binary, tmp_path):
     """A run with 2 threads on the 10k silo (enough discs for 2) says in summary.json how many
     steps each count ran; with integrator.thread_choice = "off" every step has the 2 threads."""

@@ -222,3 +222,19 @@ def test_every_code_removes_discs_at_the_engines_outlet_height(tmp_path, dem_bin
                         "--end-time", "0.01"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert json.loads((tmp_path / "n" / "summary.json").read_text())["discharge"]["outlet_y"] == expected
+
+
+def test_a_power_check_mutant_runs_on_the_scenes_that_judge_its_metrics():
+    """A power-check mutant runs only where the statistical metric kinds it must make disagree are
+    judged (in CI the quick list: the slit ends on the designed discharge alone, the density on
+    the static members and the discharge); another mutant, or one with no such scene, on all."""
+    from compare.__main__ import mutant_plans
+    plans = [plan.make_plan(e) for e in plan.read_list(plan.default_list("quick"), plan.Options())]
+    by = {m.name: m for m in mutants.mutations(("native", "liggghts", "yade"),
+                                               ["liggghts_slit_ends_1r", "liggghts_density_x1.25", "liggghts_ks_x0.5"])}
+    names = lambda mu: [p.name for p in mutant_plans(mu, plans)]
+    assert names(by["liggghts_slit_ends_1r"]) == ["silo_1000"]
+    assert names(by["liggghts_density_x1.25"]) == ["silo_17_18_members", "silo_1000"]
+    assert len(names(by["liggghts_ks_x0.5"])) == len(plans) > 15
+    collisions = [p for p in plans if p.kind == "collision"]
+    assert mutant_plans(by["liggghts_slit_ends_1r"], collisions) == collisions
