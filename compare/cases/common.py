@@ -60,6 +60,18 @@ def resolve(scene: str | Path) -> dict:
     return json.loads(p.stdout)
 
 
+def stability(scene: str | Path, sets: dict | None = None, dem: str | Path | None = None) -> dict:
+    """The engine's time-step bounds of the scene with the ``--set`` assignments ``sets``
+    (``dem resolve --stability``): those a run prints and enforces (summary.json's "stability")
+    and the bonded clusters' bound for every scheme (``dt_clusters_by_scheme``)."""
+    args = [a for k, v in (sets or {}).items() for a in ("--set", f"{k}={v}")]
+    p = subprocess.run([str(dem or dem_binary()), "resolve", str(scene), "--stability", *args], capture_output=True,
+                       text=True)
+    if p.returncode != 0:
+        raise CaseError(p.stderr.strip() or f"dem resolve {scene} --stability failed with exit {p.returncode}")
+    return json.loads(p.stdout)["stability"]
+
+
 def pair(resolved: dict, a: str, b: str) -> dict:
     for p in resolved["pairs"]:
         if sorted(p["materials"]) == sorted([a, b]):

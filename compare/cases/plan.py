@@ -253,7 +253,7 @@ def make_plan(entry: Entry) -> Plan:
         settle = FROZEN_DISCHARGE_SETTLE
     if kind == "shear":
         if not o.dt:
-            dt = shear.stable_dt(shared, dt)
+            dt = shear.stable_dt(entry.scene, dt)
         if o.duration:      # a shorter (or longer) shear: the walls turn for --duration s
             strain = math.tan(float(r["shear"]["rate"]) * o.duration)
             if not 0 < strain <= 1:

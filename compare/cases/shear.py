@@ -10,7 +10,7 @@ paper's outputs across codes.
 
 What each backend takes from here: the box (plate height and reach for the case's own discs:
 ``box``), the engine's bond list (``bonds_of``, compare/cases/shear_stability.py), the stable dt of the shared scheme
-(``stable_dt``), LIGGGHTS' refusal (``liggghts_refusal``) and the common reader
+(``stable_dt``, from the engine's bound), LIGGGHTS' refusal (``liggghts_refusal``) and the common reader
 (``read_outputs``).
 """
 from __future__ import annotations
@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.cases.common import CaseError
-from compare.cases.shear_stability import engine_bonds, scene_bounds
+from compare.cases.common import SHARED_VARIANT, CaseError, stability
+from compare.cases.shear_stability import engine_bonds
 from compare.io.run_dir import RunDir
 
 WINDOW = 0.011           # strain over which the windowed peak averages tau/sigma
@@ -45,12 +45,19 @@ def shear_time(resolved: dict) -> float:
     return math.atan(float(sh["max_strain"])) / float(sh["rate"])
 
 
-def stable_dt(resolved: dict, dt: float) -> float:
-    """The scene's dt halved until it is at most VV_SAFETY x the velocity Verlet bound of the
-    scene's clusters (or single discs) with their touching neighbours held
-    (compare/cases/shear_stability.py, the engine's own bound): the shared scheme is velocity Verlet,
-    whose bound with bonds across a gap is about a third of paper 2's eq. (19)'s."""
-    bound = scene_bounds(resolved)["velocity_verlet"]
+def shared_bound(scene) -> float:
+    """[s] The engine's time-step bound of the scene run with the shared scheme (velocity Verlet)
+    and the shared contact law: its single contacts, a disc's rotation on 4 contacts and its
+    clusters with their touching neighbours held (``dem resolve --stability``)."""
+    sets = {"integrator.scheme": "velocity_verlet", **{f"contact.{k}": v for k, v in SHARED_VARIANT.items()}}
+    return float(stability(scene, sets)["dt_bound"])
+
+
+def stable_dt(scene, dt: float) -> float:
+    """The scene's dt halved until it is at most VV_SAFETY x the engine's bound of the shared
+    scheme (``shared_bound``): velocity Verlet's bound with bonds across a gap is about a third of
+    paper 2's eq. (19)'s."""
+    bound = shared_bound(scene)
     while dt > VV_SAFETY * bound:
         dt *= 0.5
     return dt

@@ -12,7 +12,7 @@ every pair of a cluster bonded, touching = only the apex-base contacts bonded):
                     clusters of alpha = 35 do not come to rest at 1e-4 s);
 - native_yadelaw:   YADE's contact law in the engine (overlap spring, total-force no-tension
                     and Coulomb cap), velocity Verlet at 2.5e-5 s (bonded clusters with their
-                    dashpots need it: compare.cases.shear_stability): the bridge between the codes;
+                    dashpots need it: `dem resolve --stability`): the bridge between the codes;
 - native_platewalls: the plate's horizontal motion tied to the side walls (a reading of the
                     paper's "moves horizontally with the rotation of both sides");
 - yade:             YADE 2023.02a at 5e-5 s through the YADE backend's shear path
@@ -37,7 +37,7 @@ import numpy as np
 
 from compare.io import scene_toml
 from compare.figures import shear_figures as sf
-from compare.cases import shear_stability
+from compare.cases import common
 from compare.codes import shear_yade
 from compare.io.job_pool import JobPool
 
@@ -198,12 +198,14 @@ def draw_figures(get, out):
 
 
 def cluster_bounds(dem):
-    """{(alpha, variant): the scene's cluster dt bounds per scheme} (compare/cases/shear_stability.py)."""
+    """{(alpha, variant): {scheme: the dt bound the engine enforces for the scene run with it}}
+    (``dem resolve --stability``)."""
     bounds = {}
     for al in ALPHAS:
         for v in VARIANTS:
             try:
-                bounds[(al, v)] = shear_stability.scene_bounds(shear_stability.resolve(scene(al, v), dem))
+                bounds[(al, v)] = {s: common.stability(scene(al, v), {"integrator.scheme": s}, dem)["dt_bound"]
+                                   for s in ("paper_eq18", "paper_eq19", "velocity_verlet")}
             except Exception as e:  # noqa: BLE001 -- reported, never fatal
                 bounds[(al, v)] = {"error": str(e)}
     return bounds
@@ -348,10 +350,11 @@ def checks_section(L, runs):
 
 def bounds_section(L, get, bounds):
     L.append("## Time step and clusters\n")
-    L.append("Bound on dt from the spectral radius of one step on each distinct cluster (its discs, bonds and "
-             "the contacts to its touching neighbours held fixed, every contact sticking): "
-             "`python3 -m compare.cases.shear_stability`. For scenes without clusters each disc with its neighbours. "
-             "Not a safe bound for the assembly (moving neighbours raise frequencies), but it ranks the cases.\n")
+    L.append("The dt bound the engine enforces with each scheme (`dem resolve SCENE --stability --set "
+             "integrator.scheme=S`): the spectral radius of one step on a single contact, on a disc's rotation "
+             "held by 4 contacts, and on each distinct cluster (its discs, bonds and the contacts to its touching "
+             "neighbours held fixed, every contact sticking). Not a safe bound for the assembly (moving "
+             "neighbours raise frequencies), but it ranks the cases.\n")
     L.append("| alpha | variant | eq. 18 | eq. 19 | velocity Verlet | native at 1e-4: rest |")
     L.append("|---|---|---|---|---|---|")
     for al in ALPHAS:

@@ -6,6 +6,7 @@ import importlib.util
 import json
 import math
 import re
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +57,6 @@ def test_generated_arrangement_has_the_papers_angles():
 
 @pytest.fixture(scope="module")
 def small_runs(tmp_path_factory, dem_binary):
-    import subprocess
     base = tmp_path_factory.mktemp("shear")
     runs = {}
     for variant in ("free", "clusters"):
@@ -107,6 +107,31 @@ def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
         python = shear_stability.scene_bounds(shear_stability.resolve(scene, dem_binary))
         assert stab["dt_clusters"] == pytest.approx(python["paper_eq19"], rel=1e-5)
         assert stab["dt_bound"] <= stab["dt_clusters"]
+
+
+def test_dem_resolve_gives_the_bounds_a_run_enforces_for_every_scheme(small_runs, dem_binary):
+    """`dem resolve --stability`: the bounds of the run's summary.json (the comparison layer reads
+    them there, never derives them again), and the clusters' bound for each scheme, which the
+    numpy version (compare.cases.shear_stability) gives too."""
+    from compare.cases import common, shear, shear_stability
+    for variant, out in small_runs.items():
+        scene = out.parent / f"{variant}.toml"
+        stab = common.stability(scene, dem=dem_binary)
+        run = json.loads((out / "summary.json").read_text())["stability"]
+        assert {k: v for k, v in stab.items() if k != "dt_clusters_by_scheme"} == run
+        by = stab["dt_clusters_by_scheme"]
+        if variant != "clusters":
+            assert by == {"paper_eq18": None, "paper_eq19": None, "velocity_verlet": None}
+            continue
+        python = shear_stability.scene_bounds(shear_stability.resolve(scene, dem_binary))
+        for scheme in ("paper_eq18", "paper_eq19", "velocity_verlet"):
+            assert by[scheme] == pytest.approx(python[scheme], rel=1e-5), scheme
+        # the shared scheme's bound, with the shared law, is the one a velocity Verlet run enforces
+        vv = common.stability(scene, {"integrator.scheme": "velocity_verlet"}, dem_binary)
+        assert vv["dt_clusters"] == by["velocity_verlet"] and shear.shared_bound(scene) <= vv["dt_clusters"]
+    bad = subprocess.run([str(dem_binary), "resolve", str(small_runs["free"].parent / "free.toml"), "--stability",
+                          "--set", "integrator.dt=1"], capture_output=True, text=True)
+    assert bad.returncode == 0 and json.loads(bad.stdout)["stability"]["dt_bound"] < 1   # reported, not refused
 
 
 def without_shear(scene, out):

@@ -387,6 +387,22 @@ void write_disc_files(const std::string& dir, const std::string& stem, const Sce
   write_stream_atomic(dir + "/" + stem + ".vtu", [&](std::ostream& out) { write_vtu(out, g, spec.vtu_binary(d.size())); });
 }
 
+json stability_json(const StabilityReport& stab, Units units) {
+  return {{"dt_bound", stab.dt_bound}, {"limited_by", stab.limited_by},
+          {"dt_single_contact", stab.dt_single},
+          {"dt_rotation_z4", finite_or_null(stab.dt_rot_z4)},
+          {"dt_rotation_z6", finite_or_null(stab.dt_rot_z6)},
+          {"dt_clusters", finite_or_null(stab.clusters.dt)},
+          {"cluster_shapes", stab.clusters.shapes},
+          {"clusters_not_examined", stab.clusters.skipped},
+          {"note", std::string("bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
+                   "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
+                   "sticking contacts (disc-disc or disc-wall constants); with bonded clusters, on each "
+                   "distinct cluster of at most 10 discs (its discs, bonds and the contacts to neighbours "
+                   "within 0.01 ") + unit_names(units).length + ", those held fixed, every contact sticking); "
+                   "dt_bound = min(single contact, rotation on 4, clusters) is enforced"}};
+}
+
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
                    const StabilityReport& stab, json* extra) {
   w.require_velocities("write_outputs");
@@ -479,19 +495,7 @@ void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w
   json jd = json::array();
   for (const auto& p : stab.pairs) jd.push_back(pair_json(p));
   js["derived"] = jd;
-  js["stability"] = {{"dt_bound", stab.dt_bound}, {"limited_by", stab.limited_by},
-                     {"dt_single_contact", stab.dt_single},
-                     {"dt_rotation_z4", finite_or_null(stab.dt_rot_z4)},
-                     {"dt_rotation_z6", finite_or_null(stab.dt_rot_z6)},
-                     {"dt_clusters", finite_or_null(stab.clusters.dt)},
-                     {"cluster_shapes", stab.clusters.shapes},
-                     {"clusters_not_examined", stab.clusters.skipped},
-                     {"note", std::string("bounds from the spectral radius of this scheme's step on one damped degree of freedom: "
-                              "a single contact (normal, sticking shear), and a disc's rotation held by 4 or 6 "
-                              "sticking contacts (disc-disc or disc-wall constants); with bonded clusters, on each "
-                              "distinct cluster of at most 10 discs (its discs, bonds and the contacts to neighbours "
-                              "within 0.01 ") + unit_names(spec.units).length + ", those held fixed, every contact sticking); "
-                              "dt_bound = min(single contact, rotation on 4, clusters) is enforced"}};
+  js["stability"] = stability_json(stab, spec.units);
 
   // wall_profiles.csv
   {

@@ -49,6 +49,9 @@ struct RunSummary {
   std::vector<std::string> command;  // the command line (argv), for summary.json
 };
 
+// The time-step bounds as summary.json's "stability" (and `dem resolve --stability`) give them.
+nlohmann::ordered_json stability_json(const StabilityReport& stab, Units units);
+
 // Writes all files of one run into dir (which must exist). `extra` is moved into summary.json
 // (left empty): its series are some MB at a million discs, not copied at the run's last peak.
 void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
