@@ -58,15 +58,25 @@ def pytest_configure(config):
                             "leaves it out")
 
 
+# The modules whose tests drive the engine's own code paths: its reader and --set, its command
+# line, its phases, outputs, checkpoints, signals and threads. The other modules drive the
+# comparison layer's Python through the engine (translations, verdicts, pictures, studies); the
+# engine paths they step are these modules' too, so a sanitized engine adds nothing there.
+SANITIZED_MODULES = {"test_atomic_outputs", "test_checkpoint", "test_cli", "test_corpus", "test_disc_order",
+                     "test_discharge", "test_ensemble", "test_run_outputs", "test_run_records", "test_scene_set",
+                     "test_scene_toml", "test_scene_validation", "test_shear", "test_speed_settled",
+                     "test_thread_counts", "test_units", "test_vtu_binary"}
+
+
 def pytest_collection_modifyitems(config, items):
-    """DEM_ENGINE_TESTS_ONLY=1 (the sanitizer build's run): keep the tests that run the engine
-    (those using the dem_binary fixture, directly or through another fixture), less those marked
-    reference_codes: their time goes to the reference codes' runs, which a sanitized engine does
-    not change, and the engine's side of them (its scenes, its outputs, the Python that reads
-    the codes' files) runs in the tests kept and in the release build's run."""
+    """DEM_ENGINE_TESTS_ONLY=1 (the sanitizer build's run): keep the tests of SANITIZED_MODULES
+    that run the engine (those using the dem_binary fixture, directly or through another
+    fixture), less those marked reference_codes (their time goes to the reference codes' runs,
+    which a sanitized engine does not change) or release_only."""
     if os.environ.get("DEM_ENGINE_TESTS_ONLY") != "1":
         return
     keep = [item for item in items if "dem_binary" in getattr(item, "fixturenames", ())
+            and Path(str(item.fspath)).stem in SANITIZED_MODULES
             and item.get_closest_marker("reference_codes") is None and item.get_closest_marker("release_only") is None]
     config.hook.pytest_deselected(items=[item for item in items if item not in keep])
     items[:] = keep

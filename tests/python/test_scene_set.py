@@ -106,6 +106,7 @@ def dem_compare(dem_binary, *args):
     ("integrator.dt=fast", ["integrator.dt", "fast"]),
     ("walls.3.material=sand", ["walls[3]", "1 entries"]),
 ], ids=["unknown key", "wrong type", "index out of range"])
+@pytest.mark.release_only  # dem compare's Python; the engine's refusals are the tests above
 def test_compare_set_refuses_like_the_engine(tmp_path, dem_binary, assignment, expect):
     proc = dem_compare(dem_binary, WALL_SCENE, "--codes", "native", "--out", tmp_path / "c", "--set", assignment)
     assert proc.returncode == 2, proc.stdout + proc.stderr

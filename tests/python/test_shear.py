@@ -130,8 +130,8 @@ def test_dem_resolve_gives_the_bounds_a_run_enforces_for_every_scheme(small_runs
         vv = common.stability(scene, {"integrator.scheme": "velocity_verlet"}, dem_binary)
         assert vv["dt_clusters"] == by["velocity_verlet"] and shear.shared_bound(scene) <= vv["dt_clusters"]
     bad = subprocess.run([str(dem_binary), "resolve", str(small_runs["free"].parent / "free.toml"), "--stability",
-                          "--set", "integrator.dt=1"], capture_output=True, text=True)
-    assert bad.returncode == 0 and json.loads(bad.stdout)["stability"]["dt_bound"] < 1   # reported, not refused
+                          "--set", "integrator.dt=1e-3"], capture_output=True, text=True)
+    assert bad.returncode == 0 and json.loads(bad.stdout)["stability"]["dt_bound"] < 1e-3   # reported, not refused
 
 
 def without_shear(scene, out):

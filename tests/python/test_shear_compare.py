@@ -38,7 +38,7 @@ def test_a_shear_box_scene_is_planned_as_the_shear_kind():
     assert p.shared["contact"] == SHARED_VARIANT and p.shared["integrator"]["scheme"] == "velocity_verlet"
     assert p.resolved["contact"]["normal_spring"] == "incremental"      # the scene's own law kept apart
     # the shared scheme (velocity Verlet) with the bonded clusters: 1e-4 halved to 2.5e-5 s
-    # (bound 4.59e-5 s, compare/cases/shear_stability.py)
+    # (bound 4.59e-5 s: dem resolve --stability with the shared scheme and law)
     assert p.dt == 2.5e-5
     assert p.settle == 4.0 and p.duration == pytest.approx(math.atan(0.15) / 0.05, rel=1e-15)
     case = plan.member_case(p, 1)
