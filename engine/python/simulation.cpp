@@ -16,6 +16,7 @@
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
 #include "io/state.hpp"
+#include "measures/wall_loads.hpp"
 #include "physics/world.hpp"
 #include "run/scene_run.hpp"
 #include "run/status.hpp"
@@ -83,7 +84,7 @@ class Simulation {
     nlohmann::ordered_json extra;
     const RunSummary summary = run.summary(extra);
     rest_ = run.fill.rest;
-    write_outputs(out, spec_, world_, summary, stab_, &extra);
+    write_outputs(out, spec_, world_, measure_loads(world_, spec_.profile_bin), summary, stab_, &extra);
     run.discard_kept();
     if (status_ == Status::unstable) log.say("  unstable: %s\n", summary.reason.c_str());
     log.say("  %s at t = %.4f s after %ld steps; fill rest %s; %.3g s wall\n", to_string(status_), world_.time,
@@ -142,7 +143,7 @@ class Simulation {
     s.rest_threshold = rest_.threshold;
     s.mean_abs_du = rest_.mean_abs_du;
     s.mean_abs_dv = rest_.mean_abs_dv;
-    write_outputs(out, spec_, world_, s, stab_);
+    write_outputs(out, spec_, world_, measure_loads(world_, spec_.profile_bin), s, stab_);
   }
 
   // A read-only view of a flat array, kept alive by this object. Steps may move the engine's

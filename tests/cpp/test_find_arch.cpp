@@ -1,4 +1,4 @@
-// The arch over the slit (discharge.cpp find_arch): the shortest chain of compressive contacts
+// The arch over the slit (measures/arch.cpp find_arch): the shortest chain of compressive contacts
 // from a left foot to a right foot, found by a breadth-first search whose order is fixed (feet by
 // increasing index, each disc's partners in the order of the recorded pair list). find_arch keeps
 // no array the size of the discs; here the same search is written plainly, with an adjacency
@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "run/discharge.hpp"
+#include "measures/arch.hpp"
 #include "helpers.hpp"
 
 using namespace dem;

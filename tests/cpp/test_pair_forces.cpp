@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "run/discharge.hpp"
+#include "measures/arch.hpp"
 #include "physics/pair_totals.hpp"
 #include "scene/scene.hpp"
 #include "physics/world.hpp"

@@ -2,6 +2,7 @@
 scripts/engine_shape.py --compare: at most 6 folder floors, no circle between modules or
 folders, imports at a module's top but the deferred ones named there, no function over 100 lines."""
 import importlib.util
+import re
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -45,5 +46,7 @@ def test_architecture_doc_quotes_the_measured_shape_and_no_engine_function_passe
     assert shape.check(doc, REPO) == 0, capsys.readouterr().out
     assert [f for f in shape.functions(REPO / "engine" / "src") if f[0] > 100] == []
     stale = tmp_path / "architecture.md"
-    stale.write_text(doc.read_text().replace(" 9 include floors", " 8 include floors"))
+    # One figure changed, whatever it is now.
+    stale.write_text(re.sub(r" (\d+) include floors", lambda m: f" {int(m.group(1)) + 1} include floors",
+                            doc.read_text(), count=1))
     assert shape.check(stale, REPO) == 1 and "stale" in capsys.readouterr().out

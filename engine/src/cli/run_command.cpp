@@ -11,6 +11,7 @@
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
 #include "io/state.hpp"
+#include "measures/wall_loads.hpp"
 #include "physics/free_heap.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
@@ -225,7 +226,7 @@ int run_scene(const RunArgs& a, int argc, char** argv) {
   RunSummary summary = run.summary(extra);
   summary.command.assign(argv - 2, argv + argc);  // dem run ARGS: argv[0] and "run" precede them
   print_phase_result(run, log);
-  write_outputs(a.out, l.spec, l.world, summary, l.stab, &extra);
+  write_outputs(a.out, l.spec, l.world, measure_loads(l.world, l.spec.profile_bin), summary, l.stab, &extra);
   run.discard_kept();  // the outputs hold it when it was needed; a checkpoint carries its own copy
   if (!a.save_to.empty() && status != Status::unstable) save_state(l.world, a.save_to);
   return report(a, l, run, log, status, summary, pictures, argc, argv);

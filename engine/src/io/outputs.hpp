@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "io/files.hpp"
+#include "measures/wall_loads.hpp"
 #include "scene/scene.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
@@ -18,24 +19,6 @@ class OpeningPositions;
 }
 
 namespace dem {
-
-// Forces exerted by the discs on one wall, totals and per bin along the wall.
-struct WallLoad {
-  std::string name, group;
-  double fx = 0, fy = 0;           // resultant on the wall
-  double normal = 0, shear = 0;    // along the inward normal reversed / along from -> to
-  int contacts = 0;
-  std::vector<double> bin_normal, bin_shear;
-  std::vector<int> bin_contacts;
-  double bin = 0, length = 0;
-};
-struct PointLoad {
-  std::string name, group;
-  double x = 0, y = 0, fx = 0, fy = 0;
-  int contacts = 0;
-};
-
-void measure_loads(const World& w, double bin, std::vector<WallLoad>& walls, std::vector<PointLoad>& points);
 
 // What summary.json says about the run beside the world (run/scene_run.hpp fills it).
 struct RunSummary {
@@ -52,10 +35,11 @@ struct RunSummary {
 // The time-step bounds as summary.json's "stability" (and `dem resolve --stability`) give them.
 nlohmann::ordered_json stability_json(const StabilityReport& stab, Units units);
 
-// Writes all files of one run into dir (which must exist). `extra` is moved into summary.json
+// Writes all files of one run into dir (which must exist). `loads`: the world's loads on the
+// walls and points (measure_loads with spec.profile_bin). `extra` is moved into summary.json
 // (left empty): its series are some MB at a million discs, not copied at the run's last peak.
-void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const RunSummary& res,
-                   const StabilityReport& stab, nlohmann::ordered_json* extra = nullptr);
+void write_outputs(const std::string& dir, const SceneSpec& spec, const World& w, const Loads& loads,
+                   const RunSummary& res, const StabilityReport& stab, nlohmann::ordered_json* extra = nullptr);
 
 // STEM.csv and STEM.vtu of the touching contacts (docs/outputs.md); STEM.vtu only with `vtu`
 // (SceneSpec::vtu_files). `binary`: the VTU file binary (SceneSpec::vtu_binary), else ASCII.

@@ -9,12 +9,16 @@
 namespace dem {
 
 class World;
+struct GroupLoads;
 
 class Thermo {
  public:
-  // Appends the row of the world as it is, in `phase` (the header first: the columns of the wall
-  // groups of the world's walls, in their first order).
-  void sample(const World& w, const char* phase);
+  // The wall groups of its columns: those of the world's walls in their first order, fixed at
+  // the first call.
+  const std::vector<std::string>& groups(const World& w);
+  // Appends the row of the world as it is, in `phase`, with `loads` measured over groups(w) (the
+  // header first).
+  void sample(const World& w, const char* phase, const GroupLoads& loads);
   // The file's text so far (its header included).
   const std::string& text() const { return text_; }
   long last_step() const { return last_step_; }

@@ -11,7 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "io/outputs.hpp"
+#include "measures/flow.hpp"
+#include "measures/wall_loads.hpp"
 #include "physics/world.hpp"
 #include "run/opening_positions.hpp"
 #include "run/phase.hpp"
@@ -19,13 +20,6 @@
 #include "scene/scene.hpp"
 
 namespace dem {
-
-struct Removal {
-  double t;          // [s] since opening
-  int id;
-  double mass, vx, vy;
-  bool keystone;     // removed by hand (note 4), not through the outlet
-};
 
 struct BinaryOut;
 struct BinaryIn;
@@ -134,7 +128,7 @@ class DischargePhase : public Phase {
   double duration(const World& w) const { return w.time - st.t_open; }
 
   DischargeState st;
-  Recorder* record = nullptr;  // the run's: each snapshot's walls file and its entry in snapshots.pvd
+  Recorder* record = nullptr;  // the run's (set before begin): writes each snapshot's files
 
  private:
   void sample(World& w, double t);
@@ -150,22 +144,5 @@ class DischargePhase : public Phase {
   DischargeOutcome outcome_;
   nlohmann::ordered_json metrics_;
 };
-
-// What one find_arch call searched: the searches run (each in a wider disc around the slit than
-// the last, the last over all records) and the records they read, summed.
-struct ArchStats {
-  int searches = 0;
-  std::size_t records = 0;
-};
-
-// Disc indices of the arch over the slit: the shortest chain of touching discs from one slit end
-// (point L or the bottom wall within 2 r of it) to the other, over the pairs with a compressive
-// total force in this step's recorded pass. Empty when there is none.
-std::vector<int> find_arch(const World& w, double slit_left, double slit_right, double floor_y,
-                           ArchStats* stats = nullptr);
-
-// Least-squares slope of cumulative removed mass against time, after the start transient
-// (from the 5th removal on); NaN with fewer than 10 removals.
-double flow_rate(const std::vector<Removal>& removals);
 
 }  // namespace dem

@@ -16,6 +16,7 @@
 #include "io/out_dir.hpp"
 #include "io/outputs.hpp"
 #include "io/run_log.hpp"
+#include "measures/wall_loads.hpp"
 #include "run/scene_run.hpp"
 #include "physics/stability.hpp"
 #include "physics/world.hpp"
@@ -121,7 +122,7 @@ Member run_member(const SceneSpec& spec_k, const json& identity, int k, const st
     m.fill_rest = summary.rest_reached;
     m.status = to_string(status);
     if (run.discharge && run.discharge->metrics().is_object()) m.metrics = run.discharge->metrics();
-    write_outputs(dir, s, w, summary, stab, &extra);
+    write_outputs(dir, s, w, measure_loads(w, s.profile_bin), summary, stab, &extra);
     run.discard_kept();
     if (status == Status::unstable) log.say("  unstable: %s\n", summary.reason.c_str());
     log.say("  %s at t = %.4f s after %ld steps; fill rest %s; %.3g s wall\n", to_string(status), w.time, w.steps,

@@ -9,6 +9,7 @@
 #include "io/files.hpp"
 #include "io/outputs.hpp"
 #include "io/vtu.hpp"
+#include "measures/group_loads.hpp"
 #include "physics/world.hpp"
 #include "scene/scene.hpp"
 
@@ -27,22 +28,26 @@ void Recorder::configure(const SceneSpec& spec, const std::string& out_dir, doub
   snapshot_every_ = every(spec.snapshot_interval, dt);
 }
 
+void Recorder::thermo_row(const World& w, const char* phase) {
+  thermo.sample(w, phase, measure_group_loads(w, thermo.groups(w)));
+}
+
 void Recorder::phase_start(const World& w, const char* phase) {
   if (!active()) return;
-  thermo.sample(w, phase);
+  thermo_row(w, phase);
   if (snapshot_every_ > 0 && w.steps % snapshot_every_ == 0 && snapshots.last_step() != w.steps) snapshot(w);
 }
 
 void Recorder::after_step(const World& w, const char* phase) {
   if (!active()) return;
-  if (thermo_every_ > 0 && w.steps % thermo_every_ == 0) thermo.sample(w, phase);
+  if (thermo_every_ > 0 && w.steps % thermo_every_ == 0) thermo_row(w, phase);
   if (snapshot_every_ > 0 && w.steps % snapshot_every_ == 0 && snapshots.last_step() != w.steps) snapshot(w);
 }
 
 void Recorder::phase_end(const World& w, const char* phase, Status status) {
   // An interrupted phase goes on after a resume: its end row would not be in the run never stopped.
   if (!active() || status == Status::interrupted) return;
-  thermo.sample(w, phase);
+  thermo_row(w, phase);
 }
 
 std::string Recorder::write_walls(const World& w, const std::string& stem) const {
@@ -51,9 +56,13 @@ std::string Recorder::write_walls(const World& w, const std::string& stem) const
   return rel;
 }
 
-void Recorder::note_snapshot(const World& w, const std::string& discs, const std::string& walls,
-                             const std::string& contacts) {
-  if (active()) snapshots.add(on_step_grid(w.time, w.dt), w.steps, discs, walls, contacts);
+void Recorder::phase_snapshot(const World& w, const std::string& stem, const OpeningPositions* at_open) {
+  const std::string dir = out_ + "/snapshots";
+  write_disc_files(dir, "discs_" + stem, *spec_, w.discs, at_open, &w);
+  write_contact_files(dir, "contacts_" + stem, w, spec_->vtu_binary(w.discs.size()), spec_->vtu_files());
+  if (active())
+    snapshots.add(on_step_grid(w.time, w.dt), w.steps, "snapshots/discs_" + stem + ".vtu", write_walls(w, stem),
+                  "snapshots/contacts_" + stem + ".vtu");
 }
 
 void Recorder::snapshot(const World& w) {

@@ -12,6 +12,7 @@
 
 namespace dem {
 
+class OpeningPositions;
 class World;
 struct SceneSpec;
 struct BinaryOut;
@@ -34,11 +35,11 @@ class Recorder {
   void after_step(const World& w, const char* phase);
   void phase_end(const World& w, const char* phase, Status status);
 
-  // A snapshot a phase wrote (files relative to the output folder); the periodic one of the same
-  // step is then not written.
-  void note_snapshot(const World& w, const std::string& discs, const std::string& walls, const std::string& contacts);
-  // The walls' file of a phase's snapshot, snapshots/walls_STEM.vtu; returns its relative path.
-  std::string write_walls(const World& w, const std::string& stem) const;
+  // A phase's snapshot (the discharge's, the shear's): snapshots/discs_STEM and contacts_STEM
+  // (.csv, and .vtu unless output.vtu = "none"; the discs with their displacements from `at_open`
+  // when given) and, recording, walls_STEM.vtu with the snapshot's entry in snapshots.pvd, so
+  // that the periodic snapshot of the same step is not written.
+  void phase_snapshot(const World& w, const std::string& stem, const OpeningPositions* at_open = nullptr);
 
   // thermo.csv and snapshots.pvd as they stand.
   void write() const;
@@ -51,6 +52,8 @@ class Recorder {
 
  private:
   void snapshot(const World& w);
+  void thermo_row(const World& w, const char* phase);
+  std::string write_walls(const World& w, const std::string& stem) const;  // snapshots/walls_STEM.vtu
   const SceneSpec* spec_ = nullptr;
   std::string out_;
   long thermo_every_ = 0, snapshot_every_ = 0;  // [steps] 0: none

@@ -148,12 +148,7 @@ void ShearPhase::sample(World& w, double strain) {
 void ShearPhase::snapshot(World& w, double strain) {
   char stem[64];
   std::snprintf(stem, sizeof stem, "%02zu", next_snap_);
-  write_contact_files(out_ + "/snapshots", std::string("contacts_") + stem, w, spec_.vtu_binary(w.discs.size()),
-                      spec_.vtu_files());
-  write_disc_files(out_ + "/snapshots", std::string("discs_") + stem, spec_, w.discs, nullptr, &w);
-  if (record && record->active())
-    record->note_snapshot(w, std::string("snapshots/discs_") + stem + ".vtu", record->write_walls(w, stem),
-                          std::string("snapshots/contacts_") + stem + ".vtu");
+  record->phase_snapshot(w, stem);
   json walls = json::array();
   for (const Wall& wl : w.geometry.walls)
     walls.push_back({{"name", wl.name}, {"from", {wl.ax, wl.ay}}, {"to", {wl.bx, wl.by}}});

@@ -50,7 +50,7 @@ class ShearPhase : public Phase {
   nlohmann::ordered_json metrics() const override { return metrics_; }
   const ShearOutcome& outcome() const { return outcome_; }
 
-  Recorder* record = nullptr;  // the run's: each snapshot's walls file and its entry in snapshots.pvd
+  Recorder* record = nullptr;  // the run's (set before begin): writes each snapshot's files
 
  private:
   Status at_strain(World& w);  // the sample and snapshots due at the current strain; the end test
