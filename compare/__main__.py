@@ -89,6 +89,10 @@ def _common(p) -> None:
     p.add_argument("--mutant", action="append", default=None, metavar="NAME",
                    help="run only this mutant (a name of the --mutants table, e.g. mu_disc_wall_x0.8 for every "
                         "reference code or liggghts_mu_disc_wall_x0.8 for one; repeatable; implies --mutants)")
+    p.add_argument("--exhaustive", action="store_true",
+                   help="with --mutants: run each mutant on every scene given, also after a physical metric has "
+                        "caught it (by default a mutant stops at its first scene whose deterministic physical "
+                        "metric disagrees: which scenes see which mutant)")
     p.add_argument("--timeout", type=float, default=900, help="seconds per reference run (default 900)")
     p.add_argument("--resume", action="store_true",
                    help="read back every run of OUT that finished (result.json ok) from byte-identical translated "
@@ -169,7 +173,7 @@ def main(argv=None) -> int:
     if any(p.options.native_law == "scene" for p in plans):
         rep["attribution"] = attribution.attribute(plans, rep, a.out, log)
     if a.mutants:
-        rep["mutants"] = run_mutants(plans, rep, a.out, codes, log, a.mutant)
+        rep["mutants"] = run_mutants(plans, rep, a.out, codes, log, a.mutant, a.exhaustive)
     report.write(rep, a.out)
     counts = {v: sum(m["verdict"] == v for m in rep["metrics"]) for v in verdict.ORDER}
     print(f"{a.out / 'report.md'}: {rep['verdict'].upper()} ({counts['agree']} agree, {counts['disagree']} disagree, "
@@ -215,7 +219,7 @@ def _users_words(msg: str, generated: Path) -> str:
     return re.sub(r" \(line \d+\)", "", msg)
 
 
-def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dict:
+def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None, exhaustive=False) -> dict:
     rows = []
     for mu in mutants.mutations(codes, names):
         on = mutant_plans(mu, plans)
@@ -227,8 +231,11 @@ def run_mutants(plans, baseline: dict, out: Path, codes, log, names=None) -> dic
         if len(on) < len(plans):
             log(f"mutant {mu.label}: a power check of {', '.join(mu.proves)}, run on the scenes that judge them: "
                 + ", ".join(p.name for p in on))
+        # A mutant caught by a deterministic physical metric needs no further scene (a power
+        # check runs all of its scenes: it must disagree by each statistical kind it proves).
+        stop = None if mu.proves or exhaustive else (lambda ms: mutants.physical_catch(baseline, ms))
         rep = pipeline.run([], out, codes, log=log, mutation=mu, plans=on,
-                           looks=baseline.get("looks", {}).get("planned", 1))
+                           looks=baseline.get("looks", {}).get("planned", 1), stop=stop)
         c = mutants.caught(baseline, rep, mu.proves)
         rows.append({"mutant": mu.name, "code": mu.code, "applicable": True, **c})
         log(f"mutant {mu.label}: {rep['verdict']}"

@@ -166,13 +166,30 @@ def caught(baseline: dict, mutant_report: dict, proves: tuple = ()) -> dict:
             effects.append({"scene": m["scene"], "metric": m["metric"], "verdict": m["verdict"],
                             "estimate": m["stat"].get("estimate"), "ci": m.get("ci"), "margin": m["margin"],
                             "relative": m.get("relative", True)})
-    physical = [r for r in rows if not r["metric"].startswith(("translation constants", "translation geometry"))]
+    physical = [r for r in rows if not _read_back(r)]
     present = {m.get("margin_kind") for m in mutant_report["metrics"] if m.get("kind") == "statistical"}
     needed = [k for k in proves if k in present]
     proved = [k for k in needed if any(r["margin_kind"] == k for r in rows)]
     ok = bool(rows) and len(proved) == len(needed)
     return {"caught": ok, "caught_physically": bool(physical), "metrics": rows, "effects": effects,
             "verdict": mutant_report.get("verdict"), "proves": needed, "proved": proved}
+
+
+def physical_catch(baseline: dict, metrics: list) -> str | None:
+    """The first deterministic physical metric (not the translation read-back) among ``metrics``
+    (not yet judged) that fails where the baseline did not: its scene and name, or None."""
+    base = {(m["scene"], m["metric"]): m for m in baseline["metrics"]}
+    for m in metrics:
+        b = base.get((m["scene"], m["metric"]))
+        if (m.get("kind", "deterministic") == "deterministic" and not m["pass"]
+                and m.get("verdict") != "inconclusive" and not _read_back(m)
+                and (b is None or b["verdict"] != "disagree")):
+            return f"caught by {m['metric']} on {m['scene']}"
+    return None
+
+
+def _read_back(m: dict) -> bool:
+    return m["metric"].startswith(("translation constants", "translation geometry"))
 
 
 def margin(m: dict) -> float:

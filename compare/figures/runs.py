@@ -51,7 +51,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after the backend is chosen)
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 
 # Reading and the pure maths (compare/figures/figure_data.py, no matplotlib), re-exported here.
 from compare.io import atomic_file  # noqa: E402
@@ -69,8 +68,6 @@ from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, ST
                                  static_ratio, wall_series_matrix, discharge_frames, flow_data,
                                  wall_ratio_data, network_title, side_title, frames_title,
                                  ratios_title, flow_title, side_bins_title)
-# PNG writing (compare/figures/png_file.py), re-exported here.
-from compare.figures.png_file import SAVE_DPI, png_bytes  # noqa: E402,F401
 # The columns of the run's files (docs/outputs.md), as compare/io/run_dir.py reads them.
 from compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
@@ -82,41 +79,26 @@ from compare.figures.figure_data import SIDE_MARKERS, SIDE_STYLES, units_of  # n
 # --------------------------------------------------------------------------- figures
 
 
+# The pictures' resolution [dots per inch].
+SAVE_DPI = 150
 # The formats a figure is written in, by the file's suffix (matplotlib's Agg and vector backends).
 FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
 
 
 def _save(fig, out_png):
-    """Save a figure at 150 dpi in the format its suffix names (.png, .pdf or .svg), creating
+    """Save a figure at SAVE_DPI in the format its suffix names (.png, .pdf or .svg), creating
     the folder, and close it. The file is written to NAME.tmp in the same folder and renamed when
-    complete (a killed run leaves no half file). A PNG is drawn by Agg and written unfiltered at
-    zlib level 3 (png_bytes), as RGB when every pixel is opaque: the pixels of savefig, which
-    encodes RGBA at level 6 through PIL."""
+    complete (a killed run leaves no half file)."""
     fmt = FORMATS.get(os.path.splitext(out_png)[1].lower())
     if fmt is None:
         plt.close(fig)
         raise ValueError(f"{out_png}: a figure is written as .png, .pdf or .svg")
     try:
         with atomic_file.replacing(out_png) as tmp:
-            if fmt == "png":
-                _write_png(fig, tmp, SAVE_DPI)
-            else:
-                fig.savefig(tmp, dpi=SAVE_DPI, format=fmt)
+            fig.savefig(tmp, dpi=SAVE_DPI, format=fmt)
     finally:
         plt.close(fig)
     return out_png
-
-
-def _write_png(fig, path, dpi):
-    """Draw fig with Agg at dpi and write its pixels as PNG (RGB if all opaque, else RGBA)."""
-    fig.set_dpi(dpi)
-    canvas = FigureCanvasAgg(fig) if not isinstance(fig.canvas, FigureCanvasAgg) else fig.canvas
-    canvas.draw()
-    rgba = np.asarray(canvas.buffer_rgba())
-    # Opaque: every alpha byte 255, i.e. every pixel read as a little-endian word >= 0xff000000.
-    opaque = bool(np.all(rgba.view("<u4") >= 0xFF000000))
-    with open(path, "wb") as f:
-        f.write(png_bytes(rgba[..., :3] if opaque else rgba, dpi))
 
 
 def _fixed_layout(fig, left, right, bottom, top, wspace=0.0, hspace=0.0):

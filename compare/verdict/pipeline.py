@@ -601,7 +601,10 @@ def plans_of(entries: list[Entry], codes) -> list[Plan]:
 
 
 def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=None,
-        check_translation: bool = True, looks: int = 1) -> dict:
+        check_translation: bool = True, looks: int = 1, stop=None) -> dict:
+    """Every plan run in every code and judged. ``stop(metrics)``, when given, is asked after each
+    plan with that plan's metrics (not yet judged); a reason it returns ends the run there (a
+    mutant caught by a physical metric needs no further scene)."""
     out.mkdir(parents=True, exist_ok=True)
     plans = plans if plans is not None else plans_of(entries, codes)
     report = {"codes": {}, "metrics": [], "scenes": [], "calibration": [], "static": [], "discharge": {},
@@ -633,6 +636,12 @@ def run(entries: list[Entry], out: Path, codes, log=print, mutation=None, plans=
             report.setdefault("shear", []).append(detail)
         else:
             report["static"].append(detail)
+        why = stop(metrics) if stop is not None else None
+        if why:
+            left = plans[plans.index(p) + 1:]
+            if left:
+                log(f"{why}: the remaining {len(left)} scene(s) not run")
+            break
     report["elapsed_s"] = time.monotonic() - t0
     return judged(report, looks)
 

@@ -945,28 +945,6 @@ def test_the_disc_pixel_check_fails_a_misplaced_disc(tmp_path, wrong):
         _check_disc_pixels(png, x, y, r)
 
 
-@pytest.mark.parametrize("channels", [3, 4])
-def test_png_bytes_decode_to_the_same_pixels(tmp_path, channels):
-    """png_bytes (unfiltered rows, zlib) gives a PNG that PIL reads back as the same array, in the
-    mode of its channels, with its dpi; a row written shifted, a channel dropped, a wrong pHYs or
-    a strip of rows (png_file.STRIP_ROWS) lost or repeated fails this: the picture is two strips
-    and a part of one high."""
-    from PIL import Image
-    from compare.figures import png_file
-    rng = np.random.default_rng(7)
-    pixels = rng.integers(0, 256, size=(2 * png_file.STRIP_ROWS + 9, 53, channels), dtype=np.uint8)
-    pixels[5:20, 10:40] = 200                          # a flat patch beside the noise
-    path = tmp_path / "p.png"
-    path.write_bytes(figures.png_bytes(pixels, 150))
-    image = Image.open(path)
-    assert image.mode == ("RGB" if channels == 3 else "RGBA") and image.size == (53, len(pixels))
-    assert tuple(round(v) for v in image.info["dpi"]) == (150, 150)
-    np.testing.assert_array_equal(np.asarray(image), pixels)
-    # a strided view (an RGBA buffer's first three channels) is written as its values
-    path.write_bytes(figures.png_bytes(np.dstack([pixels[..., :3], pixels[..., :1]])[..., :3], 150))
-    np.testing.assert_array_equal(np.asarray(Image.open(path)), pixels[..., :3])
-
-
 def test_an_unknown_figure_suffix_is_refused_with_the_known_ones(tmp_path):
     """No traceback: exit 2 naming the suffix and the known ones, nothing written."""
     p = subprocess.run([sys.executable, "-m", "compare.figures", "network", str(tmp_path / "no_run"), "--out",
