@@ -95,6 +95,7 @@ from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snaps
                      moved_wall, pair, profiles_from_contacts)
 from compare.io.atomic_file import write_text as write_text_atomic
 from compare.cases import shear
+from compare.codes import yade_session
 
 NAME = "yade"
 TEMPLATE = Path(__file__).resolve().parent / "yade_template.py"
@@ -420,29 +421,35 @@ def _log_tail(out_dir: Path, lines: int = 8) -> str:
 
 
 def execute(out_dir: Path, timeout: float = 600, threads: int = 1, wrap: list[str] | None = None) -> dict:
-    """Runs the written script with the real yade; returns {rc, wall_time_s, timed_out}. wrap: a
-    command to run yade under (benchmarks/speed.py measures its memory with /usr/bin/time)."""
+    """Runs the written script with the real yade; returns {rc, wall_time_s, timed_out}. One thread
+    and no wrap: in a kept YADE process (compare/codes/yade_session.py); else its own `yade -n -jN
+    -x` (wrap: a command to run it under; benchmarks/speed.py measures its memory with /usr/bin/time)."""
     out_dir = Path(out_dir)
     cmd = list(wrap or []) + ["yade", "-n", f"-j{int(threads)}", "-x", SCRIPT]
     t0 = time.perf_counter()
     timed_out = False
-    with open(out_dir / LOG_FILE, "w") as log:
-        try:
-            p = subprocess.Popen(cmd, cwd=out_dir, stdout=log, stderr=subprocess.STDOUT,
-                                 stdin=subprocess.DEVNULL, start_new_session=True)
-        except OSError as e:
-            info = {"rc": None, "wall_time_s": 0.0, "timed_out": False, "error": f"cannot start yade: {e}"}
-            write_text_atomic(out_dir / PROCESS_FILE, json.dumps(info) + "\n")
-            return info
-        try:
-            rc = p.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            timed_out = True
+    if int(threads) == 1 and not wrap:
+        rc = yade_session.run(SCRIPT, out_dir, out_dir / LOG_FILE, timeout)
+        timed_out = rc is None
+        cmd = ["yade session:"] + cmd[-4:]
+    else:
+        with open(out_dir / LOG_FILE, "w") as log:
             try:
-                os.killpg(p.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-            rc = p.wait()
+                p = subprocess.Popen(cmd, cwd=out_dir, stdout=log, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL, start_new_session=True)
+            except OSError as e:
+                info = {"rc": None, "wall_time_s": 0.0, "timed_out": False, "error": f"cannot start yade: {e}"}
+                write_text_atomic(out_dir / PROCESS_FILE, json.dumps(info) + "\n")
+                return info
+            try:
+                rc = p.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                timed_out = True
+                try:
+                    os.killpg(p.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+                rc = p.wait()
     info = {"rc": rc, "wall_time_s": time.perf_counter() - t0, "timed_out": timed_out,
             "timeout": timeout, "command": " ".join(cmd)}
     write_text_atomic(out_dir / PROCESS_FILE, json.dumps(info) + "\n")

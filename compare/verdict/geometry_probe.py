@@ -38,7 +38,7 @@ import numpy as np
 from compare.codes import lammps_backend, liggghts_backend, yade_backend
 from compare.io.atomic_file import write_text as write_text_atomic
 from compare.cases.common import Case, CaseError, inward_normal
-from compare.verdict.probe import OVERLAP, _main_radius, _run
+from compare.verdict.probe import OVERLAP, _main_radius, _run, run_yade
 
 CODES = ("liggghts", "yade", "lammps")
 REL = 1e-9            # deviation / the scene's length scale
@@ -398,12 +398,12 @@ def probe(code: str, case: Case, out_dir: Path, timeout: float = 120) -> dict:
         script = write_inputs(code, case, out_dir)
         for old in list(out_dir.glob("geom_*.dump")) + [out_dir / "yade_geometry.json"]:
             old.unlink(missing_ok=True)
+        log_file = out_dir / f"{code}_geometry.log"
         if code == "yade":
-            cmd = ["yade", "-n", "-j1", "-x", script.name]
+            rc, log = run_yade(script.name, out_dir, timeout, log_file)
         else:
             be = liggghts_backend if code == "liggghts" else lammps_backend
-            cmd = be.command(script)
-        rc, log = _run(cmd, out_dir, timeout, out_dir / f"{code}_geometry.log")
+            rc, log = _run(be.command(script), out_dir, timeout, log_file)
         if rc != 0 or "ERROR" in log:
             err = next((l for l in log.splitlines() if "ERROR" in l), f"exit code {rc}")
             raise CaseError(f"{code} geometry run failed: {err.strip()}")

@@ -55,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend
+from compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend, yade_session
 from compare.cases.common import Case, CaseError, disc_material, inward_normal, material_names, pair, resolve
 from compare.io.atomic_file import write_text as write_text_atomic
 from compare.verdict import translate
@@ -338,6 +338,13 @@ def _run(cmd: list[str], cwd: Path, timeout: float, log: Path) -> tuple[int | No
     return rc, log.read_text(errors="replace")
 
 
+def run_yade(script: str, cwd: Path, timeout: float, log: Path) -> tuple[int | None, str]:
+    """``_run`` of a YADE script, in a kept YADE process (compare/codes/yade_session.py)."""
+    rc = yade_session.run(script, cwd, log, timeout)
+    text = log.read_text(errors="replace") if log.exists() else ""
+    return rc, (text if rc is not None else f"timed out after {timeout:.0f} s")
+
+
 # ---------------------------------------------------------------------------------------------
 # native
 def probe_native(case: Case, out_dir: Path, timeout: float = 60) -> dict:
@@ -408,7 +415,7 @@ def probe_yade(case: Case, out_dir: Path, timeout: float = 120) -> dict:
     out_dir = Path(out_dir)
     _lay, roles = write_probe_inputs("yade", case, out_dir)
     (out_dir / YADE_PROBE_OUT).unlink(missing_ok=True)
-    rc, log = _run(["yade", "-n", "-j1", "-x", YADE_PROBE_SCRIPT], out_dir, timeout, out_dir / "yade_probe.log")
+    rc, log = run_yade(YADE_PROBE_SCRIPT, out_dir, timeout, out_dir / "yade_probe.log")
     if rc != 0 or not (out_dir / YADE_PROBE_OUT).exists():
         tail = " | ".join(log.strip().splitlines()[-5:])
         return _result("yade", {}, {}, "failed", f"yade probe failed (exit {rc}): {tail}")
