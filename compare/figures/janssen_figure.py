@@ -30,7 +30,8 @@ def plot_ensemble_fits(fits: dict, png: Path, title: str = "") -> Path:
                           f"(95 % error bars)")
         m, lo, hi = janssen.band(f, zz)
         ax.plot(m / 1e3, zz, "-", color=c,
-                label=(f"{code} fit: r$^2$ = {f['r2']:.3f}, K = {f['K']:.2f}$\\pm${f['ci']['K']:.2f}, "
+                label=(f"{code} fit: " + (f"goodness of fit p = {f['gof']['p']:.2f}, " if "gof" in f else "")
+                       + f"K = {f['K']:.2f}$\\pm${f['ci']['K']:.2f}, "
                        f"$\\lambda$ = {f['lambda']:.0f}$\\pm${f['ci']['lambda']:.0f} cm, "
                        f"$\\mu_{{w,eff}}$ = {f['mu_w_eff']:.3f}$\\pm${f['ci']['mu_w_eff']:.3f}"))
         ax.fill_betweenx(zz, lo / 1e3, hi / 1e3, color=c, alpha=0.2, lw=0)

@@ -393,8 +393,8 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
     fraction of a disc diameter), so that the column slides down along the side walls and their
     friction is mobilised upward; the column then rests, or (a translation until the run's end)
     is measured while it slides. The ensemble-averaged side-wall pressure of each code (bins W
-    tall) is fitted with Janssen's law (scipy curve_fit); a fit counts with r^2 >= 0.95 and at
-    least 8 points; janssen_metrics judges each code against the native engine, paired by
+    tall) is fitted with Janssen's law (scipy curve_fit); a fit counts when its goodness of fit
+    (janssen.goodness_of_fit) has p >= 0.01, with at least 8 points; janssen_metrics judges each code against the native engine, paired by
     member; floor force + wall friction = weight, each member's (a sliding column: the members'
     mean)."""
     records = {c: [] for c in codes}
@@ -423,23 +423,25 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
         else:
             metrics.append(_metric(f"Janssen column: floor force + wall friction = weight, every member ({c})",
                                    plan.name, {"max_rel": bal}, 0.01, chk["balance_ok"]))
-        good = f["r2"] >= janssen.R2_MIN and f["n_points"] >= JANSSEN_MIN_POINTS
-        gate = _metric(f"Janssen fit of the {len(ok)}-member mean profile: r^2 >= {janssen.R2_MIN} with "
-                       f">= {JANSSEN_MIN_POINTS} points ({c})", plan.name,
-                       {"r2": f["r2"], "n_points": f["n_points"], "bin_width": f["bin_width"]},
-                       f"r^2 >= {janssen.R2_MIN}", good,
-                       "" if good else f"r^2 {f['r2']:.3f} with {f['n_points']} points of "
-                                       f"{f['bin_width']:g} cm: the fit cannot be judged")
-        if not good:     # a fit below its r^2 cannot be judged: inconclusive, never disagree (docs/compare.md)
+        f["gof"] = g = janssen.goodness_of_fit(f)
+        good = g["ok"] and f["n_points"] >= JANSSEN_MIN_POINTS
+        gate = _metric(f"Janssen law fits the {len(ok)}-member mean profile: goodness of fit p >= "
+                       f"{janssen.GOF_ALPHA} with >= {JANSSEN_MIN_POINTS} points ({c})", plan.name,
+                       {"gof_p": g["p"], "chi2": g["chi2"], "dof": g["dof"], "r2": f["r2"],
+                        "n_points": f["n_points"], "bin_width": f["bin_width"]},
+                       f"p >= {janssen.GOF_ALPHA}", good,
+                       "" if good else f"goodness of fit p {g['p']:.3g} (chi^2 {g['chi2']:.1f}, {g['dof']} dof) with "
+                                       f"{f['n_points']} points of {f['bin_width']:g} cm: the fit cannot be judged")
+        if not good:     # a profile the law does not fit cannot be judged: inconclusive, never disagree (docs/compare.md)
             gate["verdict"] = verdict.INCONCLUSIVE
         metrics.append(gate)
     if "native" in fits:
         for c, f in fits.items():
             if c != "native":
                 metrics += janssen_metrics(plan, fits["native"], f, c, records["native"], records[c])
-    table += ["| code | members | bin [cm] | points | r² | p_inf | lambda [cm] | K | mu_w,eff | "
+    table += ["| code | members | bin [cm] | points | chi², dof, goodness-of-fit p | r² | p_inf | lambda [cm] | K | mu_w,eff | "
               "mobilised F_t/(mu_w F_n): before lowering, after (all; top half) | balance (max) | wall time / member [s] |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for c, f in fits.items():
         ci = f["ci"]
         chk = f["checks"]
@@ -447,7 +449,8 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
         ok = [m for m in records[c] if m.get("status") == "ok"]
         before = chk["mobilised_before_mean"]
         btxt = f"{before / mu:.2f} ± {1.96 * chk['mobilised_before_se'] / mu:.2f}" if math.isfinite(before) else "n/a"
-        table.append(f"| {c} | {len(ok)} | {f['bin_width']:g} | {f['n_points']} | {f['r2']:.3f} | "
+        table.append(f"| {c} | {len(ok)} | {f['bin_width']:g} | {f['n_points']} | "
+                     f"{f['gof']['chi2']:.1f}, {f['gof']['dof']}, {f['gof']['p']:.2f} | {f['r2']:.3f} | "
                      f"{f['p_inf']:.4g} ± {ci['p_inf']:.2g} | {f['lambda']:.3g} ± {ci['lambda']:.2g} | "
                      f"{f['K']:.3g} ± {ci['K']:.2g} | {f['mu_w_eff']:.3g} ± {ci['mu_w_eff']:.2g} | "
                      f"{btxt}; {chk['mobilised_all_mean'] / mu:.2f} ± {1.96 * chk['mobilised_all_se'] / mu:.2f}; "
@@ -461,7 +464,7 @@ def janssen_column(plan: Plan, codes, out: Path, mutation=None) -> tuple[list, d
         janssen_figure.plot_ensemble_fits(fits, out.parent.parent / png,
                                           f"{plan.name}: ensemble-averaged side-wall pressure, Janssen fits, 95 % bands")
     summary = {c: {**{k: f[k] for k in janssen.FIT_KEYS}, "ci": f["ci"], "r2": f["r2"], "n_points": f["n_points"],
-                   "bin_width": f["bin_width"], "chi2_red": f["chi2_red"], "checks": f["checks"]}
+                   "bin_width": f["bin_width"], "chi2_red": f["chi2_red"], "gof": f["gof"], "checks": f["checks"]}
                for c, f in fits.items()}
     return metrics, {"case": plan.name, "members": plan.members, "table": table, "png": png, "fits": summary}
 
@@ -478,27 +481,27 @@ def janssen_metrics(plan: Plan, a: dict, b: dict, code: str, rec_a: list | None 
 
     - K, lambda, mu_w,eff: the relative difference b/a - 1 of the two ensemble fits, its standard
       error from the paired delete-one jackknife (member k left out of both ensembles;
-      janssen.jackknife_fits), n - 1 degrees of freedom; a fit below r^2_min on either side leaves
-      them inconclusive (the profile is not Janssen's);
+      janssen.jackknife_fits), n - 1 degrees of freedom; a profile that the law does not fit on
+      either side (janssen.goodness_of_fit p < GOF_ALPHA) leaves them inconclusive;
     - mu_w,eff of the deep half: every member's rho_b g W / (2 p_deep), p_deep its mean side-wall
       pressure over the fitted bins of the lower half of the profile (between the native members'
       mean surface and W/2 above the floor: the same bins in every code), where Janssen's pressure
       nears p_inf = rho_b g W / (2 mu_w,eff); the paired relative difference of the member means
       (stats.difference). It needs no fit, so a profile below the r^2 gate still judges it."""
     out = []
-    low_r2 = min(a["r2"], b["r2"]) < janssen.R2_MIN
-    why_r2 = (f"r^2 {a['r2']:.3f} (native), {b['r2']:.3f} ({code}): a fit counts only with "
-              f"r^2 >= {janssen.R2_MIN}")
+    unfit = not all(f.get("gof", {}).get("ok", False) for f in (a, b))
+    why_unfit = (f"goodness of fit p {a.get('gof', {}).get('p', float('nan')):.3g} (native), "
+              f"{b.get('gof', {}).get('p', float('nan')):.3g} ({code}): a fit counts only with p >= {janssen.GOF_ALPHA}")
     jack, jack_why = {}, ""
-    if not low_r2 and rec_a is not None and rec_b is not None:
+    if not unfit and rec_a is not None and rec_b is not None:
         try:
             jack = janssen.jackknife_fits(rec_a, rec_b, JANSSEN_JUDGED, a.get("merge"))
         except (RuntimeError, ValueError) as e:
             jack_why = f"paired jackknife: {e}"
     for k in JANSSEN_JUDGED:
         name = f"Janssen {k} ({code} vs native)"
-        if low_r2 or k not in jack:
-            out.append(verdict.unjudged(name, plan.name, why_r2 if low_r2 else
+        if unfit or k not in jack:
+            out.append(verdict.unjudged(name, plan.name, why_unfit if unfit else
                                         (jack_why or "no member records to pair"), "statistical"))
             continue
         se, n = jack[k]

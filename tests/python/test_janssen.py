@@ -1,6 +1,7 @@
 """The ensemble Janssen analysis (compare/cases/janssen.py): the weighted fit recovers known parameters
 from synthetic noisy Janssen profiles within its 95 % intervals, at about the nominal rate; K and
-mu_w,eff follow validation.md's formulas; the r^2 gate; wrong profiles (hydrostatic, mu_w
+mu_w,eff follow validation.md's formulas; the r^2 gate of a single fit and the goodness-of-fit
+gate of an ensemble's; wrong profiles (hydrostatic, mu_w
 changed) fail the comparison; the member checks catch a broken force balance. Every expected
 value is computed here from the Janssen formulas, none comes from a simulation."""
 import math
@@ -98,6 +99,49 @@ def test_same_physics_agrees_and_r2_gate_refuses_a_noise_fit():
     assert noisy["r2"] < janssen.R2_MIN
     c = janssen.compare_fits(a, noisy)
     assert not c["r2_ok"] and not c["agree"]
+
+
+# A column like the Janssen scene's: 21 bins 8 cm tall over 4 lambda, 8 members, each bin's
+# pressure scattered by 20 % from member to member (the column measures 10-40 %).
+GOF_Z = 4.0 + 8.0 * np.arange(21)
+GOF_TRUTH = janssen.model(GOF_Z, 3.0e4, 40.0, 0.5)
+
+
+def _gof_p(shape, seed, members=8, cv=0.2):
+    rng = np.random.default_rng(seed)
+    mean, sd, se = janssen._mean_sd_se(shape * (1 + cv * rng.standard_normal((members, len(GOF_Z)))), "bin")
+    f = janssen.fit_ci(GOF_Z, mean, se)
+    f["profile"] = {"z": GOF_Z, "p": mean, "se": se, "sd": sd, "members": members, "sigma": "bin"}
+    return janssen.goodness_of_fit(f, replicates=200, seed=seed)["p"], f["r2"]
+
+
+def test_goodness_of_fit_accepts_janssen_profiles_that_r2_refuses():
+    """Profiles drawn from Janssen's law: the bootstrap p-value falls below GOF_ALPHA (0.01) in
+    at most 2 of 40 (expected 0.4), while r^2 >= 0.95, the gate it replaces, refuses several: r^2
+    measures the scatter against the profile's range, not the misfit. An uncalibrated p (the
+    chi^2 table, whose bins' standard errors are taken as exact) would refuse more than the level."""
+    from scipy import stats as sps
+    res = [_gof_p(GOF_TRUTH, seed) for seed in range(40)]
+    assert sum(p < janssen.GOF_ALPHA for p, _ in res) <= 2, res
+    assert sum(r2 < 0.95 for _, r2 in res) >= 5, res
+    # the same profiles' chi^2 against the table: the standard errors' own scatter inflates it
+    table = []
+    for seed in range(40):
+        rng = np.random.default_rng(seed)
+        mean, sd, se = janssen._mean_sd_se(GOF_TRUTH * (1 + 0.2 * rng.standard_normal((8, len(GOF_Z)))), "bin")
+        f = janssen.fit_ci(GOF_Z, mean, se)
+        table.append(sps.chi2.sf(f["chi2_red"] * (len(GOF_Z) - 3), len(GOF_Z) - 3))
+    assert np.mean(np.array(table) < 0.05) > np.mean(np.array([p for p, _ in res]) < 0.05)
+
+
+def test_goodness_of_fit_refuses_a_profile_that_falls_at_depth():
+    """Below mid-depth the pressure falls by 30 % to the floor (no saturation at p_inf: not
+    Janssen's law): refused (p < 0.01) in at least 30 of 40 ensembles."""
+    zm = np.median(GOF_Z)
+    falls = np.where(GOF_Z < zm, GOF_TRUTH,
+                     np.interp(zm, GOF_Z, GOF_TRUTH) * (1 - 0.3 * (GOF_Z - zm) / (GOF_Z.max() - zm)))
+    res = [_gof_p(falls, 100 + seed) for seed in range(40)]
+    assert sum(p < janssen.GOF_ALPHA for p, _ in res) >= 30, res
 
 
 def test_mu_w_changed_fails_the_comparison():
