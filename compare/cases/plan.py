@@ -278,17 +278,20 @@ def make_plan(entry: Entry) -> Plan:
         if late:
             raise PlanError(f"{entry.scene}: walls: {', '.join(late)} still move at the run's end ({duration:g} s, "
                             "--duration or end.time): a Janssen member must rest after its floor is lowered")
-    members = 1
-    if kind in ("discharge", "janssen") or (kind == "static" and o.start == "scene"):
-        members = o.resolved_members()
+    members = o.resolved_members() if statistical_kind(kind, o.start) else 1
     name = entry.scene.stem + ("_members" if kind == "static" and o.start == "scene" else "")
     return Plan(entry, name, kind, r, shared, dt, duration, settle, members)
 
 
 def statistical(plan: Plan) -> bool:
-    """Whether the plan is judged by statistical metrics (members, intervals and margins): the
-    discharge, the static members, the Janssen column and the shear box."""
-    return plan.kind in ("discharge", "janssen", "shear") or (plan.kind == "static" and plan.options.start == "scene")
+    """Whether the plan is judged by statistical metrics (members, intervals and margins)."""
+    return statistical_kind(plan.kind, plan.options.start)
+
+
+def statistical_kind(kind: str, start: str) -> bool:
+    """The discharge, the static members (a static plan from the scene's start), the Janssen
+    column and the shear box run members and are judged by statistical metrics."""
+    return kind in ("discharge", "janssen", "shear") or (kind == "static" and start == "scene")
 
 
 def judges_any(plan: Plan, kinds) -> bool:
