@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "run/opening_positions.hpp"
+#include "io/opening_positions.hpp"
 #include "io/state.hpp"
 
 namespace dem {

@@ -16,7 +16,7 @@
 #include <stdexcept>
 
 #include "io/vtu.hpp"
-#include "run/opening_positions.hpp"
+#include "io/opening_positions.hpp"
 
 namespace dem {
 

@@ -14,7 +14,7 @@
 namespace dem {
 
 namespace {
-constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', 'D'};  // the format's version: a checkpoint resumes only in its own
+constexpr char kMagic[8] = {'D', 'E', 'M', 'C', 'K', 'P', 'T', 'E'};  // the format's version: a checkpoint resumes only in its own
 constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
 
 std::uint64_t fnv1a(const char* p, std::size_t n, std::uint64_t h = kFnvOffset) {

@@ -47,6 +47,22 @@ void save_load(BinaryOut& o, const WallLoad& L) {
   o.put(L.bin); o.put(L.length);
 }
 
+// Field by field: the struct's padding bytes would make a checkpoint's bytes differ run to run.
+void save_removals(BinaryOut& o, const std::vector<Removal>& v) {
+  o.put<std::uint64_t>(v.size());
+  for (const Removal& x : v) {
+    o.put(x.t); o.put(x.id); o.put(x.mass); o.put(x.vx); o.put(x.vy); o.put<std::uint8_t>(x.keystone ? 1 : 0);
+  }
+}
+
+void load_removals(BinaryIn& r, std::vector<Removal>& v) {
+  v.resize(r.count(1ull << 32));
+  for (Removal& x : v) {
+    x.t = r.get<double>(); x.id = r.get<int>(); x.mass = r.get<double>(); x.vx = r.get<double>();
+    x.vy = r.get<double>(); x.keystone = r.get<std::uint8_t>() != 0;
+  }
+}
+
 void load_load(BinaryIn& r, WallLoad& L) {
   L.name = r.str(1 << 20); L.group = r.str(1 << 20);
   L.fx = r.get<double>(); L.fy = r.get<double>(); L.normal = r.get<double>(); L.shear = r.get<double>();
@@ -65,11 +81,11 @@ void DischargeState::save(BinaryOut& o) const {
   for (const WallLoad& L : static_walls) save_load(o, L);
   o.put(next_s);
   o.put(static_cast<std::int32_t>(status));
-  o.vec(removals);
+  save_removals(o, removals);
   o.put(jam_at); o.put(jams);
   for (double v : sink_time) o.put(v);
   o.put(series_bytes);
-  for (const std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) o.str(s->str());
+  for (const std::ostringstream* s : {&totals, &flow}) o.str(s->str());
   const auto put_peaks = [&](const PeakTracker& p) {
     o.put(p.raw); o.put(p.windowed); o.put(p.acc); o.put(p.count);
     o.vec(p.last);
@@ -98,11 +114,11 @@ void DischargeState::load(BinaryIn& r) {
   if (s < 0 || s > static_cast<std::int32_t>(Status::interrupted)) r.fail("corrupt discharge state (status)");
   status = static_cast<Status>(s);
   if (status == Status::interrupted) status = Status::running;  // it goes on
-  r.vec(removals);
+  load_removals(r, removals);
   jam_at = r.get<double>(); jams = r.get<int>();
   for (double& v : sink_time) v = r.get<double>();
   series_bytes = r.get<std::uint64_t>();
-  for (std::ostringstream* s : {&totals, &flow, &pvd_d, &pvd_c}) {
+  for (std::ostringstream* s : {&totals, &flow}) {
     s->str(r.str());
     s->seekp(0, std::ios_base::end);  // append after the restored text
   }
@@ -347,21 +363,15 @@ void DischargePhase::sample(World& w, double t) {
   st.flow << '\n';
 }
 
-// Snapshots at the requested times (and at the end): their files through the run's recorder,
-// their entries in the discharge's own collections (kept in its state, which checkpoints save).
+// Snapshots at the requested times (and at the end): their files and their entries in the
+// discharge's own collections through the run's recorder (which checkpoints save).
 void DischargePhase::snapshots(World& w, double t) {
   const DischargeSpec& ds = spec_.discharge;
   while (st.next_snap < ds.snapshots.size() && ds.snapshots[st.next_snap] <= t + 0.5 * w.dt) {
     w.pay_kick();  // the snapshot's velocities
     char stem[32];
     std::snprintf(stem, sizeof stem, "%04zu", st.next_snap);
-    record->phase_snapshot(w, stem, &st.at_open);
-    if (spec_.vtu_files()) {
-      st.pvd_d << "    <DataSet timestep=\"" << time_text(on_step_grid(t, w.dt)) << "\" file=\"snapshots/discs_" << stem << ".vtu\"/>\n";
-      st.pvd_c << "    <DataSet timestep=\"" << time_text(on_step_grid(t, w.dt)) << "\" file=\"snapshots/contacts_" << stem << ".vtu\"/>\n";
-    } else {  // no VTU files to index: the rows of discharge_snapshots.csv
-      st.pvd_d << time_text(on_step_grid(t, w.dt)) << ",snapshots/discs_" << stem << ".csv,snapshots/contacts_" << stem << ".csv\n";
-    }
+    record->phase_snapshot(w, stem, &st.at_open, "discharge", t);
     ++st.next_snap;
   }
 }
@@ -445,12 +455,7 @@ void DischargePhase::finish(World& w, Status status) {
         << (r.keystone ? "keystone" : "outlet") << '\n';
     write_file_atomic(out_ + "/removals.csv", o.str());
   }
-  if (!spec_.vtu_files())
-    write_file_atomic(out_ + "/discharge_snapshots.csv", "t,discs,contacts\n" + st.pvd_d.str());
-  else
-    for (auto [name, body] : {std::pair{"discharge_discs.pvd", st.pvd_d.str()}, std::pair{"discharge_contacts.pvd", st.pvd_c.str()}})
-      write_file_atomic(out_ + "/" + name, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n" +
-                                               body + "  </Collection>\n</VTKFile>\n");
+  record->write_collection("discharge", out_);
 
   double best_bottom[2] = {0, 0}, best_side[2] = {0, 0};
   const json walls_json = wall_peaks(st, ds.gate, best_bottom, best_side);

@@ -14,7 +14,7 @@
 #include "measures/flow.hpp"
 #include "measures/wall_loads.hpp"
 #include "physics/world.hpp"
-#include "run/opening_positions.hpp"
+#include "io/opening_positions.hpp"
 #include "run/phase.hpp"
 #include "run/recorder.hpp"
 #include "scene/scene.hpp"
@@ -68,7 +68,7 @@ struct DischargeState {
   // a sample, kept as text.
   std::uint64_t series_bytes = 0;
   std::ofstream series_out;
-  std::ostringstream totals, flow, pvd_d, pvd_c;  // the text of the other series files and .pvd entries
+  std::ostringstream totals, flow;  // the text of the other series files
   std::vector<std::vector<PeakTracker>> bin_peaks;  // per wall and bin: peaks of the normal force
   std::vector<PeakTracker> total_peaks;             // per wall: peaks of the total normal force
   std::vector<double> sample_t;

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "io/binary.hpp"
 #include "io/files.hpp"
@@ -56,13 +58,36 @@ std::string Recorder::write_walls(const World& w, const std::string& stem) const
   return rel;
 }
 
-void Recorder::phase_snapshot(const World& w, const std::string& stem, const OpeningPositions* at_open) {
+void Recorder::phase_snapshot(const World& w, const std::string& stem, const OpeningPositions* at_open,
+                              const char* collection, double t) {
   const std::string dir = out_ + "/snapshots";
   write_disc_files(dir, "discs_" + stem, *spec_, w.discs, at_open, &w);
   write_contact_files(dir, "contacts_" + stem, w, spec_->vtu_binary(w.discs.size()), spec_->vtu_files());
   if (active())
     snapshots.add(on_step_grid(w.time, w.dt), w.steps, "snapshots/discs_" + stem + ".vtu", write_walls(w, stem),
                   "snapshots/contacts_" + stem + ".vtu");
+  if (!collection) return;
+  Collection& c = collections_[collection];
+  const std::string when = time_text(on_step_grid(t, w.dt));
+  if (spec_->vtu_files()) {
+    c.discs += "    <DataSet timestep=\"" + when + "\" file=\"snapshots/discs_" + stem + ".vtu\"/>\n";
+    c.contacts += "    <DataSet timestep=\"" + when + "\" file=\"snapshots/contacts_" + stem + ".vtu\"/>\n";
+  } else {
+    c.discs += when + ",snapshots/discs_" + stem + ".csv,snapshots/contacts_" + stem + ".csv\n";
+  }
+}
+
+void Recorder::write_collection(const std::string& name, const std::string& dir) const {
+  const auto it = collections_.find(name);
+  const Collection empty;
+  const Collection& c = it == collections_.end() ? empty : it->second;
+  if (!spec_->vtu_files()) {
+    write_file_atomic(dir + "/" + name + "_snapshots.csv", "t,discs,contacts\n" + c.discs);
+    return;
+  }
+  for (auto [part, body] : {std::pair{"_discs.pvd", &c.discs}, std::pair{"_contacts.pvd", &c.contacts}})
+    write_file_atomic(dir + "/" + name + part, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n"
+                                                 "  <Collection>\n" + *body + "  </Collection>\n</VTKFile>\n");
 }
 
 void Recorder::snapshot(const World& w) {
@@ -89,6 +114,10 @@ void Recorder::save(BinaryOut& o) const {
   o.put(thermo.last_step());
   o.str(snapshots.entries());
   o.put(snapshots.last_step());
+  o.put<std::uint64_t>(collections_.size());
+  for (const auto& [name, c] : collections_) {
+    o.str(name); o.str(c.discs); o.str(c.contacts);
+  }
 }
 
 void Recorder::load(BinaryIn& r) {
@@ -98,6 +127,13 @@ void Recorder::load(BinaryIn& r) {
   const long snap_last = r.get<long>();
   thermo.restore(std::move(text), last);
   snapshots.restore(std::move(entries), snap_last);
+  collections_.clear();
+  for (std::uint64_t n = r.count(64); n > 0; --n) {
+    std::string name = r.str(1 << 10);
+    Collection& c = collections_[name];
+    c.discs = r.str();
+    c.contacts = r.str();
+  }
 }
 
 }  // namespace dem

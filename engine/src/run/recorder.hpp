@@ -1,9 +1,10 @@
 // What the run records in every phase besides the phases' own files: thermo.csv (io/thermo.hpp)
 // every output.thermo_interval, periodic snapshots every output.snapshot_interval, and the run's
 // one ParaView collection snapshots.pvd of every snapshot (periodic, the discharge's and the
-// shear's). Steps are counted on the world's step count, so a resumed run records the same steps.
+// shear's), and a phase's own collection of its snapshots (the discharge's). Steps are counted on the world's step count, so a resumed run records the same steps.
 #pragma once
 
+#include <map>
 #include <string>
 
 #include "io/pvd.hpp"
@@ -39,7 +40,13 @@ class Recorder {
   // (.csv, and .vtu unless output.vtu = "none"; the discs with their displacements from `at_open`
   // when given) and, recording, walls_STEM.vtu with the snapshot's entry in snapshots.pvd, so
   // that the periodic snapshot of the same step is not written.
-  void phase_snapshot(const World& w, const std::string& stem, const OpeningPositions* at_open = nullptr);
+  // With `collection` (the discharge's "discharge"), the snapshot is also an entry at time t in
+  // that phase's own collection, which write_collection writes.
+  void phase_snapshot(const World& w, const std::string& stem, const OpeningPositions* at_open = nullptr,
+                      const char* collection = nullptr, double t = 0);
+  // A phase's own collection of its snapshots into dir: NAME_discs.pvd and NAME_contacts.pvd, or
+  // (no VTU files to index) the rows of NAME_snapshots.csv.
+  void write_collection(const std::string& name, const std::string& dir) const;
 
   // thermo.csv and snapshots.pvd as they stand.
   void write() const;
@@ -54,6 +61,10 @@ class Recorder {
   void snapshot(const World& w);
   void thermo_row(const World& w, const char* phase);
   std::string write_walls(const World& w, const std::string& stem) const;  // snapshots/walls_STEM.vtu
+  struct Collection {
+    std::string discs, contacts;  // the .pvd entries, or the .csv rows (discs)
+  };
+  std::map<std::string, Collection> collections_;
   const SceneSpec* spec_ = nullptr;
   std::string out_;
   long thermo_every_ = 0, snapshot_every_ = 0;  // [steps] 0: none

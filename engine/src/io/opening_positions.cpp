@@ -1,4 +1,4 @@
-#include "run/opening_positions.hpp"
+#include "io/opening_positions.hpp"
 
 #include <algorithm>
 #include <cmath>
