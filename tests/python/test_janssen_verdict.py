@@ -3,8 +3,8 @@ saturated_mu, deep_top and jackknife_fits), on synthetic members (no simulation,
 codes of the same physics agree on K, lambda, mu_w,eff and the deep half's mu_w,eff with paired
 intervals inside the 10 % margin; a disc-wall friction x 0.8 in one code (p_inf x 1.25, lambda x
 1.25) disagrees by mu_w,eff; every judged metric carries its verdict, margin and intervals; a
-profile below the fits' r^2 gate leaves the fitted parameters inconclusive, with why, and the deep
-half still judged."""
+profile Janssen's law does not fit (janssen.goodness_of_fit) leaves the fitted parameters
+inconclusive, with why, and the deep half still judged."""
 import types
 
 import numpy as np
@@ -42,11 +42,14 @@ def members(mu=0.1, K=0.7, n=16, noise=0.1, seed=1, surface=178.0, common=None):
     return out
 
 
-def judged(ra, rb, profile="quick", r2=None):
+def judged(ra, rb, profile="quick", unfit=False):
     plan = types.SimpleNamespace(name="janssen_column", options=Options(kind="janssen", profile=profile))
     fa, fb = janssen.ensemble_fit(ra), janssen.ensemble_fit(rb)
-    if r2 is not None:                  # a profile that is not Janssen's, as the r^2 gate sees it
-        fa["r2"] = r2
+    for f in (fa, fb):                  # as pipeline.janssen_column gates each code's fit
+        f["gof"] = janssen.goodness_of_fit(f)
+        assert f["gof"]["ok"], f["gof"]
+    if unfit:                           # a profile the law does not fit, as the gate sees it
+        fa["gof"] = dict(fa["gof"], p=0.001, ok=False)
     ms = pipeline.janssen_metrics(plan, fa, fb, "liggghts", ra, rb)
     verdict.finalize(ms)
     return {m["metric"].split(" (")[0]: m for m in ms}
@@ -80,11 +83,11 @@ def test_disc_wall_friction_x08_disagrees_by_mu_w_eff():
     assert ms["Janssen lambda"]["stat"]["estimate"] > 0.1             # lambda x 1.25
 
 
-def test_a_profile_below_the_r2_gate_leaves_the_fits_inconclusive_and_the_deep_half_judged():
+def test_a_profile_the_law_does_not_fit_leaves_the_fits_inconclusive_and_the_deep_half_judged():
     common = 1 + 0.05 * np.random.default_rng(7).standard_normal(16)
-    ms = judged(members(seed=1, common=common), members(mu=0.08, seed=2, common=common), r2=0.5)
+    ms = judged(members(seed=1, common=common), members(mu=0.08, seed=2, common=common), unfit=True)
     for k in ("K", "lambda", "mu_w_eff"):
-        assert ms[f"Janssen {k}"]["verdict"] == "inconclusive" and "r^2" in ms[f"Janssen {k}"]["note"]
+        assert ms[f"Janssen {k}"]["verdict"] == "inconclusive" and "goodness of fit" in ms[f"Janssen {k}"]["note"]
     sat = ms["Janssen mu_w_eff of the deep half, member by member"]
     assert sat["verdict"] == "disagree" and sat["margin"] == 0.10
 
