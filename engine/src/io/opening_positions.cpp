@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <stdexcept>
 
 #include "io/files.hpp"
@@ -13,7 +14,16 @@ namespace dem {
 
 namespace {
 constexpr char kMagic[8] = {'D', 'E', 'M', 'O', 'P', 'E', 'N', '1'};
+
+// The file (opening_positions.hpp): its header, then what `positions` writes (x, y per id).
+void write_positions_file(const std::string& path, std::uint64_t count, const std::function<void(std::ostream&)>& positions) {
+  write_stream_atomic(path, [&](std::ostream& out) {
+    out.write(kMagic, sizeof kMagic);
+    BinaryOut{out}.put(count);
+    positions(out);
+  });
 }
+}  // namespace
 
 void OpeningPositions::keep(const Discs& d) {
   int max_id = -1;
@@ -41,10 +51,7 @@ void OpeningPositions::keep(const Discs& d) {
     return;
   }
   xy_.clear();
-  write_stream_atomic(path_, [&](std::ostream& out) {
-    BinaryOut o{out};
-    out.write(kMagic, sizeof kMagic);
-    o.put(count_);
+  write_positions_file(path_, count_, [&](std::ostream& out) {
     for (std::uint64_t first = 0; first < count_; first += kBlock) {
       fill(first, std::min(kBlock, count_ - first));
       out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(block.size() * sizeof(double)));
@@ -97,12 +104,7 @@ void OpeningPositions::read_from(BinaryIn& r) {
     return;
   }
   xy_.clear();
-  write_stream_atomic(path_, [&](std::ostream& out) {
-    BinaryOut o{out};
-    out.write(kMagic, sizeof kMagic);
-    o.put(count_);
-    r.copy_to(out, bytes);
-  });
+  write_positions_file(path_, count_, [&](std::ostream& out) { r.copy_to(out, bytes); });
 }
 
 void OpeningPositions::discard() {
