@@ -1,8 +1,8 @@
 """Shared helpers of the work-precision and stability studies.
 
 Both studies drive the engine binary (``--dem PATH``, else ``$DEM_BINARY``, else
-``build/dem``) as a subprocess, write their scenes with ``compare.io.scene_toml``, read its
-``summary.json`` and ``discs.csv`` with ``compare.io.run_dir``, and write
+``build/dem``) as a subprocess, write their scenes with ``dem.compare.io.scene_toml``, read its
+``summary.json`` and ``discs.csv`` with ``dem.compare.io.run_dir``, and write
 ``results.json`` + ``report.md`` (+ PNGs) under ``--out``. Python is Debian's
 ``/usr/bin/python3`` (numpy, matplotlib). Nothing here edits the engine or ``compare/``.
 """
@@ -24,12 +24,12 @@ SCENES = ROOT / "reference_inputs" / "scenes"
 SCHEMES = ("paper_eq18", "paper_eq19", "velocity_verlet")
 PAPER_LAW = {"normal_spring": "incremental", "no_tension": "elastic", "friction_cap": "elastic"}
 
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+if str(ROOT / "build" / "python") not in sys.path:      # the package dem (dem.compare) of this checkout's build
+    sys.path.insert(0, str(ROOT / "build" / "python"))
 
-from compare.io import scene_toml  # noqa: E402
-from compare.io.atomic_file import replacing, write_text  # noqa: E402,F401 (the studies' writer)
-from compare.io.run_dir import RunDir, RunDirError  # noqa: E402
+from dem.compare.io import scene_toml  # noqa: E402
+from dem.compare.io.atomic_file import replacing, write_text  # noqa: E402,F401 (the studies' writer)
+from dem.compare.io.run_dir import RunDir, RunDirError  # noqa: E402
 
 
 def setup_binary(path: str | None) -> Path:
@@ -217,7 +217,7 @@ def savefig(fig, path: Path) -> None:
 def scene_with(base: Path, out: Path, changes: dict | None = None, add: dict | None = None, remove=(),
                pairs_scale: dict | None = None) -> Path:
     """Writes the scene ``base`` to ``out`` with keys changed, added and removed by dotted path
-    (compare.io.scene_toml.edit: a key to change or remove that the scene does not have is an
+    (dem.compare.io.scene_toml.edit: a key to change or remove that the scene does not have is an
     error) and the constants of every [[pairs]] entry scaled (pairs_scale: key -> factor, e.g.
     {"ks_rho_g": 2.0}; each entry must have the key). Returns out."""
     changes = dict(changes or {})

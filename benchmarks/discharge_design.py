@@ -33,8 +33,8 @@ TRUE_DIFFS = (0.0, 0.03)
 def other_peaks(res_path: Path, resolved: dict, windows) -> dict:
     """The windowed peak ratios of one member recomputed with other windows [s] (what a longer
     PEAK_WINDOW would give: peak_window_side@0.2 ...)."""
-    from compare.verdict import study
-    from compare.cases.common import Result
+    from dem.compare.verdict import study
+    from dem.compare.cases.common import Result
     res = Result.load(res_path)
     case = types.SimpleNamespace(series_interval=0.005, resolved=resolved)
     out, keep = {}, study.PEAK_WINDOW
@@ -60,7 +60,7 @@ def load(folders, windows=()) -> tuple[dict, dict]:
                     m = per.setdefault(code, {})[(str(f), k)] = dict(r["measures"])
                     if windows and res.exists():
                         if resolved is None:
-                            from compare.cases.common import resolve
+                            from dem.compare.cases.common import resolve
                             resolved = resolve(f / "m0" / "native" / "scene.toml")   # the walls and the gate
                         m.update(other_peaks(res, resolved, windows))
                 if res.exists():

@@ -5,7 +5,7 @@
 RUN_DIR is a discharge run (`build/dem run reference_inputs/scenes/discharge_17_18.toml --out
 RUN_DIR --quiet`); --checkout is the checkout whose compare/ draws (default this one; an older
 one to compare with), the folder the drawing process runs in. Each repeat is a fresh process: `time.process_time` around importing
-compare.figures and around each of the five pictures of `compare.figures run` (written into DIR,
+dem.compare.figures and around each of the five pictures of `dem.compare.figures run` (written into DIR,
 default a temporary folder). Prints one line a repeat.
 """
 import argparse
@@ -17,7 +17,7 @@ import tempfile
 CHILD = r"""
 import sys, time
 t0 = time.process_time()
-from compare.figures import runs as f
+from dem.compare.figures import runs as f
 t1 = time.process_time()
 run, out = sys.argv[1], sys.argv[2]
 parts = [("network", lambda: f.plot_network(run, f"{out}/network.png")),
@@ -44,9 +44,9 @@ def main(argv=None):
     out = args.out or tempfile.mkdtemp(prefix="figure_times_")
     os.makedirs(out, exist_ok=True)
     for _ in range(args.repeats):
-        # `python3 -c` puts its working folder first on sys.path: the checkout's compare/ is imported
+        # the checkout's own package dem (its build/python), not the one a .pth file names
         subprocess.run([sys.executable, "-c", CHILD, os.path.abspath(args.run_dir), os.path.abspath(out)],
-                       cwd=args.checkout, env=dict(os.environ, PYTHONPATH=os.path.abspath(args.checkout)),
+                       cwd=args.checkout, env=dict(os.environ, PYTHONPATH=os.path.join(os.path.abspath(args.checkout), "build", "python")),
                        check=True)
     print(f"load average (1 min) {os.getloadavg()[0]:.1f}")
     return 0

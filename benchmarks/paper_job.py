@@ -8,11 +8,11 @@ Each variant is a checkout (REPO: its compare/ and scenes) and an engine binary 
 this checkout and build/dem. Parts:
 
 - ``single``:       `dem run reference_inputs/scenes/discharge_17_18.toml --out DIR --quiet`;
-- ``single_plots``: that run, then `python3 -m compare.figures run DIR` (its five pictures);
+- ``single_plots``: that run, then `python3 -m dem.compare.figures run DIR` (its five pictures);
 - ``single_pictures``: `dem run ... --quiet --pictures` (the run and the same pictures in one
   command: the picture process starts with the run);
-- ``static``:       `python3 -m compare.papers.paper_static --out DIR --dem DEM`;
-- ``discharge``:    `python3 -m compare.papers.paper_discharge --out DIR --dem DEM --members M`.
+- ``static``:       `python3 -m dem.compare.papers.paper_static --out DIR --dem DEM`;
+- ``discharge``:    `python3 -m dem.compare.papers.paper_discharge --out DIR --dem DEM --members M`.
 
 Repeat r runs every variant's part before repeat r + 1 (interleaved: a change of the machine's
 load falls on all variants alike). Each run's wall time, CPU time (user + sys of the command and
@@ -71,13 +71,13 @@ def part_commands(part, repo, dem, out, members):
     if part == "single":
         return [[dem, "run", scene, "--out", out, "--quiet"]]
     if part == "single_plots":
-        return [[dem, "run", scene, "--out", out, "--quiet"], [PY, "-m", "compare.figures", "run", out]]
+        return [[dem, "run", scene, "--out", out, "--quiet"], [PY, "-m", "dem.compare.figures", "run", out]]
     if part == "single_pictures":
         return [[dem, "run", scene, "--out", out, "--quiet", "--pictures"]]
     if part == "static":
-        return [[PY, "-m", "compare.papers.paper_static", "--out", out, "--dem", dem]]
+        return [[PY, "-m", "dem.compare.papers.paper_static", "--out", out, "--dem", dem]]
     if part == "discharge":
-        return [[PY, "-m", "compare.papers.paper_discharge", "--out", out, "--dem", dem, "--members", str(members)]]
+        return [[PY, "-m", "dem.compare.papers.paper_discharge", "--out", out, "--dem", dem, "--members", str(members)]]
     raise SystemExit(f"paper_job: unknown part {part!r}")
 
 
@@ -100,7 +100,7 @@ def main(argv=None):
                 repo = Path(repo).resolve()
                 run_out = out / "runs" / name / part
                 shutil.rmtree(run_out, ignore_errors=True)
-                env = dict(os.environ, PYTHONPATH=str(repo))
+                env = dict(os.environ, PYTHONPATH=str(repo / "build" / "python"))
                 load = os.getloadavg()[0]
                 cmds = [[str(x) for x in c] for c in part_commands(part, repo, str(Path(dem).resolve()), run_out,
                                                                    args.members)]

@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _module():
-    sys.path.insert(0, os.environ.get("DEM_MODULE_DIR", str(ROOT / "build" / "python")))
+    sys.path.insert(0, os.environ.get("DEM_PYTHON_DIR", str(ROOT / "build" / "python")))
     import dem  # noqa: PLC0415 (the engine's module, built by CMake)
     return dem
 

@@ -43,12 +43,12 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "build" / "python"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import common_study  # noqa: E402
-from compare.io import scene_toml  # noqa: E402
-from compare.io.run_dir import RunDir  # noqa: E402
+from dem.compare.io import scene_toml  # noqa: E402
+from dem.compare.io.run_dir import RunDir  # noqa: E402
 
 DT = 5e-5
 PROCESS_NAMES = {"liggghts": ("liggghts",), "lammps": ("lmp",)}
@@ -145,7 +145,7 @@ def run_reference(code: str, ranks: int, scene: Path, d: Path, dem: str) -> dict
 
 
 def run_native(threads: int, scene: Path, d: Path, dem: str) -> dict:
-    from compare.codes import reference_run as engine_run, native_backend
+    from dem.compare.codes import reference_run as engine_run, native_backend
     case = engine_run.make_case(scene, 0.0)
     nscene = native_backend.write_inputs(case, d / "case")
     t0 = time.monotonic()
@@ -227,7 +227,7 @@ def main() -> int:
 
 
 def write_report(out: Path, records: list, a) -> None:
-    from compare.verdict.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
+    from dem.compare.verdict.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
     ok = [r for r in records if "error" not in r]
     ref = [r for r in ok if r["code"] == "native" and r["n"] == 1]
     base = ref[0]["walls"] if ref else None

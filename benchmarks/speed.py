@@ -44,12 +44,12 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "build" / "python"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import common_study  # noqa: E402
-from compare.io import scene_toml  # noqa: E402
-from compare.io.run_dir import RunDir  # noqa: E402
+from dem.compare.io import scene_toml  # noqa: E402
+from dem.compare.io.run_dir import RunDir  # noqa: E402
 
 SCENES = ROOT / "reference_inputs" / "scenes"
 DT_SHARED = 5e-5
@@ -129,7 +129,7 @@ def _native(args) -> dict:
     if args.scheme:  # the paper's law as the scene has it, at the paper's dt
         extra = ["--scheme", args.scheme, "--dt", repr(args.dt), "--force-dt"]
     else:  # the shared case, written exactly as the comparison layer writes it
-        from compare.codes import native_backend
+        from dem.compare.codes import native_backend
         scene = str(native_backend.write_inputs(_case(args), Path(args.dir) / "case"))
         extra = []
     cmd = [args.dem, "run", scene, "--out", str(Path(args.dir) / "run"), "--quiet", "--threads", str(args.threads)] + extra
@@ -142,7 +142,7 @@ def _native(args) -> dict:
 
 
 def _case(args):
-    from compare.verdict import study
+    from dem.compare.verdict import study
     c = study.discharge_case(Path(args.scene), DT_SHARED, args.settle * DT_SHARED, args.discharge * DT_SHARED, 0, 0.0)
     c.series_interval = args.discharge * DT_SHARED
     return c
@@ -166,17 +166,17 @@ def _reference(args, backend, log_name: str) -> dict:
 
 
 def _liggghts(args) -> dict:
-    from compare.codes import liggghts_backend
+    from dem.compare.codes import liggghts_backend
     return _reference(args, liggghts_backend, "liggghts.log")
 
 
 def _lammps(args) -> dict:
-    from compare.codes import lammps_backend
+    from dem.compare.codes import lammps_backend
     return _reference(args, lammps_backend, "lammps.log")
 
 
 def _yade(args) -> dict:
-    from compare.codes import yade_backend as yb
+    from dem.compare.codes import yade_backend as yb
     case = _case(args)
     res = yb.run(case, Path(args.dir), timeout=args.timeout, threads=args.threads, wrap=measured(args))
     if res.status != "ok":

@@ -42,7 +42,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import common_study as cs  # noqa: E402
-from compare.io.run_dir import RunDir, RunDirError  # noqa: E402
+from dem.compare.io.run_dir import RunDir, RunDirError  # noqa: E402
 
 KE_BLOWUP = 1e-2      # x (weight x mean radius): a blow-up even without exit 3
 PAPER_ZETA = 1.0015   # damping ratio of the paper's disc-disc pair (eta_n/(rho g) = 15.3, m* = m/2)

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "build" / "python"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import common_study  # noqa: E402
@@ -99,7 +99,7 @@ def main() -> int:
         settle, dis = settle * args.scale, dis * args.scale
         settled = speed.settled_scene(speed.SCENES / speed.SIZES[size][0], args.dem, out)
         phases = speed.scene_with_phases(settled, settle, dis, speed.DT_SHARED, out / f"bench_{size}.toml")
-        from compare.codes import native_backend
+        from dem.compare.codes import native_backend
         ns = argparse.Namespace(scene=str(phases), settle=settle, discharge=dis)
         scenes[size] = native_backend.write_inputs(speed._case(ns), out / f"case_{size}")
     records = []

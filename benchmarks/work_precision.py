@@ -41,7 +41,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import common_study as cs  # noqa: E402
-from compare.io.run_dir import RunDir  # noqa: E402
+from dem.compare.io.run_dir import RunDir  # noqa: E402
 
 PROFILES = {
     "full": {
@@ -128,8 +128,8 @@ def closed_form(k: float, c: float, m: float, v0: float, law: str) -> dict:
 def collision_setup():
     """The head-on calibration scenes (compare/verdict/calibration.py) with the closed forms of the
     paper's law and the shared one, and compare/'s RK4 integration of the shared law (dt / 1000)."""
-    from compare.verdict import calibration as cal
-    from compare.cases.common import disc_material, pair
+    from dem.compare.verdict import calibration as cal
+    from dem.compare.cases.common import disc_material, pair
     out = {}
     for name, scene in (("disc_disc_head_on", "head_on_disc_disc"), ("disc_wall_head_on", "restitution_zeta_030")):
         case = cal.case(scene)
@@ -151,7 +151,7 @@ def collision_setup():
 
 
 def shifted_case(case0, geo, dt, phase, law, duration):
-    from compare.cases.common import SHARED_VARIANT
+    from dem.compare.cases.common import SHARED_VARIANT
     case = copy.deepcopy(case0)
     case.dt, case.duration = dt, duration
     case.resolved["contact"] = dict(cs.PAPER_LAW if law == "paper" else SHARED_VARIANT)
@@ -173,7 +173,7 @@ def liggghts_loop_time(out_dir: Path) -> float | None:
 
 def run_native_case(case, out_dir: Path, scheme: str, timeout: float = 900) -> dict:
     """A compare Case run by this engine with the given scheme (the native backend's scene)."""
-    from compare.codes import native_backend as N
+    from dem.compare.codes import native_backend as N
     scene = N.write_inputs(case, out_dir)
     r = cs.run_dem(scene, out_dir / "run", scheme, case.dt, timeout=timeout)
     if r["rc"] != 0:
@@ -188,7 +188,7 @@ def run_native_case(case, out_dir: Path, scheme: str, timeout: float = 900) -> d
 
 def run_code_case(code: str, case, out_dir: Path, timeout: float = 900) -> dict:
     import importlib
-    be = importlib.import_module(f"compare.codes.{code}_backend")
+    be = importlib.import_module(f"dem.compare.codes.{code}_backend")
     if not be.available():
         return {"rc": None, "result": None, "message": f"{code} not installed", "loop_s": None, "process_s": None}
     res = be.run(case, out_dir, timeout=timeout)
@@ -198,7 +198,7 @@ def run_code_case(code: str, case, out_dir: Path, timeout: float = 900) -> dict:
 
 
 def collision_point(code, scheme, law, name, setup, dt, phases, duration, out: Path) -> dict:
-    from compare.verdict import calibration as cal
+    from dem.compare.verdict import calibration as cal
     case0, geo, ref = setup["case"], setup["geo"], setup["refs"][law]
     errs_e, errs_t, loops, procs, vals, msgs = [], [], [], [], [], []
     for k in range(phases):
@@ -330,13 +330,13 @@ def problem_static_paper(cfg, out: Path, repeats: int) -> dict:
 def problem_static_shared(cfg, out: Path, codes, repeats: int) -> dict:
     """The shared variant: the comparison's frozen packing (compare/verdict/pipeline.py: the native engine
     fills 17/18 with the shared law, velocities zeroed), re-rested for shared_duration in every code."""
-    from compare.verdict import pipeline
-    from compare.cases import plan as cplan
-    from compare.cases.common import Case
+    from dem.compare.verdict import pipeline
+    from dem.compare.cases import plan as cplan
+    from dem.compare.cases.common import Case
     base = out / "b_shared"
     base.mkdir(parents=True, exist_ok=True)
     scene = cs.SCENES / "silo_17_18.toml"
-    log("(b) shared variant: frozen packing (compare.verdict.pipeline.frozen_packing, dt 2e-5 s, 1 s)")
+    log("(b) shared variant: frozen packing (dem.compare.verdict.pipeline.frozen_packing, dt 2e-5 s, 1 s)")
     frozen = cplan.make_plan(cplan.Entry(scene, cplan.Options(dt=2e-5, settle=1.0)))
     pack = pipeline.frozen_packing(frozen, base / "packing")
     side = None
@@ -392,7 +392,7 @@ def problem_static_shared(cfg, out: Path, codes, repeats: int) -> dict:
     return {"side_walls": side, "duration": cfg["shared_duration"], "n_discs": int(len(pack)),
             "reference": {"dt": cfg["shared_ref_dt"], "loop_s": ref["loop_s"]}, "floor": floor,
             "reference_profile": pref.tolist(), "points": points,
-            "method": "as the paper-law case, from compare.verdict.study's frozen packing (shared law, all codes start from it)"}
+            "method": "as the paper-law case, from dem.compare.verdict.study's frozen packing (shared law, all codes start from it)"}
 
 
 # ------------------------------------------------------------------ (c) flow rate
@@ -973,8 +973,8 @@ def main(argv=None) -> int:
     import os
     import importlib
     codes = [] if args.no_codes else [c for c in CODES if c in args.codes.split(",")
-                                      and importlib.import_module(f"compare.codes.{c}_backend").available()]
-    versions = {c: importlib.import_module(f"compare.codes.{c}_backend").version() for c in codes}
+                                      and importlib.import_module(f"dem.compare.codes.{c}_backend").available()]
+    versions = {c: importlib.import_module(f"dem.compare.codes.{c}_backend").version() for c in codes}
     res = {"profile": profile, "config": cfg, "engine": cs.engine_version(), "dem": str(dem), "code_versions": versions,
            "command": " ".join(["/usr/bin/python3", "benchmarks/work_precision.py"] + (argv if argv is not None else sys.argv[1:])),
            "load_start": " ".join(f"{x:.2f}" for x in os.getloadavg()), "started": time.strftime("%Y-%m-%d %H:%M:%S")}

@@ -1,15 +1,24 @@
-# `cmake --install build [--prefix P]`: the engine (P/bin/dem), the Python module (P/lib/pythonX.Y/
-# dist-packages/dem.*.so, where Debian's python looks under /usr/local), the scenes
-# (P/share/dem/reference_inputs) and the comparison layer beside them (P/share/dem/compare), where
-# the installed dem finds it (cli/python_path.hpp): `dem compare`, `--pictures` and `--engine`
-# work with the source tree gone, and compare/ is on no Python's path but dem's own processes'.
+# `cmake --install build [--prefix P]`: the engine (P/bin/dem); the Python package dem
+# (P/<DEM_PYTHON_INSTALL_DIR>/dem: __init__.py, the engine module _engine when built, compare as a
+# link to P/share/dem/compare); the scenes (P/share/dem/reference_inputs) and the comparison layer
+# beside them (P/share/dem/compare), where its code finds the scenes. The installed dem's Python
+# processes (`dem compare`, `--pictures`, `--engine`) import that package (cli/python_path.hpp):
+# they run with the source tree gone.
 include(GNUInstallDirs)
 install(TARGETS dem RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(FILES engine/python/dem/__init__.py DESTINATION ${DEM_PYTHON_INSTALL_DIR}/dem)
 if(DEM_PYTHON_MODULE)
-  execute_process(COMMAND ${DEM_PYTHON} -c "import sys; print('lib/python%d.%d/dist-packages' % sys.version_info[:2])"
-                  OUTPUT_VARIABLE DEM_PYTHON_SITE_DEFAULT OUTPUT_STRIP_TRAILING_WHITESPACE)
-  set(DEM_PYTHON_INSTALL_DIR ${DEM_PYTHON_SITE_DEFAULT} CACHE STRING "Where the module dem installs, below the prefix")
-  install(TARGETS dem_python LIBRARY DESTINATION ${DEM_PYTHON_INSTALL_DIR})
+  install(TARGETS dem_python LIBRARY DESTINATION ${DEM_PYTHON_INSTALL_DIR}/dem)
 endif()
 install(DIRECTORY reference_inputs DESTINATION ${CMAKE_INSTALL_DATADIR}/dem)
 install(DIRECTORY compare DESTINATION ${CMAKE_INSTALL_DATADIR}/dem PATTERN "__pycache__" EXCLUDE)
+install(CODE "
+  set(dir \"${DEM_PYTHON_INSTALL_DIR}\")
+  if(NOT IS_ABSOLUTE \"\${dir}\")
+    set(dir \"\${CMAKE_INSTALL_PREFIX}/\${dir}\")
+  endif()
+  set(layer \"\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_DATADIR}/dem/compare\")
+  file(RELATIVE_PATH target \"\${dir}/dem\" \"\${layer}\")
+  message(STATUS \"Installing: \$ENV{DESTDIR}\${dir}/dem/compare -> \${target}\")
+  file(CREATE_LINK \"\${target}\" \"\$ENV{DESTDIR}\${dir}/dem/compare\" SYMBOLIC)
+")

@@ -1,6 +1,6 @@
-"""python3 -m compare scene SCENE.toml|LIST.list ... --out DIR [options]   (what `dem compare` runs)
-python3 -m compare report --out DIR [--full]     the project's study: reference_inputs/agreement/{quick,full}.list
-python3 -m compare translate [--check | --out DIR]
+"""python3 -m dem.compare scene SCENE.toml|LIST.list ... --out DIR [options]   (what `dem compare` runs)
+python3 -m dem.compare report --out DIR [--full]     the project's study: reference_inputs/agreement/{quick,full}.list
+python3 -m dem.compare translate [--check | --out DIR]
 
 Runs scenes in the native engine and the real reference codes with the shared law and writes
 DIR/report.md, DIR/agreement.json and the PNGs. Every metric agrees, disagrees or is
@@ -14,9 +14,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from compare.cases import mutants, plan, common
-from compare.verdict import pipeline, report, sequential, verdict, translate, attribution
-from compare.io import scene_toml
+from dem.compare.cases import mutants, plan, common
+from dem.compare.verdict import pipeline, report, sequential, verdict, translate, attribution
+from dem.compare.io import scene_toml
 
 CODES = ("native",) + plan.REFERENCE_CODES
 
@@ -55,7 +55,7 @@ the engine's bound (refused before any run), 3 inconclusive (or a mutant left un
 
 
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="python3 -m compare")
+    ap = argparse.ArgumentParser(prog="python3 -m dem.compare")
     sub = ap.add_subparsers(dest="cmd", required=True)
     s = sub.add_parser("scene", prog="dem compare", help="compare scenes (or list files) across codes",
                        description="Runs scenes in the native engine and the reference codes (LIGGGHTS, YADE, "
@@ -194,7 +194,7 @@ def exit_code(rep: dict, with_mutants: bool) -> int:
 
 
 def with_set(entries, assignments, folder: Path):
-    """The entries with their scenes changed by ``--set`` (compare.io.scene_toml), each written into
+    """The entries with their scenes changed by ``--set`` (dem.compare.io.scene_toml), each written into
     folder/KK/ under its own name and validated by the engine (``dem resolve``); PlanError names
     the key or the field the engine refuses."""
     out = []

@@ -1,6 +1,6 @@
-"""``python3 -m compare.engine_run``: the entry of ``dem run|ensemble --engine CODE``
+"""``python3 -m dem.compare.engine_run``: the entry of ``dem run|ensemble --engine CODE``
 (compare/codes/reference_run.py)."""
-from compare.codes.reference_run import main
+from dem.compare.codes.reference_run import main
 
 if __name__ == "__main__":
     raise SystemExit(main())

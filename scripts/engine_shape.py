@@ -15,7 +15,7 @@ measures of the Python comparison layer (compare/, or another package) from its 
 - longest functions: lines from a definition's opening brace at column 0 to its closing brace at
   column 0 (the project's formatting), top N.
 
---compare (a Python package, its imports read with ast; absolute ``compare.x`` and relative ones):
+--compare (a Python package, its imports read with ast; absolute ``dem.compare.x`` and relative ones):
 - folder floors: the longest chain of imports between the package's folders (the package's own
   top folder is one; a folder importing no other folder is floor 1);
 - circles: modules that reach themselves through their imports (each strongly connected set of
@@ -134,13 +134,13 @@ def py_imports(mods, name, tree):
             inner = in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
             if isinstance(child, ast.Import):
                 for alias in child.names:
-                    out.append((alias.name, child.lineno, in_function))
+                    out.append((alias.name.removeprefix("dem."), child.lineno, in_function))
             elif isinstance(child, ast.ImportFrom):
                 if child.level:
                     head = base.rsplit(".", child.level - 1)[0] if child.level > 1 else base
                     mod = f"{head}.{child.module}" if child.module else head
                 else:
-                    mod = child.module or ""
+                    mod = (child.module or "").removeprefix("dem.")     # compare/ is imported as dem.compare
                 for alias in child.names:
                     full = f"{mod}.{alias.name}"
                     out.append((full if full in mods else mod, child.lineno, in_function))

@@ -19,9 +19,9 @@ import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
 OUT = HERE.parent / "reference_inputs" / "agreement" / "calibration"
-sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE.parent / "build" / "python"))
 
-from compare.io import scene_toml  # noqa: E402
+from dem.compare.io import scene_toml  # noqa: E402
 
 RHO, G = 2.65, 980.0           # g/cm^3, cm/s^2: the paper's sand and gravity (constants per rho g)
 R = 1.0                        # cm, disc radius

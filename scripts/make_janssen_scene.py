@@ -21,9 +21,9 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 OUT = ROOT / "reference_inputs" / "scenes"
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "build" / "python"))
 
-from compare.io import scene_toml  # noqa: E402
+from dem.compare.io import scene_toml  # noqa: E402
 
 W, H_WALL = 15.0, 500.0          # cm
 R_MIN, R_MAX = 0.4, 0.6          # cm

@@ -30,9 +30,9 @@ import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
 OUT = HERE.parent / "reference_inputs" / "scenes"
-sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE.parent / "build" / "python"))
 
-from compare.io import scene_toml  # noqa: E402
+from dem.compare.io import scene_toml  # noqa: E402
 
 WIDTH = 40.0     # b [cm]
 HEIGHT = 20.0    # h [cm]

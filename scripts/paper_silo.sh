@@ -7,5 +7,6 @@ cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 bash scripts/build.sh
 OUT="${1:-out/paper_silo}"
-/usr/bin/python3 -m compare.papers.paper_static --out "$OUT"
-/usr/bin/python3 -m compare.papers.paper_discharge --out "$OUT/discharge"
+export PYTHONPATH="$PWD/build/python${PYTHONPATH:+:$PYTHONPATH}"   # this build's package dem (dem.compare)
+/usr/bin/python3 -m dem.compare.papers.paper_static --out "$OUT"
+/usr/bin/python3 -m dem.compare.papers.paper_discharge --out "$OUT/discharge"

@@ -7,10 +7,11 @@ bash scripts/install_deps.sh
 phase() { echo "test.sh: $1 done, ${SECONDS} s since the start"; }  # where CI's time goes
 bash scripts/build.sh
 phase "release build"
+export PYTHONPATH="$PWD/build/python${PYTHONPATH:+:$PYTHONPATH}"   # this build's package dem (dem.compare)
 /usr/bin/python3 scripts/make_paper_scenes.py --check
 /usr/bin/python3 scripts/make_janssen_scene.py --check
 /usr/bin/python3 scripts/make_calibration_scenes.py --check
-DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m compare translate --check
+DEM_BINARY="$PWD/build/dem" /usr/bin/python3 -m dem.compare translate --check
 
 # The agreement studies need only the release build, so they run beside the tests and the
 # sanitizer build: each of the test phases leaves a core idle part of its time (a build's link, a

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.io import atomic_file
+from dem.compare.io import atomic_file
 
 ROOT = Path(__file__).resolve().parents[2]
 PYTHON = "/usr/bin/python3"

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import OptimizeWarning, curve_fit
 from scipy.spatial import cKDTree
 
-from compare.cases.common import moved_wall
+from dem.compare.cases.common import moved_wall
 
 
 def _linear(z, p, lam):

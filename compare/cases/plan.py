@@ -43,8 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.cases import margins, shear
-from compare.cases.common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
+from dem.compare.cases import margins, shear
+from dem.compare.cases.common import ROOT, SHARED_VARIANT, Case, CaseError, resolve, scene_material_index
 
 KINDS = ("collision", "static", "janssen", "discharge", "shear")
 REFERENCE_CODES = ("liggghts", "yade", "lammps")

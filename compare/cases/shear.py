@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.cases.common import SHARED_VARIANT, CaseError, stability
-from compare.cases.shear_stability import engine_bonds
-from compare.io.run_dir import RunDir
+from dem.compare.cases.common import SHARED_VARIANT, CaseError, stability
+from dem.compare.cases.shear_stability import engine_bonds
+from dem.compare.io.run_dir import RunDir
 
 WINDOW = 0.011           # strain over which the windowed peak averages tau/sigma
 BANDS = ((0.0, 0.02), (0.02, 0.05), (0.05, 0.10), (0.10, 0.15))   # strain bands of the curve

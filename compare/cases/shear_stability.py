@@ -9,7 +9,7 @@ safe bound for the whole assembly (neighbours that move can raise the frequencie
 shows what bonds across a gap do: their lever arms (R0/2 > r) stiffen the coupled rotation
 modes.
 
-    /usr/bin/python3 -m compare.cases.shear_stability SCENE.toml [SCENE.toml ...] [--dem build/dem]
+    /usr/bin/python3 -m dem.compare.cases.shear_stability SCENE.toml [SCENE.toml ...] [--dem build/dem]
 """
 import argparse
 import json
@@ -177,7 +177,7 @@ def resolve(scene, dem):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="compare.cases.shear_stability", description=__doc__,
+    ap = argparse.ArgumentParser(prog="dem.compare.cases.shear_stability", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="+")
     ap.add_argument("--dem", default=os.environ.get("DEM_BINARY", str(REPO / "build" / "dem")))

@@ -5,9 +5,9 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from compare.cases.common import CaseError
-from compare.cases.plan import Plan, member_case
-from compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend
+from dem.compare.cases.common import CaseError
+from dem.compare.cases.plan import Plan, member_case
+from dem.compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend
 
 BACKENDS = {"native": native_backend, "liggghts": liggghts_backend, "yade": yade_backend, "lammps": lammps_backend}
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from compare.cases.common import Snapshot
+from dem.compare.cases.common import Snapshot
 
 FLOW_HEADER = ("t,discs_in_silo,discs_below,removed,removed_mass,moved_fraction,surface_left,"
                "surface_centre,surface_right,arch_discs,arch_crown_y")

@@ -58,9 +58,9 @@ from shutil import which
 
 import numpy as np
 
-from compare.cases.common import (mpi_prefix, run_translated, SHARED_VARIANT, Case, CaseError, Result, Snapshot, failed, inward_normal, kinetic_energy, outlet_y, pair,
+from dem.compare.cases.common import (mpi_prefix, run_translated, SHARED_VARIANT, Case, CaseError, Result, Snapshot, failed, inward_normal, kinetic_energy, outlet_y, pair,
                      profiles_from_contacts, tangent)
-from compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.io.atomic_file import write_text as write_text_atomic
 
 NAME = "lammps"
 Z_HALF = 2.0          # [cm] half thickness of the periodic z slab

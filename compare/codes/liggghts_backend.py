@@ -53,11 +53,11 @@ from shutil import which
 import meshio  # STL meshes and VTU snapshots; the POLYDATA mesh dumps (meshio reads none) are parsed here
 import numpy as np
 
-from compare.cases.common import (mpi_prefix, run_translated, outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
+from dem.compare.cases.common import (mpi_prefix, run_translated, outlet_y, SHARED_VARIANT, Case, CaseError, Result, Snapshot, bin_edges, failed,
                      motion_steps, moved_wall,
                      inward_normal, kinetic_energy, pair, tangent)
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.cases import shear
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.cases import shear
 
 NAME = "liggghts"
 Z_HALF = 2.0          # [cm] half thickness of the periodic z slab

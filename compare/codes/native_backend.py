@@ -1,6 +1,6 @@
 """The native engine as one of the compared codes: a Case becomes a scene (written by
-compare.io.scene_toml) with the case's packing as a disc file, ``build/dem run`` runs it, and its
-run directory (read by compare.io.run_dir, every key docs/outputs.md promises checked) becomes the
+dem.compare.io.scene_toml) with the case's packing as a disc file, ``build/dem run`` runs it, and its
+run directory (read by dem.compare.io.run_dir, every key docs/outputs.md promises checked) becomes the
 common Result form.
 
 The engine reports the slit ends (scene points L, R) apart from the walls; the reader folds a
@@ -10,7 +10,7 @@ where LIGGGHTS (a mesh edge) and YADE (a facet vertex) count it (common.fold_poi
 A shear case (``case.mode == "shear"``, compare/cases/shear.py) becomes a scene with the case's
 ``[shear_box]`` (the engine builds its walls and plate), ``[shear]`` and ``[clusters]``, the case's
 discs as the disc file, the compression to rest for at most ``case.settle`` (``[end]``); the
-engine's shear outputs are read into ``Result.extra["shear"]`` (compare.cases.shear.read_outputs).
+engine's shear outputs are read into ``Result.extra["shear"]`` (dem.compare.cases.shear.read_outputs).
 
 Particle snapshots (``read_snapshots``): the engine writes them only during a discharge
 (``discharge.snapshots`` times: ``snapshots/discs_NNNN.vtu`` indexed by
@@ -27,12 +27,12 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from compare.cases.common import (Case, CaseError, Result, Snapshot, dem_binary, failed, fold_points,
+from dem.compare.cases.common import (Case, CaseError, Result, Snapshot, dem_binary, failed, fold_points,
                      kinetic_energy)
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.io.run_dir import RunDir, RunDirError, read_pvd
-from compare.io.scene_toml import dumps
-from compare.cases import shear
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.io.run_dir import RunDir, RunDirError, read_pvd
+from dem.compare.io.scene_toml import dumps
+from dem.compare.cases import shear
 
 NAME = "native"
 
@@ -108,7 +108,7 @@ def scene_doc(case: Case, disc_file: str) -> tuple[dict, dict]:
 
 def scene_toml(case: Case, disc_file: str) -> str:
     """The scene file's text (scene_doc, or shear_scene_doc for a shear case, written by
-    compare.io.scene_toml)."""
+    dem.compare.io.scene_toml)."""
     doc, comments = shear_scene_doc(case, disc_file) if case.mode == "shear" else scene_doc(case, disc_file)
     try:
         return dumps(doc, comments=comments,
@@ -295,7 +295,7 @@ def read_snapshots(case: Case, out_dir: Path) -> list[Snapshot]:
     """Particle snapshots in the common form (times since the opening of a discharge).
 
     Discharge: the files ``discharge_discs.pvd`` lists (a ParaView collection, which
-    compare.io.run_dir.read_pvd parses; each VTU it names is read with meshio). Static: the engine
+    dem.compare.io.run_dir.read_pvd parses; each VTU it names is read with meshio). Static: the engine
     writes no snapshots during the run, only the final ``discs.vtu`` (t = the case's duration)."""
     rd = RunDir(Path(out_dir) / "run")
     if case.mode != "discharge":

@@ -1,6 +1,6 @@
 """``dem run SCENE.toml --engine liggghts|lammps|yade [--np N] --out DIR``: one scene run in a
 reference code, written as the engine's own run folder (docs/outputs.md), so that
-compare.io.run_dir (strict) and ``python3 -m compare.figures run DIR`` read it unchanged.
+dem.compare.io.run_dir (strict) and ``python3 -m dem.compare.figures run DIR`` read it unchanged.
 
 The scene becomes one comparison case (compare/cases/plan.py): the shared law (common.SHARED_VARIANT),
 the scene's dt, and
@@ -44,14 +44,14 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from compare.codes.backends import backend
-from compare.codes import frame_measures
-from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall,
+from dem.compare.codes.backends import backend
+from dem.compare.codes import frame_measures
+from dem.compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, densities, inward_normal, moved_wall,
                      outlet_y, resolve, scene_material_index, tangent)
-from compare.io import atomic_file, scene_toml
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.cases.plan import Entry, Options, PlanError, make_plan, start_discs
-from compare.cases.mutants import Mutation
+from dem.compare.io import atomic_file, scene_toml
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.cases.plan import Entry, Options, PlanError, make_plan, start_discs
+from dem.compare.cases.mutants import Mutation
 
 CODES = ("liggghts", "lammps", "yade")
 EXIT_BAD, EXIT_UNSTABLE, EXIT_FAILED = 2, 3, 4
@@ -105,7 +105,7 @@ def make_case(scene: Path, settle: float) -> Case:
 
 
 def with_set(scene: Path, assignments: list[str], folder: Path) -> Path:
-    """The scene with the ``--set`` assignments applied (compare.io.scene_toml, as `dem compare
+    """The scene with the ``--set`` assignments applied (dem.compare.io.scene_toml, as `dem compare
     --set`), written into ``folder`` under the scene's own name (its relative paths rebased), for
     the engine to validate as it resolves it; the scene itself without assignments."""
     if not assignments:
@@ -618,7 +618,7 @@ def _parser() -> argparse.ArgumentParser:
                          "the member's perturbed start)")
     ap.add_argument("--quiet", action="store_true")
     ap.add_argument("--pictures", action="store_true",
-                    help="also draw the run's pictures into OUT (python3 -m compare.figures run OUT), as dem run --pictures")
+                    help="also draw the run's pictures into OUT (python3 -m dem.compare.figures run OUT), as dem run --pictures")
     return ap
 
 
@@ -635,8 +635,8 @@ def _unstable_summary(out: Path, case, res, code: str, np_: int) -> None:
 
 
 def _pictures(out: Path, code: str, quiet: bool) -> int:
-    """--pictures: python3 -m compare.figures run OUT; 0, or the failure's exit status."""
-    drawn = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(out)] + (["--quiet"] if quiet else []),
+    """--pictures: python3 -m dem.compare.figures run OUT; 0, or the failure's exit status."""
+    drawn = subprocess.run([sys.executable, "-m", "dem.compare.figures", "run", str(out)] + (["--quiet"] if quiet else []),
                            capture_output=True, text=True)
     sys.stderr.write(drawn.stderr)
     if drawn.returncode != 0:
@@ -714,7 +714,7 @@ def _main(argv=None) -> int:
         write_text_atomic(out / "summary.json", json.dumps(s, indent=1, default=_json) + "\n")
     if not a.quiet:
         print(f"{code}: {s['status']} at t = {s['time']:.6g} s, {s['steps']} steps, {s['n_discs']} discs, "
-              f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m compare.figures run {out})")
+              f"{s['wall_time_s']:.3g} s wall; outputs in {out} (pictures: python3 -m dem.compare.figures run {out})")
     return _pictures(out, code, a.quiet) if a.pictures else 0
 
 

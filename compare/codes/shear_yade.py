@@ -2,7 +2,7 @@
 (compare/codes/yade_backend.py, ``shear_case_data`` and compare/codes/shear_yade_template.py), the same
 translation ``dem compare`` runs for a shear-box scene.
 
-    /usr/bin/python3 -m compare.codes.shear_yade SCENE.toml --out DIR [--clusters bonds|clumps]
+    /usr/bin/python3 -m dem.compare.codes.shear_yade SCENE.toml --out DIR [--clusters bonds|clumps]
                      [--dt S] [--dem build/dem] [--timeout S]
 
 The scene is resolved by the engine itself (``dem resolve``: discs, constants, box, clusters) and
@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.io.run_dir import RunDir
-from compare.cases import shear
-from compare.cases.common import SHARED_VARIANT, Case
-from compare.cases.plan import start_discs
-from compare.codes import yade_backend
+from dem.compare.io.run_dir import RunDir
+from dem.compare.cases import shear
+from dem.compare.cases.common import SHARED_VARIANT, Case
+from dem.compare.cases.plan import start_discs
+from dem.compare.codes import yade_backend
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -69,7 +69,7 @@ def run(scene, out_dir, clusters="bonds", dt=5e-5, dem=None, timeout=1800):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="compare.codes.shear_yade", description=__doc__,
+    ap = argparse.ArgumentParser(prog="dem.compare.codes.shear_yade", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scene")
     ap.add_argument("--out", required=True)

@@ -64,7 +64,7 @@ What the translation does (measured facts: docs/compare.md):
   distance change since bonding; shear force rotated with the contact frame; lever arms to the
   mid-gap point with avoidGranularRatcheting = False); "clumps", rigid YADE clumps. It writes the
   engine's shear outputs (shear_series.csv, shear_planes.csv, summary.json, snapshots/), read by
-  compare.cases.shear.read_outputs into ``Result.extra["shear"]``.
+  dem.compare.cases.shear.read_outputs into ``Result.extra["shear"]``.
 
 What YADE cannot express exactly (see also the module's ``LIMITATIONS``): the paper's incremental
 normal spring and elastic-force rules (only the shared variant); the engine's integration
@@ -90,12 +90,12 @@ from pathlib import Path
 import meshio  # VTKRecorder snapshots (VTU)
 import numpy as np
 
-from compare.cases.common import outlet_y as common_outlet_y
-from compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, motion_steps,
+from dem.compare.cases.common import outlet_y as common_outlet_y
+from dem.compare.cases.common import (SHARED_VARIANT, Case, CaseError, Result, Snapshot, disc_material, failed, motion_steps,
                      moved_wall, pair, profiles_from_contacts)
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.cases import shear
-from compare.codes import yade_session
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.cases import shear
+from dem.compare.codes import yade_session
 
 NAME = "yade"
 TEMPLATE = Path(__file__).resolve().parent / "yade_template.py"
@@ -606,7 +606,7 @@ def _read(case: Case, out_dir: Path) -> Result:
 
 
 def _read_shear(case: Case, out_dir: Path, proc: dict) -> Result:
-    """A shear run: the script's summary.json and shear_series.csv (compare.cases.shear.read_outputs)."""
+    """A shear run: the script's summary.json and shear_series.csv (dem.compare.cases.shear.read_outputs)."""
     common = {"wall_time_s": float(proc.get("wall_time_s", float("nan")))}
     if proc.get("error"):
         return _fail(case, out_dir, proc["error"], **common)

@@ -1,6 +1,6 @@
-"""``python3 -m compare.figures run|network|grid|profiles|bottom|frames|ratios|flow|discharge ...``:
+"""``python3 -m dem.compare.figures run|network|grid|profiles|bottom|frames|ratios|flow|discharge ...``:
 the command line of compare/figures/runs.py."""
-from compare.figures.runs import main
+from dem.compare.figures.runs import main
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -1,7 +1,7 @@
-"""The data of compare.figures' pictures, without matplotlib: reading a run directory (with a
+"""The data of dem.compare.figures' pictures, without matplotlib: reading a run directory (with a
 message that names the offending file), captions, and the pure maths of the pictures (contact-force
-segments, side-wall profiles, the discharge pictures' matrices and fits). compare.figures re-exports every name; the studies' main processes
-(compare.papers.paper_claims in them) import this module alone, so that matplotlib is imported only in
+segments, side-wall profiles, the discharge pictures' matrices and fits). dem.compare.figures re-exports every name; the studies' main processes
+(dem.compare.papers.paper_claims in them) import this module alone, so that matplotlib is imported only in
 the processes that draw.
 """
 
@@ -12,8 +12,8 @@ import textwrap
 
 import numpy as np
 
-from compare.io import run_dir as _run_dir
-from compare.io.run_dir import CONTACT_COLUMNS, SNAPSHOT_DISC_COLUMNS, RunDir, RunDirError
+from dem.compare.io import run_dir as _run_dir
+from dem.compare.io.run_dir import CONTACT_COLUMNS, SNAPSHOT_DISC_COLUMNS, RunDir, RunDirError
 
 # The paper's plot scale: one disc diameter stands for 50/pi (about 16) disc weights.
 DIAMETER_IN_DISC_WEIGHTS = 50.0 / math.pi
@@ -26,14 +26,14 @@ SAME_DEPTH = 1e-6
 
 def _fail(path, message):
     """Stop with a message that names the offending file."""
-    raise SystemExit(f"compare.figures: {path}: {message}")
+    raise SystemExit(f"dem.compare.figures: {path}: {message}")
 
 
 # --------------------------------------------------------------------------- reading
 
 
 def _reading(fn, *args, **kwargs):
-    """fn(...) of compare.io.run_dir, its RunDirError a stop that names the file."""
+    """fn(...) of dem.compare.io.run_dir, its RunDirError a stop that names the file."""
     try:
         return fn(*args, **kwargs)
     except RunDirError as err:
@@ -41,13 +41,13 @@ def _reading(fn, *args, **kwargs):
 
 
 def read_csv(path, columns, empty=None):
-    """A CSV file of a run as a dict of numpy arrays (compare.io.run_dir.read_csv); a missing or
+    """A CSV file of a run as a dict of numpy arrays (dem.compare.io.run_dir.read_csv); a missing or
     malformed file stops with SystemExit naming it."""
     return _reading(_run_dir.read_csv, path, columns, empty=empty)
 
 
 def read_summary(path):
-    """summary.json (compare.io.run_dir.read_summary) with a positive ``disc_weight``: the unit of
+    """summary.json (dem.compare.io.run_dir.read_summary) with a positive ``disc_weight``: the unit of
     the figures' force scale."""
     summary = _reading(_run_dir.read_summary, path)
     if not summary["disc_weight"] > 0:
@@ -340,13 +340,13 @@ def gate_name(summary):
 
 def read_pvd(path):
     """The DataSets of a ParaView collection (.pvd) as (timestep, file) pairs sorted by time
-    (compare.io.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
+    (dem.compare.io.run_dir.read_pvd); a missing or malformed file stops with SystemExit naming it."""
     return _reading(_run_dir.read_pvd, path)
 
 
 def snapshot_index(run_dir):
     """The discharge snapshots of a run: a list of {"t", "discs", "contacts"} sorted by t
-    (compare.io.run_dir.RunDir.discharge_snapshots)."""
+    (dem.compare.io.run_dir.RunDir.discharge_snapshots)."""
     return _reading(RunDir(run_dir).discharge_snapshots)
 
 
@@ -354,7 +354,7 @@ def select_snapshots(snaps, times=None):
     """All snapshots (times None), or for each requested time the snapshot nearest to it
     (each snapshot once, in time order)."""
     if not snaps:
-        raise SystemExit("compare.figures: the run has no discharge snapshots")
+        raise SystemExit("dem.compare.figures: the run has no discharge snapshots")
     if times is None:
         return list(snaps)
     at = np.array([s["t"] for s in snaps])
@@ -458,7 +458,7 @@ def discharge_frames(run_dir, times=None):
                read_csv(s["contacts"], CONTACT_COLUMNS) if os.path.exists(s["contacts"]) else None)
               for s in snaps]
     if any(c is None for _, _, c in frames):
-        sys.stderr.write(f"compare.figures: {run_dir}: snapshots without contact files (the run gives no "
+        sys.stderr.write(f"dem.compare.figures: {run_dir}: snapshots without contact files (the run gives no "
                          "contact list): frames.png draws the discs only\n")
     r_ref = next((reference_radius(d) for _, d, _ in frames if len(d["r"])), None)
     if r_ref is None:

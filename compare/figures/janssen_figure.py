@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from compare.cases import janssen  # noqa: E402
+from dem.compare.cases import janssen  # noqa: E402
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green"}
 

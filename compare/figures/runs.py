@@ -22,15 +22,15 @@ The file formats read here are those of docs/outputs.md:
 
 Usage, from the repository root::
 
-    /usr/bin/python3 -m compare.figures network RUN_DIR --out network.png
-    /usr/bin/python3 -m compare.figures grid RUN_DIR [RUN_DIR ...] --out grid.png [--labels ...]
-    /usr/bin/python3 -m compare.figures profiles RUN_DIR [RUN_DIR ...] --out side.png [--per bin]
-    /usr/bin/python3 -m compare.figures bottom RUN_DIR --out bottom.png
-    /usr/bin/python3 -m compare.figures frames RUN_DIR --out frames.png [--times 0 0.1 ...]
-    /usr/bin/python3 -m compare.figures ratios RUN_DIR --out wall_ratios.png
-    /usr/bin/python3 -m compare.figures flow RUN_DIR --out flow.png
-    /usr/bin/python3 -m compare.figures discharge RUN_DIR --outdir DIR
-    /usr/bin/python3 -m compare.figures run RUN_DIR [--wait] [--quiet]
+    /usr/bin/python3 -m dem.compare.figures network RUN_DIR --out network.png
+    /usr/bin/python3 -m dem.compare.figures grid RUN_DIR [RUN_DIR ...] --out grid.png [--labels ...]
+    /usr/bin/python3 -m dem.compare.figures profiles RUN_DIR [RUN_DIR ...] --out side.png [--per bin]
+    /usr/bin/python3 -m dem.compare.figures bottom RUN_DIR --out bottom.png
+    /usr/bin/python3 -m dem.compare.figures frames RUN_DIR --out frames.png [--times 0 0.1 ...]
+    /usr/bin/python3 -m dem.compare.figures ratios RUN_DIR --out wall_ratios.png
+    /usr/bin/python3 -m dem.compare.figures flow RUN_DIR --out flow.png
+    /usr/bin/python3 -m dem.compare.figures discharge RUN_DIR --outdir DIR
+    /usr/bin/python3 -m dem.compare.figures run RUN_DIR [--wait] [--quiet]
 
 ``run --wait``: `dem run --pictures` starts this process with the run, so that Python and
 matplotlib are imported while the engine steps; it reads one line on stdin when the run has
@@ -53,15 +53,15 @@ from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E4
 from matplotlib.lines import Line2D  # noqa: E402
 
 # Reading and the pure maths (compare/figures/figure_data.py, no matplotlib), re-exported here.
-from compare.io import atomic_file  # noqa: E402
-from compare.io import run_dir as _run_dir  # noqa: E402,F401
-from compare.figures.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH, SHARED_LAW,  # noqa: E402,F401
+from dem.compare.io import atomic_file  # noqa: E402
+from dem.compare.io import run_dir as _run_dir  # noqa: E402,F401
+from dem.compare.figures.figure_data import (DIAMETER_IN_DISC_WEIGHTS, PAPER_LAW, SAME_DEPTH, SHARED_LAW,  # noqa: E402,F401
                                  _cluster, _fail, _reading, common_caption, law_name, load_run,
                                  network_segments, point_positions, read_csv, read_summary,
                                  reference_radius, run_caption, scene_name, side_profile,
                                  side_wall_contacts)
 # The discharge pictures' data (compare/figures/figure_data.py), re-exported here.
-from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRACTION,  # noqa: E402,F401
+from dem.compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, STATIC_FRACTION,  # noqa: E402,F401
                                  SURFACE_COLOURS, _discharge_head, _fmt, _rest_text, cell_edges,
                                  discharge_info, displacement_radii, flow_fit_line, gate_name,
                                  network_bounds, read_pvd, select_snapshots, snapshot_index,
@@ -69,12 +69,12 @@ from compare.figures.figure_data import (DEAD_RADII, GATE_NAME, RATIO_LIMITS, ST
                                  wall_ratio_data, network_title, side_title, frames_title,
                                  ratios_title, flow_title, side_bins_title)
 # The columns of the run's files (docs/outputs.md), as compare/io/run_dir.py reads them.
-from compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
+from dem.compare.io.run_dir import (CONTACT_COLUMNS, DISC_COLUMNS, FLOW_COLUMNS, INT_COLUMNS,  # noqa: E402,F401
                              PROFILE_COLUMNS, REMOVAL_COLUMNS, SNAPSHOT_DISC_COLUMNS, TEXT_COLUMNS,
                              WALL_SERIES_COLUMNS, WALL_TOTALS_COLUMNS, RunDir, RunDirError)
 
 # Line styles and markers of the separate side walls in the profile figure (figure_data's).
-from compare.figures.figure_data import SIDE_MARKERS, SIDE_STYLES, units_of  # noqa: E402,F401
+from dem.compare.figures.figure_data import SIDE_MARKERS, SIDE_STYLES, units_of  # noqa: E402,F401
 
 # --------------------------------------------------------------------------- figures
 
@@ -192,11 +192,11 @@ def plot_network_grid(run_dirs, out_png, labels=None, ncols=4):
     whether summary.json's rest.reached is true; all panels share one length scale.
     """
     if not run_dirs:
-        raise SystemExit("compare.figures: grid needs at least one run directory")
+        raise SystemExit("dem.compare.figures: grid needs at least one run directory")
     if labels is not None and len(labels) != len(run_dirs):
-        raise SystemExit(f"compare.figures: {len(labels)} labels for {len(run_dirs)} runs")
+        raise SystemExit(f"dem.compare.figures: {len(labels)} labels for {len(run_dirs)} runs")
     if ncols < 1:
-        raise SystemExit(f"compare.figures: ncols must be >= 1, found {ncols}")
+        raise SystemExit(f"dem.compare.figures: ncols must be >= 1, found {ncols}")
     runs = [load_run(d, parts=("contacts", "discs")) for d in run_dirs]
     bounds = np.array([network_bounds(r) for r in runs])
     span_x = float(np.max(bounds[:, 1] - bounds[:, 0]))
@@ -247,11 +247,11 @@ def plot_side_profiles(run_dirs, out_png, labels=None, per="contact"):
     per="bin": the former figure, force per depth bin of wall_profiles.csv (mean of the sides).
     """
     if labels is not None and len(labels) != len(run_dirs):
-        raise SystemExit(f"compare.figures: {len(labels)} labels for {len(run_dirs)} runs")
+        raise SystemExit(f"dem.compare.figures: {len(labels)} labels for {len(run_dirs)} runs")
     if per == "bin":
         return _plot_side_bins(run_dirs, out_png, labels)
     if per != "contact":
-        raise SystemExit(f"compare.figures: per must be 'contact' or 'bin', found {per!r}")
+        raise SystemExit(f"dem.compare.figures: per must be 'contact' or 'bin', found {per!r}")
     fig, (axn, axs) = plt.subplots(1, 2, sharey=True, figsize=(11, 7))
     colours = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(run_dirs), 1)))
     split_drawn, unpaired, summaries = set(), [], []
@@ -412,7 +412,7 @@ def plot_discharge_frames(run_dir, out_png, times=None, ncols=5):
     (summary["discharge"]["outlet_y"], where discs are removed).
     """
     if ncols < 1:
-        raise SystemExit(f"compare.figures: ncols must be >= 1, found {ncols}")
+        raise SystemExit(f"dem.compare.figures: ncols must be >= 1, found {ncols}")
     d = discharge_frames(run_dir, times)
     summary, info, frames, r_ref, walls, points = (d[k] for k in ("summary", "info", "frames", "r_ref",
                                                                   "walls", "points"))
@@ -719,7 +719,7 @@ def plot_run(run_dir):
     back) has no network to draw: it is skipped with a note on stderr, and side_walls.png is
     drawn per bin of wall_profiles.csv; a discharge's frames.png has its discs without forces."""
     if not os.path.exists(os.path.join(run_dir, "contacts.csv")):
-        sys.stderr.write(f"compare.figures: {os.path.join(run_dir, 'contacts.csv')}: absent (the run gives no "
+        sys.stderr.write(f"dem.compare.figures: {os.path.join(run_dir, 'contacts.csv')}: absent (the run gives no "
                          "contact list): the contact network is skipped; side_walls.png is drawn per "
                          "wall_profiles.csv bin\n")
         out = [plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"), per="bin")]
@@ -731,7 +731,7 @@ def plot_run(run_dir):
     if side_wall_contacts(run["summary"], run["contacts"]) is not None:
         out.append(plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png")))
     else:  # a discharge that ended with no disc on a side wall: its (empty) profile bins, said so
-        sys.stderr.write(f"compare.figures: {run_dir}: no disc touches a side wall at the run's end: "
+        sys.stderr.write(f"dem.compare.figures: {run_dir}: no disc touches a side wall at the run's end: "
                          "side_walls.png is drawn per wall_profiles.csv bin\n")
         out.append(plot_side_profiles([run_dir], os.path.join(run_dir, "side_walls.png"), per="bin"))
     if os.path.exists(os.path.join(run_dir, "flow_series.csv")):
@@ -744,7 +744,7 @@ def plot_run(run_dir):
 
 def main(argv=None):
     """Command line: the subcommands of the module docstring."""
-    parser = argparse.ArgumentParser(prog="python3 -m compare.figures", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python3 -m dem.compare.figures", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("network", help="contact-force network of one run (Fig. 6)")
@@ -813,7 +813,7 @@ def main(argv=None):
         try:
             out = "\n".join(plot_run(args.run_dir))
         except OSError as e:
-            sys.stderr.write(f"compare.figures: {e}\n")
+            sys.stderr.write(f"dem.compare.figures: {e}\n")
             return 1
         if args.quiet:
             return 0

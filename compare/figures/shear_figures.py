@@ -10,8 +10,8 @@ compare/codes/shear_yade.py (same file layout for the series).
 
 Usage, from the repository root::
 
-    /usr/bin/python3 -m compare.figures.shear_figures ratio --runs A:LABEL:DIR ... --out fig7.png
-    /usr/bin/python3 -m compare.figures.shear_figures network DIR:K[:TITLE] ... --out fig6.png
+    /usr/bin/python3 -m dem.compare.figures.shear_figures ratio --runs A:LABEL:DIR ... --out fig7.png
+    /usr/bin/python3 -m dem.compare.figures.shear_figures network DIR:K[:TITLE] ... --out fig6.png
 """
 
 import argparse
@@ -25,8 +25,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
-from compare.figures.runs import _draw_discs, _fail, _reading, _save  # noqa: E402
-from compare.io.run_dir import CONTACT_COLUMNS, DISC_COLUMNS, RunDir, read_header_csv  # noqa: E402
+from dem.compare.figures.runs import _draw_discs, _fail, _reading, _save  # noqa: E402
+from dem.compare.io.run_dir import CONTACT_COLUMNS, DISC_COLUMNS, RunDir, read_header_csv  # noqa: E402
 
 SERIES_NEEDED = ("strain", "sigma", "tau", "ratio")
 STYLES = {"free": ("0.2", "-"), "clusters": ("tab:red", "-"), "touching": ("tab:orange", "--"),
@@ -35,7 +35,7 @@ STYLES = {"free": ("0.2", "-"), "clusters": ("tab:red", "-"), "touching": ("tab:
 
 def read_series(path):
     """shear_series.csv as a dict of float arrays (the columns its header names;
-    compare.io.run_dir.read_header_csv)."""
+    dem.compare.io.run_dir.read_header_csv)."""
     return _reading(read_header_csv, path, SERIES_NEEDED)
 
 
@@ -167,7 +167,7 @@ def plot_networks(items, out_png, ncols=2):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="compare.figures.shear_figures", description=__doc__,
+    ap = argparse.ArgumentParser(prog="dem.compare.figures.shear_figures", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("ratio", help="tau/sigma against strain (Fig. 7 analogue)")

@@ -8,7 +8,7 @@ once, beside the runs (up to ``jobs`` figure processes); ``drawn`` waits for it,
 task that calls it holds one of the places while its picture is drawn (no more programs run or
 draw at a time than there are places).
 
-    with JobPool(jobs, figures="compare.figures.runs") as pool:
+    with JobPool(jobs, figures="dem.compare.figures.runs") as pool:
         done = [pool.run(run_one, case) for case in cases]
         picture = pool.draw(plot, run_dir, png)
 

@@ -29,7 +29,7 @@ import re
 import tomllib
 from pathlib import Path
 
-from compare.io import atomic_file
+from dem.compare.io import atomic_file
 
 # The keys that hold file paths relative to the scene file's folder (docs/scene.md).
 PATH_KEYS = ("fill.file", "start.from")

@@ -17,7 +17,7 @@ and whether they agree. Only runs that came to rest count; the others are named 
 """
 import numpy as np
 
-from compare.figures import figure_data as figures   # reading and side-wall profiles, no matplotlib
+from dem.compare.figures import figure_data as figures   # reading and side-wall profiles, no matplotlib
 
 CORNER_SPAN = 0.10      # lowest share of the side-wall contacts' depth span: "near the bottom"
 

@@ -6,7 +6,7 @@ scheme (eq. 19, dt = 1e-4 s), velocity Verlet at dt = 5e-5 s and eq. 18 at 1e-4 
 cap), to show which deviation changes the flow. Writes OUT/report.md, OUT/discharge.json and
 the pictures of each configuration's median member.
 
-    /usr/bin/python3 -m compare.papers.paper_discharge --out out/paper_silo/discharge [--members 8] [--jobs 2]
+    /usr/bin/python3 -m dem.compare.papers.paper_discharge --out out/paper_silo/discharge [--members 8] [--jobs 2]
 """
 import argparse
 import concurrent.futures as cf
@@ -16,11 +16,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare.papers import paper_claims
-from compare.io import scene_toml
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.io.job_pool import JobPool
-from compare.io.run_dir import RunDir
+from dem.compare.papers import paper_claims
+from dem.compare.io import scene_toml
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.io.job_pool import JobPool
+from dem.compare.io.run_dir import RunDir
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -40,7 +40,7 @@ CONFIGS = [  # (tag, arrangement, scheme, dt, contact overrides)
 
 
 def scene_with(arr, contact, folder):
-    """The paper's discharge scene with the contact-law keys changed (compare.io.scene_toml: a key
+    """The paper's discharge scene with the contact-law keys changed (dem.compare.io.scene_toml: a key
     the scene does not have is an error, never a silent no-op), written into folder."""
     path = folder / f"discharge_{arr}_{'_'.join(contact.values()) or 'paper'}.toml"
     return scene_toml.edit(SCENES / f"discharge_{arr}.toml", {f"contact.{k}": v for k, v in contact.items()}, path)
@@ -109,7 +109,7 @@ PICTURES = (("frames", "plot_discharge_frames"), ("ratios", "plot_wall_ratios"),
 def draw(pictured_dir, out, tag, kind=None):
     """One picture (kind: frames, ratios or flow) of a configuration's median member, or all three;
     run in a figure process (the study's own process imports no matplotlib)."""
-    from compare.figures import runs as figures
+    from dem.compare.figures import runs as figures
     for name, plot in PICTURES:
         if kind in (None, name):
             getattr(figures, plot)(pictured_dir, out / f"{name}_{tag}.png")
@@ -178,7 +178,7 @@ def main(argv=None):
         plan.append((tag, arr, scheme, dt, contact, scene, out / tag, common))
     results, drawing = {}, []
     # Figure processes fork from a server that imported matplotlib once (compare/io/job_pool.py).
-    with JobPool(jobs, figures="compare.figures.runs") as pool:
+    with JobPool(jobs, figures="dem.compare.figures.runs") as pool:
         waiting = {}           # configuration index -> its runs not yet ended
         for k in run_order(plan):
             tag, arr, scheme, dt, contact, scene, ens, common = plan[k]

@@ -5,7 +5,7 @@ dt = 5e-5 s and the paper's 1e-4 s, fills the closed silo to rest and records th
 normal force, whether rest was reached, the force balance and the left/right asymmetry.
 Writes OUT/report.md, OUT/study.json and PNGs (network grids, Fig. 7 analogues).
 
-    /usr/bin/python3 -m compare.papers.paper_static --out out/paper_silo [--dem build/dem] [--jobs 2]
+    /usr/bin/python3 -m dem.compare.papers.paper_static --out out/paper_silo [--dem build/dem] [--jobs 2]
 """
 import argparse
 import concurrent.futures as cf
@@ -15,10 +15,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from compare.papers import paper_claims
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.io.job_pool import JobPool
-from compare.io.run_dir import RunDir, RunDirError
+from dem.compare.papers import paper_claims
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.io.job_pool import JobPool
+from dem.compare.io.run_dir import RunDir, RunDirError
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -167,7 +167,7 @@ def draw(out_root, case, records):
     """The figures of one pictured case (scheme, dt): the networks of every run that ended (the grid
     marks those not at rest) and Fig. 7 of the runs at rest (a moving fill's wall forces are no
     static profile)."""
-    from compare.figures import runs as figures   # here, in the figure processes: the study's own process imports no matplotlib
+    from dem.compare.figures import runs as figures   # here, in the figure processes: the study's own process imports no matplotlib
     records = sorted(records, key=lambda r: r["s"])
     tag = f"{case[0]}_dt{case[1]:g}"
     mine = [r for r in records if r["status"] not in ("unstable", "error")]
@@ -196,7 +196,7 @@ def main(argv=None):
     pictured = [c for c in cases if (c[1], c[2]) in (PAPER, REFERENCE)]
     cases = pictured + [c for c in cases if c not in pictured]
     records, drawing = [], []
-    with JobPool(args.jobs, figures="compare.figures.runs") as pool:
+    with JobPool(args.jobs, figures="dem.compare.figures.runs") as pool:
         futs = [pool.run(run_one, args.dem, s, sc, dt, out_root) for s, sc, dt in cases]
         for k, f in enumerate(cf.as_completed(futs), 1):
             r = f.result()

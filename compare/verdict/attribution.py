@@ -11,8 +11,8 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from compare.verdict import pipeline
-from compare.cases.common import SHARED_VARIANT
+from dem.compare.verdict import pipeline
+from dem.compare.cases.common import SHARED_VARIANT
 
 
 @dataclasses.dataclass

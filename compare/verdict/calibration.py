@@ -55,7 +55,7 @@ leapfrog, half a step behind in v, is at 0.5), while a 10 % error in mu or k_n m
 t_c beyond it.
 Between codes that run the same discrete law the tolerance is CODE_REL = 1e-4 of the scale.
 
-``python3 -m compare.verdict.calibration --out DIR [--codes native,liggghts,yade[,lammps]]`` runs every
+``python3 -m dem.compare.verdict.calibration --out DIR [--codes native,liggghts,yade[,lammps]]`` runs every
 scene in each code and writes DIR/calibration.md and DIR/calibration.json; exit 1 when a code is outside a
 tolerance, differs from another code, or fails to run. A code that cannot express a scene (LAMMPS:
 the open slit) is listed as refused and not run.
@@ -70,9 +70,9 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.codes import backends
-from compare.cases.common import ROOT, Case, CaseError, disc_material, pair, resolve, Result
-from compare.verdict import study
+from dem.compare.codes import backends
+from dem.compare.cases.common import ROOT, Case, CaseError, disc_material, pair, resolve, Result
+from dem.compare.verdict import study
 
 SCENES = ROOT / "reference_inputs" / "agreement" / "calibration"
 K_DT = 1.0            # code vs reference: K_DT x (dt / t_c x scale + the sliding term), module text
@@ -519,7 +519,7 @@ def table(rows: list, codes) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python3 -m compare.verdict.calibration", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python3 -m dem.compare.verdict.calibration", description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", required=True, type=Path)
     ap.add_argument("--codes", default="native,liggghts,yade")
     ap.add_argument("--scenes", default="", help="comma-separated scene names (default: all)")

@@ -10,10 +10,10 @@ import math
 
 import numpy as np
 
-from compare.verdict import calibration as cal
-from compare.cases.common import Case
-from compare.verdict.study import failures, metric
-from compare.verdict.verdict import unjudged
+from dem.compare.verdict import calibration as cal
+from dem.compare.cases.common import Case
+from dem.compare.verdict.study import failures, metric
+from dem.compare.verdict.verdict import unjudged
 
 
 def _worst(measured: dict, target: dict, tol: dict) -> float:

@@ -35,10 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.codes import lammps_backend, liggghts_backend, yade_backend
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.cases.common import Case, CaseError, inward_normal
-from compare.verdict.probe import OVERLAP, _main_radius, _run, run_yade
+from dem.compare.codes import lammps_backend, liggghts_backend, yade_backend
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.cases.common import Case, CaseError, inward_normal
+from dem.compare.verdict.probe import OVERLAP, _main_radius, _run, run_yade
 
 CODES = ("liggghts", "yade", "lammps")
 REL = 1e-9            # deviation / the scene's length scale

@@ -1,6 +1,6 @@
 """One pipeline for every comparison: entries (scene + options) -> runs in every code -> metrics.
 
-``dem compare`` (python3 -m compare scene) and the studies (the list files under
+``dem compare`` (python3 -m dem.compare scene) and the studies (the list files under
 reference_inputs/agreement/) both call ``run``. For each entry (compare/cases/plan.py) it
 1. refuses what a reference code cannot express, before any run (PlanError, exit 2);
 2. reads each reference code's effective constants back from the code itself and compares them
@@ -27,14 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.verdict import collision_judge, preflight, study, verdict, geometry_probe, probe, shear_judge
-from compare.cases import janssen, stats
-from compare.codes import native_backend
-from compare.codes.backends import refusals
-from compare.cases.common import Case, Result, scene_material_index, inward_normal, tangent
-from compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, start_discs
-from compare.figures import janssen_figure
-from compare.io.job_pool import in_order
+from dem.compare.verdict import collision_judge, preflight, study, verdict, geometry_probe, probe, shear_judge
+from dem.compare.cases import janssen, stats
+from dem.compare.codes import native_backend
+from dem.compare.codes.backends import refusals
+from dem.compare.cases.common import Case, Result, scene_material_index, inward_normal, tangent
+from dem.compare.cases.plan import Entry, Plan, PlanError, codes_of, jittered, make_plan, member_case, start_discs
+from dem.compare.figures import janssen_figure
+from dem.compare.io.job_pool import in_order
 
 # Static cases from a frozen packing: tolerances at 10x the largest cross-code spread measured on
 # the paper's eight frozen lattices (reference_inputs/agreement/static.list, docs/compare.md): the
@@ -148,7 +148,7 @@ def input_key(write) -> str:
 
 
 def probe_key(module, code: str, case: Case) -> str:
-    """The cache key of a probe (``module``: compare.verdict.probe or compare.verdict.geometry_probe): the bytes of
+    """The cache key of a probe (``module``: dem.compare.verdict.probe or dem.compare.verdict.geometry_probe): the bytes of
     the inputs it runs, written by the backend's own translation; any change to the translation
     (a mutant, a backend bug) gets its own probe, and cases that translate alike share one."""
     writer = module.write_probe_inputs if hasattr(module, "write_probe_inputs") else module.write_inputs

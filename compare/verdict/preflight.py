@@ -14,9 +14,9 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from compare.codes import native_backend
-from compare.cases.common import Case, dem_binary
-from compare.io.scene_toml import dumps
+from dem.compare.codes import native_backend
+from dem.compare.cases.common import Case, dem_binary
+from dem.compare.io.scene_toml import dumps
 
 BOUND = re.compile(r"above the stability bound ([0-9.eE+-]+) s")
 

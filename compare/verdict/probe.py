@@ -55,10 +55,10 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend, yade_session
-from compare.cases.common import Case, CaseError, disc_material, inward_normal, material_names, pair, resolve
-from compare.io.atomic_file import write_text as write_text_atomic
-from compare.verdict import translate
+from dem.compare.codes import lammps_backend, liggghts_backend, native_backend, yade_backend, yade_session
+from dem.compare.cases.common import Case, CaseError, disc_material, inward_normal, material_names, pair, resolve
+from dem.compare.io.atomic_file import write_text as write_text_atomic
+from dem.compare.verdict import translate
 
 CODES = ("native", "liggghts", "yade", "lammps")
 FIELDS = ("kn", "ks", "eta_n", "eta_s", "mu")
@@ -803,10 +803,10 @@ def check_case(case: Case, out_root: Path, codes=CODES, timeout: float = 120, re
 
 
 def main(argv=None) -> int:
-    """python3 -m compare.verdict.probe [--out DIR] [--codes ...]: probes the paper's translated cases
-    (compare.verdict.translate.cases) and prints each code's largest relative difference and wall time."""
+    """python3 -m dem.compare.verdict.probe [--out DIR] [--codes ...]: probes the paper's translated cases
+    (dem.compare.verdict.translate.cases) and prints each code's largest relative difference and wall time."""
 
-    ap = argparse.ArgumentParser(prog="python3 -m compare.verdict.probe")
+    ap = argparse.ArgumentParser(prog="python3 -m dem.compare.verdict.probe")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--codes", default=",".join(CODES))
     a = ap.parse_args(argv)

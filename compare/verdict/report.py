@@ -11,11 +11,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from compare.verdict import calibration  # noqa: E402
-from compare.io import atomic_file  # noqa: E402
-from compare.io.atomic_file import write_text as write_text_atomic  # noqa: E402
-from compare.cases.shear import label
-from compare.cases.stats import wilson
+from dem.compare.verdict import calibration  # noqa: E402
+from dem.compare.io import atomic_file  # noqa: E402
+from dem.compare.io.atomic_file import write_text as write_text_atomic  # noqa: E402
+from dem.compare.cases.shear import label
+from dem.compare.cases.stats import wilson
 
 COLORS = {"native": "tab:blue", "liggghts": "tab:orange", "yade": "tab:green", "lammps": "tab:red"}
 MARKERS = {"native": "o", "liggghts": "s", "yade": "^", "lammps": "D"}

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 
-from compare.verdict import pipeline, verdict
+from dem.compare.verdict import pipeline, verdict
 
 DEFAULT_MAX_MEMBERS = 32
 

@@ -17,11 +17,11 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from compare.cases import stats
-from compare.cases.shear import band_key, bands, curve, label, measures
-from compare.verdict import verdict
-from compare.verdict.report import COLORS, _savefig
-from compare.verdict.study import metric
+from dem.compare.cases import stats
+from dem.compare.cases.shear import band_key, bands, curve, label, measures
+from dem.compare.verdict import verdict
+from dem.compare.verdict.report import COLORS, _savefig
+from dem.compare.verdict.study import metric
 
 
 def judge(name: str, per_code: dict, max_strain: float, sample_strain: float, options) -> tuple[list, dict]:

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.codes import backends
-from compare.cases import stats
-from compare.verdict import verdict
-from compare.cases.common import ROOT, SHARED_VARIANT, Case, Result, failed, resolve
+from dem.compare.codes import backends
+from dem.compare.cases import stats
+from dem.compare.verdict import verdict
+from dem.compare.cases.common import ROOT, SHARED_VARIANT, Case, Result, failed, resolve
 
 CODES = ("native", "liggghts", "yade", "lammps")
 SCENES = ROOT / "reference_inputs" / "scenes"

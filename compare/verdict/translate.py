@@ -1,5 +1,5 @@
 """The paper's scenes translated for LIGGGHTS, YADE and LAMMPS, committed under reference_inputs/
-(``python3 -m compare translate``; ``--check`` in CI fails when they are stale).
+(``python3 -m dem.compare translate``; ``--check`` in CI fails when they are stale).
 
 YADE's folders hold only ``yade_case.json``, the case's data: its script is one template
 (compare/codes/yade_template.py) for every case, so it is not committed ten times. ``python3 -m
@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.codes import lammps_backend, liggghts_backend, yade_backend
-from compare.cases.common import ROOT, SHARED_VARIANT, Case, resolve
-from compare.verdict.study import DEFAULT_DT, LATTICE_DT, SCENES
+from dem.compare.codes import lammps_backend, liggghts_backend, yade_backend
+from dem.compare.cases.common import ROOT, SHARED_VARIANT, Case, resolve
+from dem.compare.verdict.study import DEFAULT_DT, LATTICE_DT, SCENES
 
 OUT = ROOT / "reference_inputs"
 SUBDIRS = ("liggghts", "yade", "lammps")
@@ -80,7 +80,7 @@ def main(check: bool, out: Path | None = None) -> int:
         write_all(Path(tmp))
         stale = [f"{sub}/{f}" for sub in SUBDIRS for f in _same(Path(tmp) / sub, OUT / sub)]
     if stale:
-        print("stale reference inputs (run python3 -m compare translate): " + ", ".join(stale[:10]), file=sys.stderr)
+        print("stale reference inputs (run python3 -m dem.compare translate): " + ", ".join(stale[:10]), file=sys.stderr)
         return 1
     print("reference_inputs/" + ", reference_inputs/".join(SUBDIRS) + " are up to date")
     return 0

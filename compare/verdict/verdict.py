@@ -9,8 +9,8 @@ reason, never disagree.
 """
 from __future__ import annotations
 
-from compare.cases import margins, stats
-from compare.cases.stats import AGREE, DISAGREE, INCONCLUSIVE
+from dem.compare.cases import margins, stats
+from dem.compare.cases.stats import AGREE, DISAGREE, INCONCLUSIVE
 
 EXIT = {AGREE: 0, DISAGREE: 1, INCONCLUSIVE: 3}   # 2: bad input, refused before any run
 ORDER = (DISAGREE, INCONCLUSIVE, AGREE)           # what a scene or report says when metrics differ

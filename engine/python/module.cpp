@@ -1,5 +1,6 @@
-// The Python module `dem` (pybind11): scenes (scene_object.cpp) and simulations (simulation.cpp)
-// over the engine's own reader, world and run harness (docs/python.md).
+// The engine's Python module `dem._engine` (pybind11), whose names the package `dem` exports
+// (dem/__init__.py): scenes (scene_object.cpp) and simulations (simulation.cpp) over the engine's
+// own reader, world and run harness (docs/python.md).
 #include <pybind11/pybind11.h>
 
 #include "scene/scene.hpp"
@@ -9,7 +10,7 @@ namespace dem::python {
 void bind_simulation(pybind11::module_& m);
 }
 
-PYBIND11_MODULE(dem, m) {
+PYBIND11_MODULE(_engine, m) {
   m.doc() = "2D discrete-element engine of Kiyama & Fujimura (1983): scenes, runs and their arrays (docs/python.md)";
   m.attr("__version__") = DEM_VERSION;
   m.attr("build") = DEM_BUILD_ID;

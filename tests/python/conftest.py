@@ -1,12 +1,24 @@
-"""Make the repository root importable, so tests can `import compare.figures`."""
+"""Put this build's Python package dem (build/python: the engine module and dem.compare, linked
+to this checkout's compare/) first on the path, so that tests import `dem.compare` from the
+checkout under test and never another through a .pth file."""
+import os
 import sys
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-if str(REPO_ROOT) not in sys.path:
-    sys.path.insert(0, str(REPO_ROOT))
 
-import os
+
+def package_dir() -> Path:
+    """The folder holding this build's package dem (ctest passes DEM_PYTHON_DIR; otherwise build/python)."""
+    return Path(os.environ.get("DEM_PYTHON_DIR", REPO_ROOT / "build" / "python")).absolute()
+
+
+if str(package_dir()) not in sys.path:
+    sys.path.insert(0, str(package_dir()))
+# and first on the path of every Python process a test starts (`python3 -m dem.compare ...`)
+if os.environ.get("PYTHONPATH", "").split(os.pathsep)[0] != str(package_dir()):
+    os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(package_dir()), os.environ.get("PYTHONPATH")) if p)
+
 import subprocess
 
 import pytest
@@ -21,23 +33,17 @@ def dem_binary():
     return path
 
 
-def module_dir() -> Path:
-    """Where this build's module dem is (ctest passes DEM_MODULE_DIR; otherwise build/python)."""
-    return Path(os.environ.get("DEM_MODULE_DIR", REPO_ROOT / "build" / "python"))
-
-
 @pytest.fixture(scope="session")
 def dem_module():
-    """This build's Python module dem, imported from its build folder (never another checkout's
-    through a .pth file); skipped on builds without it (sanitizers: DEM_NO_MODULE)."""
+    """This build's package dem with its engine module dem._engine, imported from its build
+    folder; skipped on builds without the module (sanitizers: DEM_NO_MODULE)."""
     if os.environ.get("DEM_NO_MODULE") == "1":
-        pytest.skip("this build has no Python module (DEM_PYTHON_MODULE=OFF, or a sanitizer build)")
-    where = module_dir()
-    if not any(where.glob("dem.*.so")):
-        pytest.fail(f"the module dem is not built in {where}: build first (cmake --build build)")
-    sys.path.insert(0, str(where))
+        pytest.skip("this build has no engine module (DEM_PYTHON_MODULE=OFF, or a sanitizer build)")
+    where = package_dir() / "dem"
+    if not any(where.glob("_engine.*.so")):
+        pytest.fail(f"the engine module dem._engine is not built in {where}: build first (cmake --build build)")
     import dem
-    assert Path(dem.__file__).parent.resolve() == where.resolve(), dem.__file__
+    assert Path(dem.__file__).parent == where, dem.__file__
     return dem
 
 

@@ -1,7 +1,7 @@
-"""compare.io.atomic_file: a file is written whole or left as it was."""
+"""dem.compare.io.atomic_file: a file is written whole or left as it was."""
 import pytest
 
-from compare.io import atomic_file
+from dem.compare.io import atomic_file
 
 
 def test_written_whole_in_a_new_folder(tmp_path):

@@ -103,7 +103,7 @@ def scene(tmp_path_factory):
 
 def test_killed_runs_leave_only_complete_files(tmp_path, dem_binary, scene):
     """dem run killed while it steps and writes, and the drawing of its pictures
-    (compare.figures run) killed while it draws: every file left is complete or a .tmp."""
+    (dem.compare.figures run) killed while it draws: every file left is complete or a .tmp."""
     def timed(cmd):
         t0 = time.monotonic()
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=REPO)
@@ -112,7 +112,7 @@ def test_killed_runs_leave_only_complete_files(tmp_path, dem_binary, scene):
 
     full = tmp_path / "full"
     engine = timed([str(dem_binary), "run", str(scene), "--out", str(full), "--quiet"])
-    drawing = max(0.1, timed([sys.executable, "-m", "compare.figures", "run", str(full)]))
+    drawing = max(0.1, timed([sys.executable, "-m", "dem.compare.figures", "run", str(full)]))
     assert (full / "network.png").exists() and len(list((full / "snapshots").glob("*.vtu"))) == 78  # discs, contacts, walls
     assert check_dir(full) > 100
     rng = random.Random(11)
@@ -125,7 +125,7 @@ def test_killed_runs_leave_only_complete_files(tmp_path, dem_binary, scene):
             time.sleep(rng.uniform(0.05, 1.0) * engine)
         else:  # while the PNGs are drawn
             shutil.copytree(full, out, ignore=shutil.ignore_patterns("*.png"))
-            p = subprocess.Popen([sys.executable, "-m", "compare.figures", "run", str(out)], cwd=REPO,
+            p = subprocess.Popen([sys.executable, "-m", "dem.compare.figures", "run", str(out)], cwd=REPO,
                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
             time.sleep(rng.uniform(0.0, 1.0) * drawing)
         os.killpg(p.pid, signal.SIGKILL)

@@ -12,11 +12,11 @@ import sys
 import numpy as np
 import pytest
 
-from compare.cases.common import SHARED_VARIANT
+from dem.compare.cases.common import SHARED_VARIANT
 
-from compare.verdict import calibration as cal
-from compare.codes import native_backend
-from compare.cases.common import Case, pair
+from dem.compare.verdict import calibration as cal
+from dem.compare.codes import native_backend
+from dem.compare.cases.common import Case, pair
 
 ROOT = cal.ROOT
 sys.path.insert(0, str(ROOT / "scripts"))

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"

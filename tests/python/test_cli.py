@@ -58,7 +58,7 @@ def test_the_help_documents_the_commands_and_the_exit_codes(run_dem):
     assert "3 when every member was unstable" in ens and "4 when every member failed" in ens and "merge" in ens
     run = run_dem("run", "--help").stdout
     for option in ("--out DIR", "--dt S", "--threads N", "--resume", "--pictures", "--engine CODE", "--np N",
-                   "--settle S", "--timeout S", "compare.figures run DIR", "exits with 130 (SIGINT) or 143"):
+                   "--settle S", "--timeout S", "dem.compare.figures run DIR", "exits with 130 (SIGINT) or 143"):
         assert option in run, option
     assert "usage: dem ensemble merge" in run_dem("ensemble", "merge", "--help").stdout
 

@@ -13,10 +13,10 @@ import meshio
 import numpy as np
 import pytest
 
-from compare.cases import janssen, plan
-from compare.codes import liggghts_backend, native_backend, yade_backend
-from compare.verdict import study, verdict
-from compare.cases.common import SHARED_VARIANT, Case, CaseError, Result, failed, resolve
+from dem.compare.cases import janssen, plan
+from dem.compare.codes import liggghts_backend, native_backend, yade_backend
+from dem.compare.verdict import study, verdict
+from dem.compare.cases.common import SHARED_VARIANT, Case, CaseError, Result, failed, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 SILO = ROOT / "reference_inputs" / "scenes" / "silo_17_18.toml"

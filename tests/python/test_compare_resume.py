@@ -3,8 +3,8 @@ read back; a failed run, a changed case or changed inputs on disk run again."""
 import types
 from pathlib import Path
 
-from compare.verdict import study
-from compare.cases.common import Result
+from dem.compare.verdict import study
+from dem.compare.cases.common import Result
 
 
 def _fake_backend(calls):

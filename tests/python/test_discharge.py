@@ -10,14 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
 
 
 def scene(tmp_path, name, changes=None, **kwargs):
-    """The 17/18 discharge scene with keys changed by dotted path (compare.io.scene_toml: a key the
+    """The 17/18 discharge scene with keys changed by dotted path (dem.compare.io.scene_toml: a key the
     scene does not have is an error)."""
     return scene_toml.edit(BASE, changes, tmp_path / f"{name}.toml", **kwargs)
 

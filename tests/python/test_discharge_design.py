@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.verdict import pipeline, study
-from compare.cases import plan as plan_mod
-from compare.cases.common import Case, Result, failed
+from dem.compare.verdict import pipeline, study
+from dem.compare.cases import plan as plan_mod
+from dem.compare.cases.common import Case, Result, failed
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -68,7 +68,7 @@ def test_frozen_discharge_members_start_alike_in_every_code_from_the_rested_pack
 def test_the_frozen_packing_is_at_rest(tmp_path):
     """The packing, unjittered, run for a member's settle in the native engine: the discs stay
     where they are, to within the jitter of a member."""
-    from compare.codes import native_backend
+    from dem.compare.codes import native_backend
     scene = _small_silo(tmp_path)
     plan = _plan(scene)
     pack = pipeline.frozen_packing(plan, tmp_path / "out")

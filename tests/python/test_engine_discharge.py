@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.io.run_dir import RunDir, read_pvd
+from dem.compare.io.run_dir import RunDir, read_pvd
 from test_engine_run import DISCHARGE, LATTICE, dem, needs_liggghts, needs_lmp, needs_yade, scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -131,7 +131,7 @@ def test_a_discharge_in_a_reference_code_writes_the_native_outputs(tmp_path, dem
     assert flow["discs_in_silo"][-1] == np.sum(discs["y"] > 0)
     assert conservation_problems(out) == []
     assert conservation_problems(drop_a_removal(out, tmp_path / "mutant")) != []
-    p = subprocess.run(["/usr/bin/python3", "-m", "compare.figures", "run", str(out)], capture_output=True,
+    p = subprocess.run(["/usr/bin/python3", "-m", "dem.compare.figures", "run", str(out)], capture_output=True,
                        text=True, cwd=ROOT, timeout=300)
     assert p.returncode == 0, p.stderr
     for png in ("frames.png", "flow.png", "wall_ratios.png", "side_walls.png"):

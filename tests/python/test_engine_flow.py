@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from compare.cases.common import Snapshot
-from compare.codes.frame_measures import Frame, arch, flow, jams, pattern, removal_ids, surfaces
+from dem.compare.cases.common import Snapshot
+from dem.compare.codes.frame_measures import Frame, arch, flow, jams, pattern, removal_ids, surfaces
 
 # a 10 cm wide floor at y = 0 with the slit [3, 7] (the gate), no points
 RESOLVED = {"walls": [{"name": "left", "from": [0, 12], "to": [0, 0]},

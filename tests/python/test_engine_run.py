@@ -18,8 +18,8 @@ import meshio
 import numpy as np
 import pytest
 
-from compare.verdict.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
-from compare.io.run_dir import RunDir
+from dem.compare.verdict.pipeline import TOL_STATIC_SHEAR, TOL_STATIC_TOTAL
+from dem.compare.io.run_dir import RunDir
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -193,14 +193,14 @@ def test_a_malformed_mutant_exits_2_naming_it(rested, dem_binary):
 @needs_liggghts
 def test_the_figure_tool_draws_a_reference_run_without_its_contact_network(rested, dem_binary):
     """`--pictures` draws the reference run's pictures (no network: the code gives no
-    contact list), and compare.figures (matplotlib) draws them again."""
+    contact list), and dem.compare.figures (matplotlib) draws them again."""
     out = rested / "figures"
     p = dem(dem_binary, "run", rested / "rested.toml", "--engine", "liggghts", "--out", out, "--pictures")
     assert p.returncode == 0, p.stderr
     assert "contact network is skipped" in p.stderr and str(out / "side_walls.png") in p.stdout
     assert (out / "side_walls.png").stat().st_size > 0 and not (out / "network.png").exists()
     (out / "side_walls.png").unlink()
-    p = subprocess.run(["/usr/bin/python3", "-m", "compare.figures", "run", str(out)], capture_output=True,
+    p = subprocess.run(["/usr/bin/python3", "-m", "dem.compare.figures", "run", str(out)], capture_output=True,
                        text=True, cwd=ROOT, timeout=120)
     assert p.returncode == 0, p.stderr
     assert "contact network is skipped" in p.stderr

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"

@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from compare.verdict import sequential
-from compare.cases import stats
+from dem.compare.verdict import sequential
+from dem.compare.cases import stats
 
 ALPHA = stats.FAMILY_ALPHA
 TRIALS = 2000

@@ -1,6 +1,6 @@
 """The examples (examples/*.py) run with the module from this build, from a folder outside the
 repository, and print what they promise; and the .pth file the build installs makes
-`import dem, compare` work from any folder."""
+`import dem.compare` work from any folder."""
 import json
 import os
 import re
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import module_dir
+from conftest import package_dir
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -24,7 +24,7 @@ def python(args, cwd, path_entries=None, timeout=120):
 
 
 def test_paper_silo_example(dem_module, tmp_path):
-    proc = python([REPO / "examples" / "paper_silo.py", "--out", tmp_path / "out"], tmp_path, [module_dir()])
+    proc = python([REPO / "examples" / "paper_silo.py", "--out", tmp_path / "out"], tmp_path, [package_dir()])
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
     assert re.match(r"silo_17_18: rest at t = 0\.\d{4} s after \d+ steps, 350 discs$", lines[0]), lines[0]
@@ -38,7 +38,7 @@ def test_paper_silo_example(dem_module, tmp_path):
 
 
 def test_dt_sweep_example(dem_module, tmp_path):
-    proc = python([REPO / "examples" / "dt_sweep.py"], tmp_path, [module_dir()])
+    proc = python([REPO / "examples" / "dt_sweep.py"], tmp_path, [package_dir()])
     assert proc.returncode == 0, proc.stderr
     rows = [line.split() for line in proc.stdout.splitlines()[1:]]
     assert [(r[0], float(r[1])) for r in rows] == [(s, dt) for s in ("paper_eq19", "velocity_verlet")
@@ -49,17 +49,20 @@ def test_dt_sweep_example(dem_module, tmp_path):
     assert status["velocity_verlet", 5e-5] == "rest" and status["velocity_verlet", 1e-4] == "unstable"
 
 
-def test_pth_file_imports_dem_and_compare_from_any_folder(dem_module, tmp_path):
+def test_pth_file_imports_dem_and_its_compare_from_any_folder(dem_module, tmp_path):
     """build/dem.pth is what scripts/build.sh installs into the site folder: read as a site
-    folder's .pth, it makes this build's module and the repository's compare importable."""
-    pth = module_dir().parent / "dem.pth"
+    folder's .pth, it makes this build's package dem importable (the engine module, and
+    dem.compare from the checkout), and no top-level `compare`."""
+    pth = package_dir().parent / "dem.pth"
     assert pth.exists(), "the build writes dem.pth"
     # -S: no site folders at start-up, so a dem.pth installed there by another checkout's build
     # cannot come first; Debian's packages (numpy) after this build's folder.
     code = (f"import site; site.addsitedir({str(pth.parent)!r}); site.addsitedir('/usr/lib/python3/dist-packages'); "
-            "import dem, compare; print(dem.__file__); print(compare.__file__)")
+            "import dem, dem.compare, importlib.util; print(dem.Simulation.__module__); print(dem.__file__); "
+            "print(dem.compare.__file__); print(importlib.util.find_spec('compare'))")
     proc = python(["-S", "-c", code], tmp_path)
     assert proc.returncode == 0, proc.stderr
-    dem_file, compare_file = proc.stdout.split()
-    assert Path(dem_file).parent.resolve() == module_dir().resolve()
+    engine, dem_file, compare_file, top_level = proc.stdout.split()
+    assert engine == "dem._engine" and Path(dem_file).parent == package_dir() / "dem"
     assert Path(compare_file).resolve() == REPO / "compare" / "__init__.py"
+    assert top_level == "None", "the .pth puts no package named compare on the path"

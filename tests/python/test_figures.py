@@ -1,4 +1,4 @@
-"""Tests of compare.figures on synthetic run directories written as docs/outputs.md describes."""
+"""Tests of dem.compare.figures on synthetic run directories written as docs/outputs.md describes."""
 import csv
 import json
 import math
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import matplotlib.image
 
-from compare.figures import runs as figures
+from dem.compare.figures import runs as figures
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
@@ -255,7 +255,7 @@ def test_cli_subcommands(tmp_path):
                               ["profiles", run, "--per", "bin"], ["bottom", run],
                               ["grid", run, run, run, "--labels", "a", "b", "c", "--ncols", "2"])):
         out = tmp_path / f"{n}_{args[0]}.png"
-        done = subprocess.run([sys.executable, "-m", "compare.figures", *args, "--out", str(out)],
+        done = subprocess.run([sys.executable, "-m", "dem.compare.figures", *args, "--out", str(out)],
                               cwd=REPO_ROOT, capture_output=True, text=True)
         assert done.returncode == 0, done.stderr
         assert_png(out)
@@ -788,12 +788,12 @@ def test_discharge_cli(tmp_path):
     for args in (["frames", run, "--times", "0", "0.1", "--ncols", "1"], ["ratios", run],
                  ["flow", run]):
         out = tmp_path / f"{args[0]}.png"
-        done = subprocess.run([sys.executable, "-m", "compare.figures", *args, "--out", str(out)],
+        done = subprocess.run([sys.executable, "-m", "dem.compare.figures", *args, "--out", str(out)],
                               cwd=REPO_ROOT, capture_output=True, text=True)
         assert done.returncode == 0, done.stderr
         assert_png(out)
     outdir = tmp_path / "all"
-    done = subprocess.run([sys.executable, "-m", "compare.figures", "discharge", run,
+    done = subprocess.run([sys.executable, "-m", "dem.compare.figures", "discharge", run,
                            "--outdir", str(outdir)], cwd=REPO_ROOT, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     for name in ("frames.png", "wall_ratios.png", "flow.png"):
@@ -946,7 +946,7 @@ def test_the_disc_pixel_check_fails_a_misplaced_disc(tmp_path, wrong):
 
 def test_an_unknown_figure_suffix_is_refused_with_the_known_ones(tmp_path):
     """No traceback: exit 2 naming the suffix and the known ones, nothing written."""
-    p = subprocess.run([sys.executable, "-m", "compare.figures", "network", str(tmp_path / "no_run"), "--out",
+    p = subprocess.run([sys.executable, "-m", "dem.compare.figures", "network", str(tmp_path / "no_run"), "--out",
                         str(tmp_path / "x.xyz")], capture_output=True, text=True, cwd=Path(__file__).resolve().parents[2])
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert "'.xyz'" in p.stderr and ".png, .pdf, .svg" in p.stderr and not list(tmp_path.iterdir())

@@ -1,4 +1,4 @@
-"""compare.verdict.geometry_probe: each code's walls, points, radii and start positions, read back from the
+"""dem.compare.verdict.geometry_probe: each code's walls, points, radii and start positions, read back from the
 code after its setup, equal the case's to 1e-9 of the scene's length scale; a moved wall, point,
 radius or position fails naming the item. And the probes' cache key (pipeline.probe_key) is the
 bytes of the translated inputs: a translation that differs gets its own probe.
@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.verdict import geometry_probe as G
-from compare.codes import lammps_backend, liggghts_backend, yade_backend
-from compare.verdict import pipeline, probe as P
-from compare.cases.common import SHARED_VARIANT, Case, dem_binary, resolve
-from compare.cases.mutants import Mutation
+from dem.compare.verdict import geometry_probe as G
+from dem.compare.codes import lammps_backend, liggghts_backend, yade_backend
+from dem.compare.verdict import pipeline, probe as P
+from dem.compare.cases.common import SHARED_VARIANT, Case, dem_binary, resolve
+from dem.compare.cases.mutants import Mutation
 
 ROOT = Path(__file__).resolve().parents[2]
 RUN_SECONDS = 20.0      # a zero-step run of a tiny case in each code

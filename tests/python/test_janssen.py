@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.cases import janssen
+from dem.compare.cases import janssen
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -218,7 +218,7 @@ C_W, C_MU_W = 8.0, 0.1       # the column's width [cm] and its smooth walls' fri
 @pytest.fixture
 def column(dem_binary, monkeypatch):
     monkeypatch.setenv("DEM_BINARY", str(dem_binary))
-    from compare.cases.common import SHARED_VARIANT, resolve
+    from dem.compare.cases.common import SHARED_VARIANT, resolve
     r = resolve(SCENE)
     r["contact"] = dict(SHARED_VARIANT)
     return r
@@ -252,7 +252,7 @@ def test_max_overlap_ratio():
 
 
 def test_member_record_balance_and_mobilised_friction(column):
-    from compare.cases.common import Result
+    from dem.compare.cases.common import Result
     r = column
     t_end = r["end"]["time"]
     geo = janssen.geometry(r, t_end)
@@ -296,16 +296,16 @@ def test_fitted_bins_are_the_width_tall_and_enough_over_the_depth():
 
 def test_the_plan_refuses_a_run_that_ends_while_the_floor_moves(dem_binary, monkeypatch):
     monkeypatch.setenv("DEM_BINARY", str(dem_binary))
-    from compare.cases.plan import Entry, Options, PlanError, make_plan
+    from dem.compare.cases.plan import Entry, Options, PlanError, make_plan
     p = make_plan(Entry(SCENE, Options(kind="janssen", members=8)))
-    from compare.io import scene_toml
+    from dem.compare.io import scene_toml
     assert p.duration == scene_toml.load(SCENE)["end"]["time"] and p.members == 8    # the scene's end.time
     with pytest.raises(PlanError, match="bottom still move at the run's end"):
         make_plan(Entry(SCENE, Options(kind="janssen", duration=1.5)))
 
 
 def test_the_power_check_mutant_is_run_by_name():
-    from compare.cases import mutants
+    from dem.compare.cases import mutants
     default = mutants.mutations(("native", "liggghts", "yade"))               # the default set, per code
     assert len(default) == 2 * len(mutants.SPECS)
     assert "liggghts_mu_disc_wall_x0.8" not in [m.name for m in default]      # named only
@@ -387,14 +387,14 @@ def test_a_lowered_floor_in_every_code(dem_binary, monkeypatch, tmp_path, code):
     lower, the walls carry the weight, and the side walls' friction holds the discs up."""
     monkeypatch.setenv("DEM_BINARY", str(dem_binary))
     from importlib import import_module
-    from compare.cases.common import SHARED_VARIANT, Case, resolve
-    from compare.cases.plan import start_discs
+    from dem.compare.cases.common import SHARED_VARIANT, Case, resolve
+    from dem.compare.cases.plan import start_discs
     (tmp_path / "s.toml").write_text(LOWERED)
     r = resolve(tmp_path / "s.toml")
     r["contact"] = dict(SHARED_VARIANT)
     assert r["walls"][2]["motion"] == {"velocity": [0.0, -1.0], "from": 0.3, "until": 0.5}
     case = Case(name="lowered", resolved=r, discs=start_discs(r), dt=2e-5, duration=0.7, series_interval=0.05)
-    res = import_module(f"compare.codes.{code}_backend").run(case, tmp_path / code, 600)
+    res = import_module(f"dem.compare.codes.{code}_backend").run(case, tmp_path / code, 600)
     assert res.ok, res.reason
     d = np.array(res.discs_end)
     weight = float(np.sum(2.65 * math.pi * d[:, 2] ** 2) * 980)

@@ -10,9 +10,9 @@ import types
 import numpy as np
 import pytest
 
-from compare.cases import janssen
-from compare.verdict import pipeline, verdict
-from compare.cases.plan import Options
+from dem.compare.cases import janssen
+from dem.compare.verdict import pipeline, verdict
+from dem.compare.cases.plan import Options
 
 # A column like scripts/make_janssen_scene.py's (W = 8 cm, a fill 3 lambda deep), mu_w,eff = 0.1.
 W, RHO_S, PHI, G = 8.0, 2.65, 0.78, 980.0

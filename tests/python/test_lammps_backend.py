@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.verdict import calibration, probe
-from compare.codes import lammps_backend as lb
-from compare.cases import mutants
-from compare.cases.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
+from dem.compare.verdict import calibration, probe
+from dem.compare.codes import lammps_backend as lb
+from dem.compare.cases import mutants
+from dem.compare.cases.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 CAL = ROOT / "reference_inputs" / "agreement" / "calibration"

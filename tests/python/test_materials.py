@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.codes import liggghts_backend, native_backend, yade_backend
-from compare.verdict import probe as P
-from compare.io import scene_toml
-from compare.cases.common import PYTHON, ROOT, SHARED_VARIANT, Case, CaseError, dem_binary, kinetic_energy, resolve
+from dem.compare.codes import liggghts_backend, native_backend, yade_backend
+from dem.compare.verdict import probe as P
+from dem.compare.io import scene_toml
+from dem.compare.cases.common import PYTHON, ROOT, SHARED_VARIANT, Case, CaseError, dem_binary, kinetic_energy, resolve
 
 needs_liggghts = pytest.mark.skipif(not liggghts_backend.available(), reason="liggghts is not on PATH")
 needs_yade = pytest.mark.skipif(not yade_backend.available(), reason="yade is not on PATH")
@@ -288,10 +288,10 @@ def test_yade_probe_sees_a_wrong_disc_material(series_case, tmp_path, monkeypatc
 
 # ------------------------------------------------------------------------------------------
 def _compare(*args, timeout):
-    """`dem compare ARGS` as the binary runs it: this tree's comparison layer (python3 -m compare
+    """`dem compare ARGS` as the binary runs it: this tree's comparison layer (python3 -m dem.compare
     scene) with the engine as the native code."""
-    env = dict(os.environ, DEM_BINARY=str(dem_binary()), PYTHONPATH=str(ROOT))
-    return subprocess.run([PYTHON, "-m", "compare", "scene", *map(str, args)], capture_output=True, text=True,
+    env = dict(os.environ, DEM_BINARY=str(dem_binary()))
+    return subprocess.run([PYTHON, "-m", "dem.compare", "scene", *map(str, args)], capture_output=True, text=True,
                           timeout=timeout, env=env, cwd=ROOT)
 
 
@@ -309,7 +309,7 @@ def test_two_materials_static_frozen_through_dem_compare(tmp_path):
     assert "translation constants read back (liggghts)" in names
     assert any(n.startswith("weight carried by the walls") for n in names)
     mutants = json.loads((out / "mutants.json").read_text())
-    from compare.cases.mutants import SPECS
+    from dem.compare.cases.mutants import SPECS
     assert mutants["all_caught"] and len(mutants["rows"]) == len(SPECS)
     # no bonds, no side-wall group, no points: those mutants change nothing here
     assert [r["mutant"] for r in mutants["rows"] if not r["applicable"]] == [
@@ -321,7 +321,7 @@ def test_two_materials_static_frozen_through_dem_compare(tmp_path):
 
 
 def test_collision_and_janssen_kinds_refuse_several_disc_materials(tmp_path):
-    from compare.cases.plan import Entry, Options, PlanError, make_plan
+    from dem.compare.cases.plan import Entry, Options, PlanError, make_plan
     scene = write_scene(tmp_path / "scene", FREE)
     for kind in ("collision", "janssen"):
         with pytest.raises(PlanError, match=f"fill: --kind {kind} judges discs of one material"):

@@ -6,7 +6,7 @@ import time
 import types
 from pathlib import Path
 
-from compare.verdict import pipeline
+from dem.compare.verdict import pipeline
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from compare.papers import paper_discharge
-from compare.io.run_dir import RunDir
+from dem.compare.papers import paper_discharge
+from dem.compare.io.run_dir import RunDir
 
 # The pool is Python's; the engine runs it starts are the release build's (sanitizer: release only).
 pytestmark = pytest.mark.release_only

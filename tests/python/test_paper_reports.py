@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.figures import runs as figures
-from compare.papers import paper_claims, paper_discharge, paper_static
+from dem.compare.figures import runs as figures
+from dem.compare.papers import paper_claims, paper_discharge, paper_static
 
 REPO = Path(__file__).resolve().parents[2]
 

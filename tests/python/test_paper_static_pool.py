@@ -1,10 +1,10 @@
 """The static study draws its pictured cases' figures in figure processes while other runs go on:
-the PNGs are those compare.figures draws in this process from the same runs, byte for byte, and
+the PNGs are those dem.compare.figures draws in this process from the same runs, byte for byte, and
 the report shows them."""
-from compare.figures import runs as figures
+from dem.compare.figures import runs as figures
 import pytest
 
-from compare.papers import paper_static
+from dem.compare.papers import paper_static
 
 # The pool is Python's; the engine runs it starts are the release build's (sanitizer: release only).
 pytestmark = pytest.mark.release_only

@@ -1,4 +1,4 @@
-"""compare.verdict.probe: each code's effective constants, read back from the code, equal the resolved
+"""dem.compare.verdict.probe: each code's effective constants, read back from the code, equal the resolved
 scene's to 1e-9, and a wrong translation (a backend that scales one constant, or a case whose
 resolved constants were changed for the code) fails compare_constants naming the quantity.
 
@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.codes import liggghts_backend, native_backend, yade_backend
-from compare.verdict import probe as P
-from compare.cases.common import SHARED_VARIANT, Case, dem_binary, resolve
+from dem.compare.codes import liggghts_backend, native_backend, yade_backend
+from dem.compare.verdict import probe as P
+from dem.compare.cases.common import SHARED_VARIANT, Case, dem_binary, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 DD = {"kn": 9.0e7, "ks": 3.0e7, "eta_n": 3.0e4, "eta_s": 1.0e4, "mu": 0.5}

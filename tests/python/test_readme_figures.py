@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from compare.papers import paper_discharge, paper_static
+from dem.compare.papers import paper_discharge, paper_static
 
 REPO = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("readme_figures", REPO / "scripts" / "readme_figures.py")

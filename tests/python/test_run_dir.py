@@ -1,4 +1,4 @@
-"""compare.io.run_dir, the one reader of a `dem run` directory: real runs (a fill, a discharge, a
+"""dem.compare.io.run_dir, the one reader of a `dem run` directory: real runs (a fill, a discharge, a
 shear) read with every key docs/outputs.md promises checked, the files agree with the summary,
 and a missing or malformed file is an error that names it."""
 import importlib.util
@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.io import scene_toml
-from compare.io.run_dir import (DISCHARGE_KEYS, FILES, SHEAR_KEYS, SUMMARY_KEYS, WALL_KEYS, RunDir, RunDirError,
+from dem.compare.io import scene_toml
+from dem.compare.io.run_dir import (DISCHARGE_KEYS, FILES, SHEAR_KEYS, SUMMARY_KEYS, WALL_KEYS, RunDir, RunDirError,
                              read_csv)
 
 REPO = Path(__file__).resolve().parents[2]
@@ -203,8 +203,8 @@ def test_plain_files_read_as_csv_reader_reads_them(tmp_path, monkeypatch):
     a = read_csv(tmp_path / "plain.csv", columns, empty=float("nan"))
     b = read_csv(tmp_path / "spaced.csv", columns, empty=float("nan"))
     assert a["wall"].tolist() == ["left", "right", "bottom_a"] and a["bin"].tolist() == [0, 3, 12]
-    import compare.io.run_dir
-    monkeypatch.setattr(compare.io.run_dir, "PLAIN_MAX_BYTES", 10)          # the plain file by csv.reader
+    import dem.compare.io.run_dir
+    monkeypatch.setattr(dem.compare.io.run_dir, "PLAIN_MAX_BYTES", 10)          # the plain file by csv.reader
     c = read_csv(tmp_path / "plain.csv", columns, empty=float("nan"))
     for k in columns:
         assert a[k].dtype == b[k].dtype == c[k].dtype, k
@@ -230,9 +230,9 @@ def test_numbers_read_by_numpy_are_those_of_float_and_int(tmp_path, monkeypatch)
         lines.append(f"{v!r},w{k % 7},{k - 2000},{'%.17g' % v}")
     (tmp_path / "a.csv").write_text("\n".join(lines) + "\n")
     columns = ("t", "wall", "bin", "normal")
-    import compare.io.run_dir
+    import dem.compare.io.run_dir
     fast = read_csv(tmp_path / "a.csv", columns)
-    monkeypatch.setattr(compare.io.run_dir, "PLAIN_MAX_BYTES", 10)        # csv.reader, float(), int()
+    monkeypatch.setattr(dem.compare.io.run_dir, "PLAIN_MAX_BYTES", 10)        # csv.reader, float(), int()
     slow = read_csv(tmp_path / "a.csv", columns)
     monkeypatch.undo()
     for k in columns:

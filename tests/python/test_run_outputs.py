@@ -113,7 +113,7 @@ def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
     import subprocess
     assert "phi" not in read_csv(run_dir / "discs.csv")[0]
     assert "phi" not in meshio.read(run_dir / "discs.vtu").point_data
-    from compare.io import scene_toml
+    from dem.compare.io import scene_toml
     scene = scene_toml.edit(SCENE, None, tmp_path / "angle.toml", add={"output.rotation_angle": True})
     out = tmp_path / "run"
     proc = subprocess.run([str(dem_binary), "run", str(scene), "--out", str(out), "--quiet"],
@@ -129,11 +129,11 @@ def test_rotation_angle_only_when_asked(run_dir, tmp_path, dem_binary):
 
 
 def test_run_writes_data_and_python_draws_its_pictures(run_dir):
-    """The engine draws nothing; compare.figures run draws a run's pictures into its folder."""
+    """The engine draws nothing; dem.compare.figures run draws a run's pictures into its folder."""
     import subprocess
     import sys
     assert not list(run_dir.glob("*.png"))
-    proc = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(run_dir)], cwd=REPO,
+    proc = subprocess.run([sys.executable, "-m", "dem.compare.figures", "run", str(run_dir)], cwd=REPO,
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     for name in ("network.png", "side_walls.png"):
@@ -145,7 +145,7 @@ def test_no_temporary_files_left(run_dir):
 
 
 def test_figures_from_a_real_run(run_dir, tmp_path):
-    from compare.figures import runs as figures
+    from dem.compare.figures import runs as figures
     net = tmp_path / "network.png"
     prof = tmp_path / "profiles.png"
     figures.plot_network(run_dir, net)
@@ -186,7 +186,7 @@ def test_no_vtu_writes_the_csv_files_alone(tmp_path, dem_binary):
     snapshots listed with the .pvd's times in discharge_snapshots.csv. A run that still wrote a VTU
     file, or whose index had other times or names, fails this."""
     import subprocess
-    from compare.io.run_dir import RunDir
+    from dem.compare.io.run_dir import RunDir
     scene = REPO / "reference_inputs" / "scenes" / "discharge_17_18.toml"
     runs = {}
     for name, extra in (("vtu", []), ("none", ["--no-vtu"])):

@@ -1,4 +1,4 @@
-"""A run's pictures: `python3 -m compare.figures run DIR [--wait] [--quiet]` and `dem run --pictures`,
+"""A run's pictures: `python3 -m dem.compare.figures run DIR [--wait] [--quiet]` and `dem run --pictures`,
 which starts that process with the run, on an engine run of the paper's 17/18 discharge."""
 import shutil
 import subprocess
@@ -39,10 +39,10 @@ def copy_run(run, where):
 
 
 def test_five_pictures_written_and_decoded(run, tmp_path):
-    """`python3 -m compare.figures run DIR` writes the five files, listed on stdout, PNGs that PIL
+    """`python3 -m dem.compare.figures run DIR` writes the five files, listed on stdout, PNGs that PIL
     decodes and that are not blank (4 % of the pixels or more other than white, several colours)."""
     out = copy_run(run, tmp_path / "run")
-    p = draw("-m", "compare.figures", "run", str(out))
+    p = draw("-m", "dem.compare.figures", "run", str(out))
     assert p.returncode == 0, p.stderr
     assert p.stdout.split() == [str(out / name) for name in PICTURES]
     for name in PICTURES:
@@ -61,7 +61,7 @@ def test_wait_draws_on_draw_and_nothing_otherwise(run, tmp_path):
     other line or the end of stdin draws nothing and exits 0."""
     for line, drawn in (("draw\n", True), ("stop\n", False), ("", False)):
         out = copy_run(run, tmp_path / f"run_{line.strip() or 'eof'}")
-        p = subprocess.run([sys.executable, "-m", "compare.figures", "run", str(out), "--wait", "--quiet"],
+        p = subprocess.run([sys.executable, "-m", "dem.compare.figures", "run", str(out), "--wait", "--quiet"],
                            input=line, capture_output=True, text=True, cwd=REPO, timeout=300)
         assert p.returncode == 0 and p.stdout == "", p.stderr
         assert sorted(x.name for x in out.glob("*.png")) == (sorted(PICTURES) if drawn else []), line
@@ -70,7 +70,7 @@ def test_wait_draws_on_draw_and_nothing_otherwise(run, tmp_path):
 @pytest.mark.release_only  # the picture process also runs in the unstable run's test below
 def test_dem_run_pictures_draws_the_same_files_after_the_run(run, tmp_path, dem_binary):
     """`dem run SCENE --out DIR --pictures`: the run's outputs, then the five pictures of
-    `python3 -m compare.figures run DIR`, byte for byte (the run is deterministic), the files named on
+    `python3 -m dem.compare.figures run DIR`, byte for byte (the run is deterministic), the files named on
     stdout unless --quiet."""
     out = tmp_path / "both"
     p = subprocess.run([str(dem_binary), "run", str(SCENE), "--out", str(out), "--pictures", "--quiet"],
@@ -78,7 +78,7 @@ def test_dem_run_pictures_draws_the_same_files_after_the_run(run, tmp_path, dem_
     assert p.returncode == 0, p.stderr
     assert p.stdout == "", p.stdout
     reference = copy_run(run, tmp_path / "reference")
-    p = draw("-m", "compare.figures", "run", str(reference))
+    p = draw("-m", "dem.compare.figures", "run", str(reference))
     assert p.returncode == 0, p.stderr
     for name in PICTURES:
         assert (out / name).read_bytes() == (reference / name).read_bytes(), name
@@ -111,7 +111,7 @@ def test_dem_run_pictures_draws_nothing_for_an_unstable_run_and_says_when_they_f
 
 
 def test_a_missing_run_directory_is_named(tmp_path):
-    p = draw("-m", "compare.figures", "run", str(tmp_path / "nowhere"))
+    p = draw("-m", "dem.compare.figures", "run", str(tmp_path / "nowhere"))
     assert p.returncode != 0
     assert str(tmp_path / "nowhere") in p.stderr
     assert "Traceback" not in p.stderr
@@ -133,7 +133,7 @@ def test_a_broken_run_names_the_file(run, tmp_path, broken):
     else:
         lines = (out / name).read_text().splitlines()
         (out / name).write_text("\n".join(",".join(line.split(",")[:-1]) for line in lines) + "\n")
-    p = draw("-m", "compare.figures", "run", str(out))
+    p = draw("-m", "dem.compare.figures", "run", str(out))
     assert p.returncode != 0
     assert f"{out / name}:" in p.stderr, p.stderr
     assert "Traceback" not in p.stderr, p.stderr

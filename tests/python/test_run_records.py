@@ -12,8 +12,8 @@ import meshio
 import numpy as np
 import pytest
 
-from compare.io import scene_toml
-from compare.io.run_dir import RunDir
+from dem.compare.io import scene_toml
+from dem.compare.io.run_dir import RunDir
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SILO = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"
@@ -97,7 +97,7 @@ def test_help_names_set(run_dem):
 
 def dem_compare(dem_binary, *args):
     env = {**os.environ, "DEM_BINARY": str(dem_binary)}
-    return subprocess.run([sys.executable, "-m", "compare", "scene", *map(str, args)], cwd=REPO, env=env,
+    return subprocess.run([sys.executable, "-m", "dem.compare", "scene", *map(str, args)], cwd=REPO, env=env,
                           capture_output=True, text=True, timeout=120)
 
 
@@ -127,8 +127,8 @@ def test_compare_set_changes_the_scene_it_translates(tmp_path, dem_binary):
     assert doc["walls"][0]["material"] == "sand" and doc["integrator"]["dt"] == 5e-7
     assert scene_toml.parse_assignment("integrator.scheme=velocity_verlet") == ("integrator.scheme", "velocity_verlet")
     assert scene_toml.parse_assignment("walls.0.to=[1, 2]") == ("walls[0].to", [1, 2])
-    from compare import __main__ as cli
-    from compare.cases import plan
+    from dem.compare import __main__ as cli
+    from dem.compare.cases import plan
     entries = cli.with_set([plan.Entry(WALL_SCENE, plan.Options())], ["integrator.dt=5e-7"], tmp_path / "s")
     written = entries[0].scene
     assert written.name == WALL_SCENE.name and scene_toml.load(written)["integrator"]["dt"] == 5e-7

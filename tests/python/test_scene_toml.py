@@ -1,4 +1,4 @@
-"""compare.io.scene_toml, the one TOML writer: values, documents that tomllib reads back equal
+"""dem.compare.io.scene_toml, the one TOML writer: values, documents that tomllib reads back equal
 (every committed scene), edits that refuse keys the scene does not have, relative file paths
 rebased, and the scene generators that write through it."""
 import json
@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.io import scene_toml as st
+from dem.compare.io import scene_toml as st
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -94,10 +94,10 @@ def test_shear_outputs(small_runs):
 
 
 def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
-    """The engine's time-step bound of the clusters (C++, Eigen) against compare.cases.shear_stability
+    """The engine's time-step bound of the clusters (C++, Eigen) against dem.compare.cases.shear_stability
     (numpy), two codes written apart from the same model: each distinct cluster with its bonds
     and its neighbours within 0.01 cm held, every contact sticking."""
-    from compare.cases import shear_stability
+    from dem.compare.cases import shear_stability
     for variant, out in small_runs.items():
         stab = json.loads((out / "summary.json").read_text())["stability"]
         if variant != "clusters":
@@ -112,8 +112,8 @@ def test_engine_cluster_bound_is_the_python_one(small_runs, dem_binary):
 def test_dem_resolve_gives_the_bounds_a_run_enforces_for_every_scheme(small_runs, dem_binary):
     """`dem resolve --stability`: the bounds of the run's summary.json (the comparison layer reads
     them there, never derives them again), and the clusters' bound for each scheme, which the
-    numpy version (compare.cases.shear_stability) gives too."""
-    from compare.cases import common, shear, shear_stability
+    numpy version (dem.compare.cases.shear_stability) gives too."""
+    from dem.compare.cases import common, shear, shear_stability
     for variant, out in small_runs.items():
         scene = out.parent / f"{variant}.toml"
         stab = common.stability(scene, dem=dem_binary)
@@ -206,7 +206,7 @@ def test_a_contact_inside_a_cluster_counts_once():
     """Three discs bonded 0-1 and 1-2 (as bonds = "touching" with a tolerance under 0.005 cm
     makes them), 0 and 2 first apart, then 0.005 cm apart below disc 1: the 0-2 block of the
     cluster's stiffness is zero, then that one contact's, -(kn n n^T + ks t t^T)."""
-    from compare.cases import shear_stability
+    from dem.compare.cases import shear_stability
     r, kn, ks = 1.0, 3.0e4, 1.0e4
     x2 = 2 * r * math.cos(math.radians(30))
     resolved = {
@@ -282,7 +282,7 @@ def test_touching_clusters_must_hold_together(tmp_path, run_dem):
 
 
 def test_shear_figures(small_runs, tmp_path):
-    from compare.figures import shear_figures as sf
+    from dem.compare.figures import shear_figures as sf
     series = sf.read_series(str(small_runs["clusters"] / "shear_series.csv"))
     raw, at, windowed = sf.peak(series)
     assert np.isfinite(raw) and raw >= windowed
@@ -301,7 +301,7 @@ def test_yade_runs_the_same_small_box_with_unbreakable_bonds(tmp_path, dem_binar
     import shutil
     if shutil.which("yade") is None:
         pytest.skip("yade is not installed")
-    from compare.codes import shear_yade
+    from dem.compare.codes import shear_yade
     scene = tmp_path / "clusters.toml"
     scene.write_text(small_scene("clusters", max_strain=0.005))
     summary = shear_yade.run(scene, tmp_path / "yade", "bonds", 5e-5, dem_binary, timeout=300)

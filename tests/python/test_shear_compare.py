@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.cases import margins, mutants, plan, shear, stats
-from compare.codes import backends, native_backend, yade_backend
-from compare.verdict import shear_judge, verdict
-from compare.cases.common import SHARED_VARIANT, Result, resolve
+from dem.compare.cases import margins, mutants, plan, shear, stats
+from dem.compare.codes import backends, native_backend, yade_backend
+from dem.compare.verdict import shear_judge, verdict
+from dem.compare.cases.common import SHARED_VARIANT, Result, resolve
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "reference_inputs" / "scenes"

@@ -56,8 +56,8 @@ def test_settled_scene_starts_from_a_resting_packing(dem_binary, tmp_path):
     assert speed.settled_scene(base, str(dem_binary), tmp_path) == scene
     assert (tmp_path / "bench_silo_10k_settled" / "discs.csv").stat().st_mtime_ns == stamp
     # The native comparison case keeps the scene's allowance (the frozen default is 0.05 r).
-    from compare.codes import native_backend
-    from compare.verdict import study
+    from dem.compare.codes import native_backend
+    from dem.compare.verdict import study
     phased = speed.scene_with_phases(scene, 20, 20, 5e-5, tmp_path / "phased.toml")  # as the study times it
     case = study.discharge_case(phased, 5e-5, 1e-3, 1e-3, 0, 0.0)
     text = native_backend.write_inputs(case, tmp_path / "case").read_text()

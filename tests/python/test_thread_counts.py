@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = REPO / "reference_inputs" / "scenes" / "bench_silo_10k.toml"

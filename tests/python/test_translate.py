@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from compare.codes import yade_backend
-from compare.verdict import translate
+from dem.compare.codes import yade_backend
+from dem.compare.verdict import translate
 
 REPO = Path(__file__).resolve().parents[2]
 

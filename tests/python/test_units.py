@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = REPO / "reference_inputs" / "scenes"
@@ -121,8 +121,8 @@ def test_resolve_names_the_units_of_its_numbers(tmp_path, dem_binary):
 def test_pictures_and_jitter_carry_the_scenes_units(tmp_path, dem_binary, monkeypatch):
     """An SI scene's pictures label lengths in m and masses in kg, and dem compare's default
     jitter is the cgs scenes' 1e-3 cm expressed in m (1e-5); a given --perturb is taken as it is."""
-    from compare.cases import plan
-    from compare.figures import runs
+    from dem.compare.cases import plan
+    from dem.compare.figures import runs
     scene = si_scene(tmp_path / "si.toml")
     _, s = run(dem_binary, scene, tmp_path / "run")
     fig_labels = []

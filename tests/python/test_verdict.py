@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.cases import mutants, plan, stats
-from compare.verdict import study
-from compare.cases.common import SHARED_VARIANT, Case, Result
+from dem.compare.cases import mutants, plan, stats
+from dem.compare.verdict import study
+from dem.compare.cases.common import SHARED_VARIANT, Case, Result
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "reference_inputs" / "scenes"
@@ -109,7 +109,7 @@ def test_a_scene_a_reference_code_cannot_express_is_refused_before_any_run(tmp_p
     """A disc-wall spring stiffer than twice the disc-disc one: YADE combines the two materials of a
     contact in series and cannot reach it; the refusal names the field, the code and why, and
     nothing is written (exit 2)."""
-    from compare.io import scene_toml
+    from dem.compare.io import scene_toml
     scene = scene_toml.edit(SCENES / "silo_17_18.toml", {"pairs[1].kn_rho_g": 1.5e5}, tmp_path / "s.toml")
     out = tmp_path / "out"
     p = subprocess.run([str(dem_binary), "compare", str(scene), "--out", str(out), "--codes", "native,yade"],
@@ -207,8 +207,8 @@ def test_every_code_removes_discs_at_the_engines_outlet_height(tmp_path, dem_bin
     gate is at y = 6 removes discs below y = 2 in the engine, the LIGGGHTS outlet mesh and the
     YADE remover alike (measured from y = 0 the references counted discs some 0.05 s later)."""
     import meshio
-    from compare.codes import liggghts_backend, yade_backend
-    from compare.cases.common import outlet_y
+    from dem.compare.codes import liggghts_backend, yade_backend
+    from dem.compare.cases.common import outlet_y
     scene = ROOT / "reference_inputs" / "agreement" / "user" / "hopper.toml"
     p = plan.make_plan(plan.Entry(scene, plan.Options()))
     gate = next(w for w in p.shared["walls"] if w["name"] == "gate")
@@ -228,7 +228,7 @@ def test_a_power_check_mutant_runs_on_the_scenes_that_judge_its_metrics():
     """A power-check mutant runs only where the statistical metric kinds it must make disagree are
     judged (in CI the quick list: the slit ends on the designed discharge alone, the density on
     the static members and the discharge); another mutant, or one with no such scene, on all."""
-    from compare.__main__ import mutant_plans
+    from dem.compare.__main__ import mutant_plans
     plans = [plan.make_plan(e) for e in plan.read_list(plan.default_list("quick"), plan.Options())]
     by = {m.name: m for m in mutants.mutations(("native", "liggghts", "yade"),
                                                ["liggghts_slit_ends_1r", "liggghts_density_x1.25", "liggghts_ks_x0.5"])}

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from compare.cases import margins, plan
-from compare.verdict import verdict
+from dem.compare.cases import margins, plan
+from dem.compare.verdict import verdict
 
 ROOT = Path(__file__).resolve().parents[2]
 SILO = ROOT / "reference_inputs" / "scenes" / "silo_17_18.toml"
@@ -33,7 +33,7 @@ def test_a_dt_above_the_engines_bound_is_refused_before_any_run(dem_binary, tmp_
     # the dt it names passes the pre-flight
     q = subprocess.run([str(dem_binary), "resolve", str(SILO)], capture_output=True, text=True)
     assert q.returncode == 0
-    from compare.verdict import preflight
+    from dem.compare.verdict import preflight
     pl = plan.make_plan(plan.Entry(SILO, plan.Options(dt=largest)))
     assert preflight.refusal(pl, plan.member_case(pl, 0)) is None
     pl = plan.make_plan(plan.Entry(SILO, plan.Options(dt=bound * 1.01)))
@@ -93,8 +93,8 @@ def test_verdicts_combine_and_map_to_exit_codes():
 
 
 def test_the_forest_plot_draws_every_statistical_metric_of_a_scene(tmp_path):
-    from compare.verdict import report
-    from compare.cases import stats
+    from dem.compare.verdict import report
+    from dem.compare.cases import stats
     a, b = [100.0, 101.0, 99.0, 100.5], [101.0, 102.0, 100.0, 101.0]
     ms = [verdict.statistical("flow_rate (liggghts vs native)", "s", stats.difference(a, b, paired=True), "flow_rate",
                               plan.Options()),

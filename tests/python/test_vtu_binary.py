@@ -8,7 +8,7 @@ import meshio
 import numpy as np
 import pytest
 
-from compare.io import scene_toml
+from dem.compare.io import scene_toml
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "reference_inputs" / "scenes" / "silo_17_18.toml"

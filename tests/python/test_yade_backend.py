@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compare.io import scene_toml
-from compare.codes import yade_backend as yb
-from compare.io.run_dir import RunDir
-from compare.cases.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
+from dem.compare.io import scene_toml
+from dem.compare.codes import yade_backend as yb
+from dem.compare.io.run_dir import RunDir
+from dem.compare.cases.common import SHARED_VARIANT, Case, CaseError, dem_binary, resolve
 
 pytestmark = pytest.mark.skipif(not yb.available(), reason="yade is not on PATH (Debian: apt-get install yade)")
 

@@ -5,7 +5,7 @@ import shutil
 
 import pytest
 
-from compare.codes import yade_session
+from dem.compare.codes import yade_session
 
 pytestmark = [pytest.mark.reference_codes,
               pytest.mark.skipif(shutil.which("yade") is None and os.environ.get("CI") != "true",

@@ -22,7 +22,7 @@ Command add_run(CLI::App& dem);       // run_command.cpp
 Command add_ensemble(CLI::App& dem);  // ensemble_command.cpp
 Command add_params(CLI::App& dem);    // params_command.cpp
 Command add_resolve(CLI::App& dem);   // resolve_command.cpp
-Command add_compare(CLI::App& dem);   // resolve_command.cpp: `python3 -m compare scene ARGS`
+Command add_compare(CLI::App& dem);   // resolve_command.cpp: `python3 -m dem.compare scene ARGS`
 
 extern const char* g_program;  // argv[0], for the commands the engine prints
 
@@ -32,9 +32,10 @@ int bad(const std::string& msg);
 int bad_usage(const std::string& command, const std::string& msg);
 std::string shell_quote(const std::string& s);
 
-// The process becomes `python3 -m MODULE... ARGS` of the comparison layer (compare/, Python),
-// with this binary as its native engine (DEM_BINARY) and the source tree on its path. Returns
-// only when Python cannot start (exit 4, `who` naming the command).
+// The process becomes `python3 -m MODULE... ARGS` of the comparison layer (dem.compare, Python),
+// with this binary as its native engine (DEM_BINARY) and its package dem on the path
+// (python_path.hpp). Returns only when there is no package or Python cannot start (exit 4, `who`
+// naming the command).
 int exec_python(const std::vector<std::string>& module, const std::vector<std::string>& args, const char* who);
 std::vector<std::string> words(int argc, char** argv);
 

@@ -36,7 +36,13 @@ int exec_python(const std::vector<std::string>& module, const std::vector<std::s
   std::error_code ec;
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (!ec) setenv("DEM_BINARY", self.c_str(), 1);
-  setenv("PYTHONPATH", comparison_python_path().c_str(), 1);
+  std::string error;
+  const std::string path = comparison_python_path(error);
+  if (path.empty()) {
+    std::fprintf(stderr, "%s: %s\n", who, error.c_str());
+    return 4;
+  }
+  setenv("PYTHONPATH", path.c_str(), 1);
   std::vector<std::string> all = {DEM_PYTHON_EXE, "-m"};
   all.insert(all.end(), module.begin(), module.end());
   all.insert(all.end(), args.begin(), args.end());

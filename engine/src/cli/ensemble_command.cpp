@@ -83,12 +83,12 @@ std::string inconsistency(const EnsembleArgs& a) {
   if (a.member < 0) return "--engine runs one member: give --member K (and gather them with dem ensemble merge DIR)";
   if (a.ov.dt > 0 || !a.ov.scheme.empty() || a.ov.force_dt)  // the codes run the shared law's dt
     return "--dt, --scheme, --force-dt do not go with --engine: set the scene's value with --set";
-  if (a.ov.no_vtu)  // compare.engine_run writes a reference code's files, VTU included
+  if (a.ov.no_vtu)  // dem.compare.engine_run writes a reference code's files, VTU included
     return "--no-vtu does not go with --engine: a member in a reference code writes the files of dem run --engine";
   return "";
 }
 
-// Member K in a reference code: its start written here, then `python3 -m compare.engine_run`.
+// Member K in a reference code: its start written here, then `python3 -m dem.compare.engine_run`.
 int run_engine_member(const SceneSpec& spec, const EnsembleOptions& eo, const EnsembleArgs& a) {
   const int member = static_cast<int>(a.member);
   const std::string dir = prepare_engine_member(spec, eo, member, a.out, a.engine, a.settle);
@@ -98,7 +98,7 @@ int run_engine_member(const SceneSpec& spec, const EnsembleOptions& eo, const En
   if (!a.timeout.empty()) args.insert(args.end(), {"--timeout", a.timeout});
   for (const std::string& v : a.ov.sets) args.insert(args.end(), {"--set", v});
   if (a.quiet) args.push_back("--quiet");
-  return exec_python({"compare.engine_run"}, args, "dem ensemble --engine");
+  return exec_python({"dem.compare.engine_run"}, args, "dem ensemble --engine");
 }
 
 int run_members(const EnsembleArgs& a, int argc, char** argv) {

@@ -16,24 +16,26 @@ extern char** environ;
 namespace dem {
 
 bool PictureProcess::start(const std::string& out, bool quiet, std::string& error) {
+  const std::string path = comparison_python_path(error);
+  if (path.empty()) return false;
   int fds[2];
   if (pipe(fds) != 0) {
     error = std::string("cannot make a pipe: ") + std::strerror(errno);
     return false;
   }
-  // Its environment: this one, the source tree on PYTHONPATH, and glibc's malloc on transparent
+  // Its environment: this one, dem's Python package on PYTHONPATH, and glibc's malloc on transparent
   // huge pages unless the caller set its own tunables (a fresh 4 kB page costs this process's
   // first touch of its pictures' memory some 0.1 s CPU in all; benchmarks/README.md, "The
   // paper's job").
   std::vector<std::string> env;
-  env.push_back("PYTHONPATH=" + comparison_python_path());
+  env.push_back("PYTHONPATH=" + path);
   if (!std::getenv("GLIBC_TUNABLES")) env.push_back("GLIBC_TUNABLES=glibc.malloc.hugetlb=1");
   for (char** e = environ; *e; ++e)
     if (std::strncmp(*e, "PYTHONPATH=", 11) != 0) env.push_back(*e);
   std::vector<char*> envp;
   for (std::string& e : env) envp.push_back(e.data());
   envp.push_back(nullptr);
-  std::vector<const char*> args = {DEM_PYTHON_EXE, "-m", "compare.figures", "run", out.c_str(), "--wait"};
+  std::vector<const char*> args = {DEM_PYTHON_EXE, "-m", "dem.compare.figures", "run", out.c_str(), "--wait"};
   if (quiet) args.push_back("--quiet");
   args.push_back(nullptr);
 

@@ -1,4 +1,4 @@
-// `dem run --pictures`: the run's pictures drawn by compare.figures (matplotlib) in a process
+// `dem run --pictures`: the run's pictures drawn by dem.compare.figures (matplotlib) in a process
 // started with the run, so that Python and its imports (numpy, matplotlib) are done while the
 // engine steps, and the pictures follow the outputs at once.
 #pragma once
@@ -14,7 +14,7 @@ class PictureProcess {
   PictureProcess(const PictureProcess&) = delete;
   PictureProcess& operator=(const PictureProcess&) = delete;
   ~PictureProcess() { cancel(); }
-  // Starts `python3 -m compare.figures run DIR --wait [--quiet]`, the source tree on its
+  // Starts `python3 -m dem.compare.figures run DIR --wait [--quiet]`, dem's package on its
   // PYTHONPATH; it imports, then waits for a line on its stdin. False with `error` set when it
   // cannot be started.
   bool start(const std::string& out, bool quiet, std::string& error);

@@ -1,5 +1,5 @@
 // dem resolve: the validated scene as JSON, what the comparison layer translates; and dem
-// compare, which hands its arguments to the comparison layer (`python3 -m compare scene ARGS`).
+// compare, which hands its arguments to the comparison layer (`python3 -m dem.compare scene ARGS`).
 #include <cstdio>
 #include <memory>
 
@@ -71,7 +71,7 @@ Command add_compare(CLI::App& dem) {
   // Every word after `compare`, --help included, is the comparison layer's.
   c->prefix_command();
   c->set_help_flag();
-  return {c, [](int argc, char** argv) { return exec_python({"compare", "scene"}, words(argc, argv), "dem compare"); }};
+  return {c, [](int argc, char** argv) { return exec_python({"dem.compare", "scene"}, words(argc, argv), "dem compare"); }};
 }
 
 }  // namespace dem::cli

@@ -1,5 +1,5 @@
 // dem run: parse -> load -> build -> run the phases -> write; with --engine CODE, the scene in
-// a reference code (`python3 -m compare.engine_run`, which gets the arguments untouched).
+// a reference code (`python3 -m dem.compare.engine_run`, which gets the arguments untouched).
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,7 +26,7 @@ namespace {
 
 const char* kRunFooter =
     "The engine writes data (docs/outputs.md); the pictures of a run (network.png, side_walls.png and\n"
-    "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m compare.figures run DIR,\n"
+    "a discharge's frames, wall ratios and flow) are drawn by " DEM_PYTHON_EXE " -m dem.compare.figures run DIR,\n"
     "or with the run by --pictures.\n"
     "The scene is validated completely before anything is written; a bad scene exits with 2 and\n"
     "leaves no output directory. A run that blows up (non-finite values, overlap beyond\n"
@@ -188,7 +188,7 @@ int report(const RunArgs& a, Loaded& l, SceneRun& run, RunLog& log, Status statu
           summary.rest_reached ? "reached" : "not reached");
   if (summary.rest_reached) log.say(" at t = %.4f s", summary.rest_time);
   const std::string picture_hint = a.pictures ? std::string("pictures: --pictures draws them next")
-                                              : std::string("pictures: ") + DEM_PYTHON_EXE + " -m compare.figures run " + shell_quote(out);
+                                              : std::string("pictures: ") + DEM_PYTHON_EXE + " -m dem.compare.figures run " + shell_quote(out);
   log.say("; %.3g s wall, %.3g particle-steps/s\n  outputs in %s (%s)\n", summary.wall_seconds,
           summary.wall_seconds > 0 ? l.world.particle_steps / summary.wall_seconds : 0.0, out.c_str(), picture_hint.c_str());
   log.write(out, a.resume);
@@ -247,7 +247,7 @@ Command add_run(CLI::App& dem) {
   add_set_option(*run, a->ov.sets);
   run->add_flag("--quiet", a->quiet, "no header and no progress line");
   run->add_flag("--pictures", a->pictures,
-                "also draw the run's pictures into DIR with matplotlib (" DEM_PYTHON_EXE " -m compare.figures\n"
+                "also draw the run's pictures into DIR with matplotlib (" DEM_PYTHON_EXE " -m dem.compare.figures\n"
                 "run DIR), in a Python process started with the run; none when the run stops unstable\n"
                 "or interrupted; exit 4 if they fail");
   add_native_options(*run, *a);
@@ -256,7 +256,7 @@ Command add_run(CLI::App& dem) {
   run->allow_extras();
   return {run, [a, run](int argc, char** argv) {
             if (!a->engine.empty())
-              return exec_python({"compare.engine_run"}, words(argc, argv), "dem run --engine");
+              return exec_python({"dem.compare.engine_run"}, words(argc, argv), "dem run --engine");
             if (!run->remaining().empty())
               return bad_usage("dem run", "unknown option or extra argument " + run->remaining().front());
             return run_scene(*a, argc, argv);

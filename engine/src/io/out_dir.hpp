@@ -7,7 +7,7 @@
 namespace dem {
 
 // Removes from dir the files the engine writes (and their NAME.tmp), the snapshots it wrote into
-// dir/snapshots, and the pictures compare.figures draws from them; other files stay. Returns the
+// dir/snapshots, and the pictures dem.compare.figures draws from them; other files stay. Returns the
 // number of files removed.
 int clear_run_outputs(const std::string& dir);
 

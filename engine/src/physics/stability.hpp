@@ -42,7 +42,7 @@ struct PairReport {
 // linearised with every contact sticking: its discs' x, y and rotation (3 degrees of freedom a
 // disc), its bonds (lever arms a_i, a_j), and the contacts to the discs, walls and points within
 // kClusterTouch of touching (found by a list build with that skin), those partners held fixed
-// (compare.cases.shear_stability, the same in numpy, leaves points out: the shear box has none). The smallest over the distinct cluster
+// (dem.compare.cases.shear_stability, the same in numpy, leaves points out: the shear box has none). The smallest over the distinct cluster
 // shapes (clusters with the same stiffness, damping and masses are computed once). The
 // many-degree-of-freedom form of the one-contact bounds above: bonds across a gap (lever arms
 // R0/2 > r) stiffen the coupled rotation modes. Like them, not a bound for the whole assembly

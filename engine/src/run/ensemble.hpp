@@ -30,7 +30,7 @@ int run_member_alone(const SceneSpec& spec, const EnsembleOptions& opt, int k, c
 // out_dir/member_KK, writes there member_start.csv (x,y of member k's start, the scene's discs in
 // their order, perturbed exactly as run_member_alone perturbs them) and member.json (the
 // identity, with the code and the settling time: members of another code are another ensemble),
-// and returns the folder, for `compare.engine_run --member-start` to run and fill in.
+// and returns the folder, for `dem.compare.engine_run --member-start` to run and fill in.
 std::string prepare_engine_member(const SceneSpec& spec, const EnsembleOptions& opt, int k, const std::string& out_dir,
                                   const std::string& code, double settle);
 
