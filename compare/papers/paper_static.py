@@ -77,10 +77,11 @@ def verdict(r):
 
 
 def engine_version(dem) -> str:
-    """`dem --version` (name, version, compiler, build type): what a report says of its engine,
-    never the path of the binary (another machine's reader has none)."""
+    """`dem --version`'s first line (name, version, compiler, build type): what a report says of
+    its engine, never a path (another machine's reader has none; the second line names the
+    binary's Python package)."""
     proc = subprocess.run([str(dem), "--version"], capture_output=True, text=True, timeout=30)
-    return proc.stdout.strip() or "dem (version unknown)"
+    return (proc.stdout.strip().splitlines() or ["dem (version unknown)"])[0]
 
 
 def write_report(out_root, records, dem):

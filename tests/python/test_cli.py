@@ -63,10 +63,12 @@ def test_the_help_documents_the_commands_and_the_exit_codes(run_dem):
     assert "usage: dem ensemble merge" in run_dem("ensemble", "merge", "--help").stdout
 
 
-def test_version(run_dem):
+def test_version(run_dem, dem_binary):
     for args in (("--version",), ("version",)):
         proc = run_dem(*args)
         assert proc.returncode == 0 and proc.stdout.startswith("dem 0.") and "(" in proc.stdout, proc.stdout
+        # the Python package its dem compare, --pictures and --engine run: this build's
+        assert proc.stdout.splitlines()[1] == f"python package: {Path(dem_binary).parent / 'python' / 'dem'}"
 
 
 def test_values_reach_the_scene_as_given(run_dem, tmp_path):

@@ -53,6 +53,8 @@ def test_the_installed_dem_runs_its_own_package(tmp_path, dem_binary):
     assert py.returncode == 0, py.stderr
     assert py.stdout.splitlines()[-1].split() == [str(package / "__init__.py"), "dem._engine", str(share.resolve())], \
         py.stdout
+    v = subprocess.run([str(dem), "--version"], capture_output=True, text=True, env=env, timeout=60)
+    assert v.stdout.splitlines()[1] == f"python package: {package}", v.stdout
     # the checkout's build keeps its own checkout's layer
     b = subprocess.run([str(dem_binary), "compare", "--help"], capture_output=True, text=True, env=env, timeout=120)
     assert b.returncode == 0 and "imported from" not in b.stdout
@@ -66,6 +68,8 @@ def test_a_copy_of_build_dem_elsewhere_says_it_has_no_package(tmp_path, dem_bina
     c = subprocess.run([str(copy), "compare", "--help"], capture_output=True, text=True, env=env, timeout=60)
     assert c.returncode == 4 and "dem compare: dem's Python package (dem.compare) is not found for " + str(copy) \
         in c.stderr and "cmake --install" in c.stderr, c.stderr
+    v = subprocess.run([str(copy), "--version"], capture_output=True, text=True, env=env, timeout=60)
+    assert v.returncode == 0 and v.stdout.splitlines()[1].startswith("python package: none (dem's Python package"), v.stdout
     out = tmp_path / "run"
     r = subprocess.run([str(copy), "run", str(REPO / "examples" / "flat_silo.toml"), "--out", str(out), "--pictures"],
                        capture_output=True, text=True, env=env, timeout=60)

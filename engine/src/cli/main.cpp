@@ -6,6 +6,7 @@
 #include <exception>
 
 #include "cli/cli.hpp"
+#include "cli/python_path.hpp"
 
 using namespace dem;
 
@@ -42,6 +43,15 @@ int parse_error(const CLI::App& app, const CLI::ParseError& e) {
   return cli::bad_usage(command_path(sub), e.what());
 }
 
+// `dem --version`: the version and build, and the Python package that `dem compare`,
+// `--pictures` and `--engine` run (an installed one, the build tree's, or none).
+std::string version_text() {
+  std::string error;
+  const std::string root = dem::python_package_root(error);
+  return std::string("dem ") + DEM_VERSION + " (" + DEM_BUILD_ID + ")\npython package: " +
+         (root.empty() ? "none (" + error + ")" : root + "/dem");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -50,8 +60,7 @@ int main(int argc, char** argv) {
   app.get_formatter()->label("Usage", "usage");
   app.get_formatter()->column_width(28);
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // a repeated option: the last
-  app.set_version_flag("--version", std::string("dem ") + DEM_VERSION + " (" + DEM_BUILD_ID + ")",
-                       "the version and build (compiler, build type)");
+  app.set_version_flag("--version", version_text, "the version, the build (compiler, build type) and the Python package it runs");
   app.require_subcommand(1);
   const std::vector<cli::Command> commands = {cli::add_run(app), cli::add_ensemble(app), cli::add_params(app),
                                               cli::add_resolve(app), cli::add_compare(app)};
@@ -68,7 +77,7 @@ int main(int argc, char** argv) {
     return parse_error(app, e);
   }
   if (version->parsed()) {
-    std::printf("dem %s (%s)\n", DEM_VERSION, DEM_BUILD_ID);
+    std::printf("%s\n", version_text().c_str());
     return 0;
   }
   for (const cli::Command& c : commands) {
