@@ -5,11 +5,6 @@ set(DEM_PYTHON_BUILD_DIR ${CMAKE_BINARY_DIR}/python)
 file(MAKE_DIRECTORY ${DEM_PYTHON_BUILD_DIR}/dem)
 file(CREATE_LINK ${PROJECT_SOURCE_DIR}/engine/python/dem/__init__.py ${DEM_PYTHON_BUILD_DIR}/dem/__init__.py SYMBOLIC)
 file(CREATE_LINK ${PROJECT_SOURCE_DIR}/compare ${DEM_PYTHON_BUILD_DIR}/dem/compare SYMBOLIC)
-# A build tree laid out before the package: its module build/python/dem.*.so would be a second dem.
-file(GLOB DEM_STALE_MODULE ${DEM_PYTHON_BUILD_DIR}/dem.*.so)
-if(DEM_STALE_MODULE)
-  file(REMOVE ${DEM_STALE_MODULE})
-endif()
 
 # Where `cmake --install` puts the package, below the prefix: Debian's python looks in
 # PREFIX/lib/python3.X/dist-packages for PREFIX /usr/local. The installed dem finds its package
